@@ -1,0 +1,81 @@
+"""Reading and writing posegen's YAML artefacts, with provenance and atomic writes."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from posegen import __version__
+from posegen.errors import InputError
+
+try:
+    _Dumper: Any = yaml.CSafeDumper
+    _Loader: Any = yaml.CSafeLoader
+except AttributeError:  # PyYAML built without libyaml
+    _Dumper = yaml.SafeDumper
+    _Loader = yaml.SafeLoader
+
+
+def provenance(config: dict[str, Any], model_sha256: str, seed: int | None) -> dict[str, Any]:
+    """What made an artefact: config, robot model hash, seed and posegen version."""
+    return {
+        "posegen_version": __version__,
+        "robot_model_sha256": model_sha256,
+        "seed": seed,
+        "config": config,
+    }
+
+
+def write_atomic(path: str | Path, text: str) -> None:
+    """Write a file so that it is either fully there or not changed at all."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def dump_yaml(data: dict[str, Any]) -> str:
+    """YAML text of plain data: block mappings, lists of numbers inline."""
+    return str(yaml.dump(data, Dumper=_Dumper, sort_keys=False, default_flow_style=None, width=1 << 16))
+
+
+def write_yaml(path: str | Path, data: dict[str, Any]) -> None:
+    """Atomically write plain data as YAML."""
+    write_atomic(path, dump_yaml(data))
+
+
+def read_yaml(path: str | Path, kind: str) -> dict[str, Any]:
+    """Read a posegen artefact and check its kind.
+
+    Args:
+        path: File to read.
+        kind: Expected value of the ``format`` field ("posegen-pool", ...).
+
+    Raises:
+        InputError: The file is missing, not YAML, or not an artefact of that kind.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror}") from exc
+    try:
+        data = yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        raise InputError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+    if not isinstance(data, dict) or data.get("format") != kind:
+        found = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise InputError(f"{path}: not a {kind} file (format: {found!r})")
+    return data

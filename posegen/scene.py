@@ -1,0 +1,280 @@
+"""The robot-and-table scene shared by every stage: model, stance, contact frames, table.
+
+The scene adds one *contact frame* per chain to the robot description: the centroid of
+the fingertip ends, with z along the gripper normal (pointing away from the table at a
+flush contact). pinocchio, placo and the calibration model all read the same augmented
+URDF, so every stage agrees on where the contact is.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.config import ChainConfig, Config
+from posegen.errors import ConfigError, unknown_name
+from posegen.geometry import FloatArray, convex_hull_clockwise, flatten_on_floor, yaw_rotation
+
+LOG = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RobotFiles:
+    """Resolved robot description files."""
+
+    urdf: Path
+    srdf: Path
+    package_dirs: tuple[str, ...]
+
+    def sha256(self) -> str:
+        """Hash of the URDF and SRDF contents (the model identity saved in artefacts)."""
+        digest = hashlib.sha256()
+        for path in (self.urdf, self.srdf):
+            digest.update(path.read_bytes())
+        return digest.hexdigest()
+
+
+@dataclass(frozen=True)
+class Spot:
+    """A contact target spot on the table."""
+
+    name: str
+    xy_table_m: tuple[float, float]  # in the table frame
+    chains: tuple[str, ...]  # chains whose arm serves this spot
+
+
+def resolve_robot_files(config: Config) -> RobotFiles:
+    """Find the URDF/SRDF files named by the config.
+
+    Raises:
+        ConfigError: The files do not exist or the example-robot-data name is unknown.
+    """
+    source = config.robot
+    if source.example_robot_data is not None:
+        from example_robot_data import robots_loader
+
+        loaders = {
+            name[: -len("Loader")].lower(): cls
+            for name, cls in vars(robots_loader).items()
+            if name.endswith("Loader") and isinstance(cls, type) and getattr(cls, "urdf_filename", "")
+        }
+        key = source.example_robot_data.lower()
+        if key not in loaders:
+            raise ConfigError(unknown_name("example-robot-data robot", key, loaders))
+        loader = loaders[key]
+        robots_dir = Path(robots_loader.getModelPath(loader.path))
+        data_dir = robots_dir / loader.path
+        urdf = data_dir / loader.urdf_subpath / loader.urdf_filename
+        srdf = data_dir / loader.srdf_subpath / loader.srdf_filename
+        package_dirs: tuple[str, ...] = (os.path.normpath(robots_dir / ".." / ".."),)
+    else:
+        urdf = Path(str(source.urdf))
+        srdf = Path(str(source.srdf))
+        package_dirs = source.package_dirs
+    for path in (urdf, srdf):
+        if not path.is_file():
+            raise ConfigError(f"robot.source: file not found: {path}")
+    return RobotFiles(urdf=urdf, srdf=srdf, package_dirs=package_dirs)
+
+
+def _frame_id(model: pin.Model, name: str) -> int:
+    if not model.existFrame(name):
+        raise ConfigError(unknown_name("frame", name, (f.name for f in model.frames)))
+    return int(model.getFrameId(name))
+
+
+def contact_placement(model: pin.Model, chain: ChainConfig) -> pin.SE3:
+    """Placement of a chain's contact frame in its gripper frame.
+
+    Origin: centroid of the fingertip ends (each ``fingertip_length_m`` beyond its link
+    origin, against the normal). z: normal of the fingertip plane, pointing to the side
+    of the gripper frame origin. x: the gripper frame's x projected on the plane.
+    """
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    grip = data.oMf[_frame_id(model, chain.gripper_frame)]
+    tips = np.array(
+        [grip.actInv(data.oMf[_frame_id(model, f)]).translation for f in chain.fingertip_frames]
+    )  # (n, 3)
+    centroid = tips.mean(axis=0)
+    normal = np.linalg.svd(tips - centroid)[2][-1]
+    if normal @ (-centroid) < 0:
+        normal = -normal
+    x_axis = np.array([1.0, 0.0, 0.0]) - normal[0] * normal
+    if np.linalg.norm(x_axis) < 1e-6:
+        x_axis = np.array([0.0, 1.0, 0.0]) - normal[1] * normal
+    x_axis /= np.linalg.norm(x_axis)
+    rotation = np.column_stack([x_axis, np.cross(normal, x_axis), normal])
+    return pin.SE3(rotation, centroid - chain.fingertip_length_m * normal)
+
+
+def augmented_urdf(urdf_text: str, model: pin.Model, config: Config) -> str:
+    """The URDF with one fixed contact link per chain added."""
+    root = ET.fromstring(urdf_text)
+    for chain in config.chains:
+        placement = contact_placement(model, chain)
+        xyz = " ".join(repr(float(v)) for v in placement.translation)
+        rpy = " ".join(repr(float(v)) for v in pin.rpy.matrixToRpy(placement.rotation))
+        ET.SubElement(root, "link", name=chain.contact_frame)
+        joint = ET.SubElement(root, "joint", name=f"{chain.contact_frame}_joint", type="fixed")
+        ET.SubElement(joint, "parent", link=chain.gripper_frame)
+        ET.SubElement(joint, "child", link=chain.contact_frame)
+        ET.SubElement(joint, "origin", xyz=xyz, rpy=rpy)
+    return ET.tostring(root, encoding="unicode")
+
+
+def kinematic_urdf(urdf_text: str) -> str:
+    """The URDF without visual and collision elements (what solvers need)."""
+    root = ET.fromstring(urdf_text)
+    for link in root.findall("link"):
+        for tag in ("visual", "collision"):
+            for element in link.findall(tag):
+                link.remove(element)
+    return ET.tostring(root, encoding="unicode")
+
+
+class Scene:
+    """Robot model, stance, contact frames and table of one configuration.
+
+    Attributes:
+        config: The validated configuration.
+        files: The robot description files.
+        urdf_xml: The augmented URDF (with contact frames).
+        model: pinocchio model with a free-flyer root.
+        joint_names: The actuated (1-dof) joints, in model order.
+        lower, upper: Joint limits (rad), shape (nj,).
+        velocity_limit: Joint velocity limits (rad/s), shape (nj,).
+        reference: The reference posture's joint angles (rad), shape (nj,).
+        sole_poses: World pose of each sole, shape (4, 4) each.
+        support_polygon: Clockwise support polygon in the floor plane (m), shape (h, 2).
+        table_pose: World pose of the table's top face centre, shape (4, 4).
+        spots: Contact target spots.
+    """
+
+    def __init__(self, config: Config) -> None:
+        self.config = config
+        self.files = resolve_robot_files(config)
+        nominal_text = self.files.urdf.read_text()
+        try:
+            nominal = pin.buildModelFromXML(nominal_text, pin.JointModelFreeFlyer())
+        except (RuntimeError, ValueError) as exc:
+            raise ConfigError(f"cannot load URDF {self.files.urdf}: {exc}") from exc
+        for chain in config.chains:
+            for frame in (chain.sole_frame, chain.gripper_frame, *chain.fingertip_frames):
+                _frame_id(nominal, frame)
+            if nominal.existFrame(chain.contact_frame):
+                raise ConfigError(f"chains.{chain.name}.contact_frame '{chain.contact_frame}' already exists")
+        for frame in (*config.stance.sole_frames, *config.stance.floor_contact_frames):
+            _frame_id(nominal, frame)
+        self.urdf_xml = augmented_urdf(nominal_text, nominal, config)
+        self.model = pin.buildModelFromXML(self.urdf_xml, pin.JointModelFreeFlyer())
+        self.joint_names = tuple(
+            str(self.model.names[j]) for j in range(1, self.model.njoints) if self.model.joints[j].nq == 1
+        )
+        self._q_index = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in self.joint_names])
+        self._v_index = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in self.joint_names])
+        self.lower = self.model.lowerPositionLimit[self._q_index].copy()
+        self.upper = self.model.upperPositionLimit[self._q_index].copy()
+        self.velocity_limit = self.model.velocityLimit[self._v_index].copy()
+        self.locked = np.zeros(len(self.joint_names), dtype=bool)  # (nj,) held during sampling
+        self.locked_values = np.zeros(len(self.joint_names))  # (nj,) rad, where locked
+        for name, value in config.locked_joints.items():
+            i = self.joint_index(name)
+            if not self.lower[i] <= value <= self.upper[i]:
+                raise ConfigError(
+                    f"robot.locked_joints.{name}: {value} rad is outside [{self.lower[i]}, {self.upper[i]}]"
+                )
+            self.locked[i] = True
+            self.locked_values[i] = value
+
+        pin.loadReferenceConfigurations(self.model, str(self.files.srdf), False)
+        refs = self.model.referenceConfigurations
+        postures = {str(e.key()): np.array(e.data()) for e in refs}
+        if config.stance.reference_posture not in postures:
+            raise ConfigError(unknown_name("reference posture", config.stance.reference_posture, postures))
+        self.reference = postures[config.stance.reference_posture][self._q_index].copy()
+
+        data = self.model.createData()
+        pin.framesForwardKinematics(self.model, data, postures[config.stance.reference_posture])
+        self.sole_poses = {
+            f: flatten_on_floor(data.oMf[self.model.getFrameId(f)].homogeneous) for f in config.stance.sole_frames
+        }
+        corners = [
+            (pose @ np.array([x, y, 0.0, 1.0]))[:2]
+            for pose in self.sole_poses.values()
+            for x in config.stance.foot_x_m
+            for y in config.stance.foot_y_m
+        ]
+        self.support_polygon = convex_hull_clockwise(np.array(corners))
+
+        table = config.table
+        self.table_pose = np.eye(4)
+        self.table_pose[:3, :3] = yaw_rotation(np.deg2rad(table.yaw_deg))
+        self.table_pose[:3, 3] = table.top_center_m
+        self.spots = tuple(
+            Spot(
+                name=f"contact_{i * len(table.spots_y_m) + j:02d}",
+                xy_table_m=(x, y),
+                chains=tuple(c.name for c in config.chains if c.spot_y_range_m[0] <= y <= c.spot_y_range_m[1]),
+            )
+            for i, x in enumerate(table.spots_x_m)
+            for j, y in enumerate(table.spots_y_m)
+        )
+
+    @property
+    def anchor_sole(self) -> str:
+        """The sole frame the floating base is solved from."""
+        return self.config.stance.sole_frames[0]
+
+    def joint_index(self, name: str) -> int:
+        """Index of an actuated joint in :attr:`joint_names`.
+
+        Raises:
+            ConfigError: The joint does not exist.
+        """
+        try:
+            return self.joint_names.index(name)
+        except ValueError:
+            raise ConfigError(unknown_name("joint", name, self.joint_names)) from None
+
+    def frame_id(self, name: str) -> int:
+        """pinocchio id of a frame, with a clear error listing the valid frames."""
+        return _frame_id(self.model, name)
+
+    def spot_world(self, spot: Spot) -> FloatArray:
+        """World position (m) of a spot on the table top. Shape (3,)."""
+        return (self.table_pose @ np.array([*spot.xy_table_m, 0.0, 1.0]))[:3]
+
+    def configuration(self, joints: FloatArray) -> FloatArray:
+        """Full pinocchio configuration with the floating base placing the anchor sole.
+
+        Args:
+            joints: Actuated joint angles (rad), shape (nj,).
+
+        Returns:
+            Configuration, shape (nq,): free-flyer pose such that the anchor sole is at
+            its fixed pose, then the joint angles.
+        """
+        q = pin.neutral(self.model)
+        q[self._q_index] = joints
+        data = self.model.createData()
+        pin.framesForwardKinematics(self.model, data, q)
+        base_to_sole = data.oMf[self.model.getFrameId(self.anchor_sole)]
+        base = pin.SE3(self.sole_poses[self.anchor_sole]) * base_to_sole.inverse()
+        q[:7] = pin.SE3ToXYZQUAT(base)
+        return q
+
+    def joints_of(self, q: FloatArray) -> FloatArray:
+        """Actuated joint angles (rad) of a full configuration. Shape (nj,)."""
+        return np.array(q[self._q_index], dtype=float)
+
+    def velocity_indices(self) -> FloatArray:
+        """Indices of the actuated joints in the velocity vector. Shape (nj,)."""
+        return self._v_index.copy()
