@@ -65,6 +65,7 @@ def read_yaml(path: str | Path, kind: str) -> dict[str, Any]:
 
     Raises:
         InputError: The file is missing, not YAML, or not an artefact of that kind.
+
     """
     path = Path(path)
     try:

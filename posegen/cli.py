@@ -62,10 +62,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
     data = read_yaml(args.file, POOL_FORMAT)
     pool = pool_from_dict(data, args.file)
-    if args.config:
-        config = load_config(args.config)
-    else:
-        config = parse_config(pool.provenance.get("config"), "")
+    config = load_config(args.config) if args.config else parse_config(pool.provenance.get("config"), "")
     scene = Scene(config)
     recorded = pool.provenance.get("robot_model_sha256")
     if recorded and recorded != scene.files.sha256():

@@ -101,6 +101,7 @@ class Config:
 
         Raises:
             ConfigError: No chain has that name.
+
         """
         for chain in self.chains:
             if chain.name == name:
@@ -178,9 +179,7 @@ class _Reader:
 
     def numbers(self, key: str, length: int | None = None, default: Any = ...) -> tuple[float, ...]:
         value = self.raw(key, default)
-        ok = isinstance(value, list) and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
-        )
+        ok = isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
         if not ok or (length is not None and len(value) != length) or not value:
             size = f"{length} " if length is not None else ""
             raise ConfigError(f"{self._path(key)}: expected a list of {size}numbers, got {value!r}")
@@ -204,6 +203,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
 
     Raises:
         ConfigError: A field is missing, of the wrong type or out of range.
+
     """
     top = _Reader(data, "")
     robot = top.sub("robot")
@@ -312,6 +312,7 @@ def load_config(path: str | Path) -> Config:
 
     Raises:
         ConfigError: The file is missing, not YAML, or not a valid configuration.
+
     """
     path = Path(path)
     try:

@@ -34,6 +34,7 @@ def unknown_name(kind: str, name: str, valid: Iterable[str]) -> str:
 
     Returns:
         A one-line message.
+
     """
     choices = sorted(valid)
     shown = ", ".join(choices[:40]) + (", ..." if len(choices) > 40 else "")

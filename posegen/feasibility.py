@@ -87,6 +87,7 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
         checker: Collision checker measuring the closest pair; None to skip collisions.
         joints: Actuated joint angles (rad), shape (nj,).
         chain: Name of the chain in contact.
+
     """
     q = scene.configuration(joints)
     model = scene.model

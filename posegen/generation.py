@@ -17,7 +17,7 @@ import json
 import logging
 import multiprocessing
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator
 from pathlib import Path
 from typing import Any
 
@@ -74,6 +74,7 @@ class Checkpoint:
 
         Raises:
             InputError: A checkpoint of a different run is in the way.
+
         """
         if not self.path.exists():
             return []
@@ -84,8 +85,7 @@ class Checkpoint:
             header = {}
         if header.get("key") != self.key:
             raise InputError(
-                f"{self.path} belongs to a different run (config, seed or version); "
-                "delete it or choose another output"
+                f"{self.path} belongs to a different run (config, seed or version); delete it or choose another output"
             )
         chunks = []
         for line in lines[1:]:
@@ -119,9 +119,7 @@ def run_key(config: Config, seed: int, model_sha256: str) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _chunks(
-    config: Config, seed: int, workers: int, first_chunk: int
-) -> Iterator[list[Outcome]]:
+def _chunks(config: Config, seed: int, workers: int, first_chunk: int) -> Generator[list[Outcome], None, None]:
     size = config.sampling.chunk_size
     ranges = (range(c * size, (c + 1) * size) for c in itertools.count(first_chunk))
     if workers <= 1:
@@ -165,6 +163,7 @@ def generate_pool(
     Raises:
         InfeasibleError: No feasible posture in the first samples, or acceptance too low.
         InputError: A checkpoint of a different run is in the way.
+
     """
     if n <= 0:
         raise InfeasibleError(f"--n must be a positive number of postures, got {n}")

@@ -22,6 +22,7 @@ def flatten_on_floor(pose: FloatArray) -> FloatArray:
 
     Returns:
         A new homogeneous transform, shape (4, 4).
+
     """
     flat = np.eye(4)
     flat[:3, :3] = yaw_rotation(float(np.arctan2(pose[1, 0], pose[0, 0])))
@@ -41,6 +42,7 @@ def tilt_angles(rotation: FloatArray) -> tuple[float, float]:
 
     Returns:
         (roll, pitch) in rad.
+
     """
     pitch = float(np.arcsin(np.clip(-rotation[2, 0], -1.0, 1.0)))
     roll = float(np.arctan2(rotation[2, 1], rotation[2, 2]))
@@ -55,6 +57,7 @@ def convex_hull_clockwise(points: FloatArray) -> FloatArray:
 
     Returns:
         Hull vertices, shape (h, 2), clockwise (the order placo's CoM polygon expects).
+
     """
     pts = sorted({(float(x), float(y)) for x, y in points})
     if len(pts) < 3:
@@ -86,6 +89,7 @@ def polygon_margin(polygon_cw: FloatArray, point: FloatArray) -> float:
 
     Returns:
         Positive inside (distance to the nearest edge line), negative outside.
+
     """
     margin = np.inf
     n = len(polygon_cw)

@@ -86,6 +86,7 @@ def posture_from_dict(raw: Any, n_joints: int, where: str) -> Posture:
 
     Raises:
         InputError: A field is missing or malformed.
+
     """
     try:
         joints = tuple(float(v) for v in raw["joints"])
@@ -112,6 +113,7 @@ def pool_from_dict(data: dict[str, Any], where: str = "pool") -> Pool:
 
     Raises:
         InputError: The data is not a valid pool.
+
     """
     if data.get("format_version") != POOL_VERSION:
         raise InputError(f"{where}: unsupported format_version {data.get('format_version')!r}")
@@ -119,9 +121,7 @@ def pool_from_dict(data: dict[str, Any], where: str = "pool") -> Pool:
     raw_postures = data.get("postures")
     if not isinstance(names, list) or not isinstance(raw_postures, list):
         raise InputError(f"{where}: 'joint_names' and 'postures' must be lists")
-    postures = tuple(
-        posture_from_dict(raw, len(names), f"{where}: posture {i}") for i, raw in enumerate(raw_postures)
-    )
+    postures = tuple(posture_from_dict(raw, len(names), f"{where}: posture {i}") for i, raw in enumerate(raw_postures))
     summary = data.get("summary") or {}
     return Pool(
         joint_names=tuple(str(n) for n in names),
@@ -137,6 +137,7 @@ def load_pool(path: str | Path) -> Pool:
 
     Raises:
         InputError: The file is missing or not a valid pool.
+
     """
     return pool_from_dict(read_yaml(path, POOL_FORMAT), str(path))
 

@@ -120,6 +120,7 @@ class Projector:
         Returns:
             The projected posture; ``converged`` says whether the equalities hold to
             solver precision (feasibility is assessed separately).
+
         """
         scene = self.scene
         sample = np.where(scene.locked, scene.locked_values, joints)

@@ -14,6 +14,7 @@ import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -55,6 +56,7 @@ def resolve_robot_files(config: Config) -> RobotFiles:
 
     Raises:
         ConfigError: The files do not exist or the example-robot-data name is unknown.
+
     """
     source = config.robot
     if source.example_robot_data is not None:
@@ -68,7 +70,7 @@ def resolve_robot_files(config: Config) -> RobotFiles:
         key = source.example_robot_data.lower()
         if key not in loaders:
             raise ConfigError(unknown_name("example-robot-data robot", key, loaders))
-        loader = loaders[key]
+        loader: Any = loaders[key]
         robots_dir = Path(robots_loader.getModelPath(loader.path))
         data_dir = robots_dir / loader.path
         urdf = data_dir / loader.urdf_subpath / loader.urdf_filename
@@ -100,9 +102,7 @@ def contact_placement(model: pin.Model, chain: ChainConfig) -> pin.SE3:
     data = model.createData()
     pin.framesForwardKinematics(model, data, pin.neutral(model))
     grip = data.oMf[_frame_id(model, chain.gripper_frame)]
-    tips = np.array(
-        [grip.actInv(data.oMf[_frame_id(model, f)]).translation for f in chain.fingertip_frames]
-    )  # (n, 3)
+    tips = np.array([grip.actInv(data.oMf[_frame_id(model, f)]).translation for f in chain.fingertip_frames])  # (n, 3)
     centroid = tips.mean(axis=0)
     normal = np.linalg.svd(tips - centroid)[2][-1]
     if normal @ (-centroid) < 0:
@@ -156,6 +156,7 @@ class Scene:
         support_polygon: Clockwise support polygon in the floor plane (m), shape (h, 2).
         table_pose: World pose of the table's top face centre, shape (4, 4).
         spots: Contact target spots.
+
     """
 
     def __init__(self, config: Config) -> None:
@@ -238,6 +239,7 @@ class Scene:
 
         Raises:
             ConfigError: The joint does not exist.
+
         """
         try:
             return self.joint_names.index(name)
@@ -245,7 +247,7 @@ class Scene:
             raise ConfigError(unknown_name("joint", name, self.joint_names)) from None
 
     def frame_id(self, name: str) -> int:
-        """pinocchio id of a frame, with a clear error listing the valid frames."""
+        """Pinocchio id of a frame, with a clear error listing the valid frames."""
         return _frame_id(self.model, name)
 
     def spot_world(self, spot: Spot) -> FloatArray:
@@ -261,6 +263,7 @@ class Scene:
         Returns:
             Configuration, shape (nq,): free-flyer pose such that the anchor sole is at
             its fixed pose, then the joint angles.
+
         """
         q = pin.neutral(self.model)
         q[self._q_index] = joints

@@ -52,6 +52,7 @@ def verify_postures(
         scene: The scene the postures were made for.
         postures: Postures to check.
         progress: Called with the number of postures checked so far.
+
     """
     meshes = CollisionChecker(scene, convex=False)
     margin = scene.config.margins.collision_m

@@ -1,0 +1,96 @@
+"""posegen benchmarks (``make bench``): timings and quality figures for the README.
+
+Run from the repository root. Each stage prints a Markdown table; ``--only`` picks stages.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+POSEGEN = str(Path(sys.executable).with_name("posegen"))
+
+
+def machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{os.cpu_count()} cores, {cpu}, Python {platform.python_version()}"
+
+
+def bench_pool(workdir: Path, n: int) -> Path:
+    from posegen.pool import load_pool
+
+    out = workdir / "pool.yaml"
+    start = time.perf_counter()
+    subprocess.run(
+        [POSEGEN, "pool", "--n", str(n), "-q", "-o", str(out)], check=True, cwd=ROOT, stdout=subprocess.DEVNULL
+    )
+    wall = time.perf_counter() - start
+    pool = load_pool(out)
+    joints = pool.joints()
+    names = pool.joint_names
+    config = pool.provenance["config"]
+    free = [i for i, name in enumerate(names) if name not in config["robot"]["locked_joints"]]
+    spread = joints[:, free].std(axis=0)
+    counts = [c for per in pool.per_spot().values() for c in per.values()]
+    print(f"\n### pool: {n} postures ({machine()})\n")
+    print("| figure | value |\n|---|---|")
+    print(f"| wall time, `posegen pool --n {n}` (2 workers, incl. start-up) | {wall:.1f} s |")
+    print(
+        f"| samples attempted / accepted | {pool.attempted} / {len(pool.postures)} "
+        f"({100 * len(pool.postures) / pool.attempted:.1f}%) |"
+    )
+    print("| rejections | " + ", ".join(f"{k} {v}" for k, v in pool.rejected.items()) + " |")
+    chains = sorted({p.chain for p in pool.postures})
+    print(
+        "| postures per chain | " + ", ".join(f"{c} {sum(p.chain == c for p in pool.postures)}" for c in chains) + " |"
+    )
+    print(
+        f"| postures per (spot, chain) | min {min(counts)}, median {int(np.median(counts))}, max {max(counts)} "
+        f"over {len(counts)} pairs |"
+    )
+    print(
+        f"| per-joint std of the free joints | min {spread.min():.3f}, median {np.median(spread):.3f}, "
+        f"max {spread.max():.3f} rad |"
+    )
+    print(
+        f"| min collision distance (hulls) | min {min(p.min_distance_m for p in pool.postures) * 1000:.1f} mm, "
+        f"median {np.median([p.min_distance_m for p in pool.postures]) * 1000:.1f} mm |"
+    )
+    start = time.perf_counter()
+    subprocess.run([POSEGEN, "check", str(out), "-q"], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+    print(f"| `posegen check` on meshes | {time.perf_counter() - start:.1f} s, no violation |")
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--only", nargs="*", default=["pool"], help="stages to run")
+    parser.add_argument("--n", type=int, default=1500, help="pool size")
+    parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
+    args = parser.parse_args()
+    workdir = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="posegen-bench-"))
+    workdir.mkdir(parents=True, exist_ok=True)
+    if "pool" in args.only:
+        bench_pool(workdir, args.n)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,93 @@
+"""The command line: clean one-line errors, exit codes, no partial output files."""
+
+import yaml
+
+from posegen.artefact import write_yaml
+from posegen.cli import main
+from tests.conftest import CONFIG
+
+
+def run(argv, capsys):
+    code = main(argv)
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def assert_one_line_error(err):
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("posegen: error: "), err
+    assert "Traceback" not in err
+
+
+def bad_config(tmp_path, edit):
+    data = yaml.safe_load(CONFIG.read_text())
+    edit(data)
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return str(path)
+
+
+def test_pool_writes_file_and_summary(tmp_path, capsys):
+    out = tmp_path / "pool.yaml"
+    code, stdout, _ = run(["pool", "--n", "6", "--workers", "1", "-q", "-o", str(out)], capsys)
+    assert code == 0
+    assert "6 postures accepted" in stdout and "rejected:" in stdout
+    assert out.exists() and not (tmp_path / "pool.yaml.partial.jsonl").exists()
+    code, stdout, _ = run(["check", str(out), "-q"], capsys)
+    assert code == 0 and "FAIL" not in stdout
+
+
+def test_unknown_frame_in_config(tmp_path, capsys):
+    path = bad_config(tmp_path, lambda d: d["chains"]["left"].update(gripper_frame="left_hand"))
+    out = tmp_path / "pool.yaml"
+    code, _, err = run(["pool", "--n", "3", "--config", path, "-o", str(out), "-q"], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    assert "unknown frame 'left_hand'" in err and "gripper_left_base_link" in err
+    assert not out.exists()
+
+
+def test_table_out_of_reach(tmp_path, capsys):
+    path = bad_config(tmp_path, lambda d: d["table"].update(top_center_m=[2.5, 0.0, 0.7]))
+    out = tmp_path / "pool.yaml"
+    code, _, err = run(["pool", "--n", "3", "--workers", "1", "--config", path, "-o", str(out), "-q"], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    assert "within reach" in err and not out.exists()
+
+
+def test_nonpositive_n(tmp_path, capsys):
+    out = tmp_path / "pool.yaml"
+    code, _, err = run(["pool", "--n", "0", "-o", str(out), "-q"], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    assert not out.exists()
+
+
+def test_malformed_config_yaml(tmp_path, capsys):
+    path = tmp_path / "broken.yaml"
+    path.write_text("robot: {source: [\n")
+    code, _, err = run(["pool", "--n", "3", "--config", str(path), "-q"], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+
+
+def test_check_flags_a_tampered_pool(small_pool, tmp_path, capsys):
+    data = small_pool.to_dict()
+    data["postures"][3]["joints"][0] += 0.05  # a left-leg joint: the right sole no longer fits
+    path = tmp_path / "tampered.yaml"
+    write_yaml(path, data)
+    code, stdout, _ = run(["check", str(path), "-q"], capsys)
+    assert code == 1
+    assert "FAIL sole" in stdout and "FAIL contact" in stdout and "posture 3" in stdout
+
+
+def test_check_rejects_files_that_are_not_pools(tmp_path, capsys):
+    path = tmp_path / "notapool.yaml"
+    path.write_text("format: something-else\n")
+    code, _, err = run(["check", str(path)], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    code, _, err = run(["check", str(tmp_path / "missing.yaml")], capsys)
+    assert code == 2
+    assert_one_line_error(err)
