@@ -39,6 +39,7 @@ class ChainConfig:
     fingertip_length_m: float  # from a fingertip link origin to its end, along -z of gripper_frame
     contact_frame: str  # name given to the contact frame that posegen adds to the model
     spot_y_range_m: tuple[float, float]  # table-frame y range of the spots this arm serves
+    recorded_as: str = ""  # the name recordings give this gripper (e.g. "talos/left_gripper")
 
 
 @dataclass(frozen=True)
@@ -259,6 +260,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
                 fingertip_length_m=ch.number("fingertip_length_m", minimum=0.0),
                 contact_frame=ch.text("contact_frame"),
                 spot_y_range_m=ch.interval("spot_y_range_m"),
+                recorded_as=ch.text("recorded_as", str(name)),
             )
         )
 

@@ -1,0 +1,135 @@
+"""Levenberg-Marquardt identification of base parameters with a physically sized prior.
+
+The estimate minimises
+
+    sum_contacts sum_c (r_c / sigma_c)^2 + sum_{free robot params} (delta_k / s_k)^2
+
+where r = (height, roll, pitch) residuals, sigma_c the measurement noise per component
+(estimated from the residuals themselves), delta_k the deviation of a free parameter
+from its nominal value and s_k its prior size (``prior_length_m`` or
+``prior_angle_rad``). Plane parameters have no prior: where the table is is unknown.
+This is the maximum a posteriori estimate under Gaussian noise and a Gaussian prior.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize
+
+from posegen.contact_model import ContactModel, Contacts, Group, Unit
+from posegen.geometry import FloatArray
+
+
+@dataclass(frozen=True)
+class Weights:
+    """Measurement noise and prior sizes."""
+
+    noise: tuple[float, float, float]  # sigma of height (m), roll (rad), pitch (rad)
+    prior_length_m: float  # prior sigma of a length parameter's deviation
+    prior_angle_rad: float  # prior sigma of an angle parameter's deviation
+
+
+@dataclass(frozen=True)
+class Fit:
+    """An identified parameter vector."""
+
+    theta: FloatArray  # (p,) all parameters
+    free: tuple[int, ...]  # parameter indices that were estimated
+    residuals: FloatArray  # (n, 3) training residuals: m, rad, rad
+    iterations: int
+    std: FloatArray  # (p,) posterior standard deviation (0 for fixed parameters)
+
+
+def prior_scale(model: ContactModel, weights: Weights) -> FloatArray:
+    """Prior sigma per parameter (inf for planes: no prior). Shape (p,)."""
+    scale = np.array(
+        [weights.prior_length_m if p.unit == Unit.LENGTH else weights.prior_angle_rad for p in model.parameters]
+    )
+    scale[model.columns(Group.PLANE)] = np.inf
+    return scale
+
+
+def initial_planes(model: ContactModel, contacts: Contacts, theta: FloatArray) -> FloatArray:
+    """Parameters with the contacts' sessions' planes level at their contacts' mean height."""
+    out = theta.copy()
+    present = sorted(set(contacts.sessions))
+    for session in present:
+        for field in ("z", "roll", "pitch"):
+            out[model.index[f"plane@{session}.{field}"]] = 0.0
+    heights = model.residuals(out, contacts)[:, 0]
+    sessions = np.array(contacts.sessions)
+    for session in present:
+        out[model.index[f"plane@{session}.z"]] = float(np.mean(heights[sessions == session]))
+    return out
+
+
+def identify(
+    model: ContactModel,
+    contacts: Contacts,
+    free: Sequence[int],
+    weights: Weights,
+    theta0: FloatArray,
+    max_iterations: int = 100,
+) -> Fit:
+    """Estimate the ``free`` parameters by Levenberg-Marquardt.
+
+    Args:
+        model: Measurement model.
+        contacts: Training contacts.
+        free: Parameter indices to estimate (base parameters); others stay at ``theta0``.
+        weights: Noise and prior.
+        theta0: (p,) starting point and prior mean for the robot parameters.
+        max_iterations: Cap on Jacobian evaluations.
+    """
+    free_idx = np.array(free, dtype=int)
+    noise = np.array(weights.noise)
+    scale = prior_scale(model, weights)[free_idx]
+    has_prior = np.isfinite(scale)
+    prior_mean = theta0[free_idx]
+
+    def unpack(x: FloatArray) -> FloatArray:
+        theta = theta0.copy()
+        theta[free_idx] = x
+        return theta
+
+    def fun(x: FloatArray) -> FloatArray:
+        r = model.residuals(unpack(x), contacts) / noise
+        return np.concatenate([r.ravel(), (x - prior_mean)[has_prior] / scale[has_prior]])
+
+    def jac(x: FloatArray) -> FloatArray:
+        _, j = model.jacobian(unpack(x), contacts)
+        j = (j[:, :, free_idx] / noise[None, :, None]).reshape(-1, len(free_idx))
+        prior_rows = np.diag(1.0 / scale[has_prior])
+        prior_j = np.zeros((int(has_prior.sum()), len(free_idx)))
+        prior_j[:, has_prior] = prior_rows
+        return np.vstack([j, prior_j])
+
+    result = scipy.optimize.least_squares(
+        fun, prior_mean.copy(), jac=jac, method="lm", xtol=1e-12, ftol=1e-12, max_nfev=max_iterations * 10
+    )
+    theta = unpack(result.x)
+    final_jac = jac(result.x)
+    std = np.zeros(model.size)
+    try:
+        cov = np.linalg.inv(final_jac.T @ final_jac)
+        std[free_idx] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    except np.linalg.LinAlgError:
+        std[free_idx] = np.nan
+    return Fit(
+        theta=theta,
+        free=tuple(int(i) for i in free_idx),
+        residuals=model.residuals(theta, contacts),
+        iterations=int(result.nfev),
+        std=std,
+    )
+
+
+def refit_planes(model: ContactModel, contacts: Contacts, theta: FloatArray, weights: Weights) -> FloatArray:
+    """Re-fit only the plane parameters of the contacts' sessions (kinematics frozen)."""
+    sessions = set(contacts.sessions)
+    cols = [i for i, p in enumerate(model.parameters) if p.group == Group.PLANE and p.owner in sessions]
+    start = initial_planes(model, contacts, theta)
+    return identify(model, contacts, cols, weights, start).theta
