@@ -13,11 +13,10 @@ This is the maximum a posteriori estimate under Gaussian noise and a Gaussian pr
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 
 from posegen.contact_model import ContactModel, Contacts, Group, Unit
 from posegen.geometry import FloatArray
@@ -72,7 +71,7 @@ def identify(
     free: Sequence[int],
     weights: Weights,
     theta0: FloatArray,
-    max_iterations: int = 100,
+    max_iterations: int = 50,
 ) -> Fit:
     """Estimate the ``free`` parameters by Levenberg-Marquardt.
 
@@ -107,11 +106,9 @@ def identify(
         prior_j[:, has_prior] = prior_rows
         return np.vstack([j, prior_j])
 
-    result = scipy.optimize.least_squares(
-        fun, prior_mean.copy(), jac=jac, method="lm", xtol=1e-12, ftol=1e-12, max_nfev=max_iterations * 10
-    )
-    theta = unpack(result.x)
-    final_jac = jac(result.x)
+    x, iterations = levenberg_marquardt(fun, jac, prior_mean.copy(), max_iterations)
+    theta = unpack(x)
+    final_jac = jac(x)
     std = np.zeros(model.size)
     try:
         cov = np.linalg.inv(final_jac.T @ final_jac)
@@ -122,9 +119,60 @@ def identify(
         theta=theta,
         free=tuple(int(i) for i in free_idx),
         residuals=model.residuals(theta, contacts),
-        iterations=int(result.nfev),
+        iterations=iterations,
         std=std,
     )
+
+
+def levenberg_marquardt(
+    fun: Callable[[FloatArray], FloatArray],
+    jac: Callable[[FloatArray], FloatArray],
+    x0: FloatArray,
+    max_iterations: int,
+    step_tolerance: float = 1e-12,
+) -> tuple[FloatArray, int]:
+    """Minimise ||fun(x)||^2 by Levenberg-Marquardt (Marquardt's diagonal scaling).
+
+    Stops when a step changes x by less than ``step_tolerance`` (relative) or lowers the
+    cost (a dimensionless chi-square here) by less than 1e-10 (1 + cost).
+
+    Returns:
+        The minimiser and the number of Jacobian evaluations.
+    """
+    x = x0.copy()
+    r = fun(x)
+    cost = float(r @ r)
+    damping = 1e-4
+    iterations = 0
+    while iterations < max_iterations:
+        j = jac(x)
+        iterations += 1
+        jtj = j.T @ j
+        grad = j.T @ r
+        diag = np.maximum(np.diag(jtj), 1e-30)
+        improved = False
+        while damping < 1e12:
+            try:
+                step = np.linalg.solve(jtj + damping * np.diag(diag), -grad)
+            except np.linalg.LinAlgError:
+                damping *= 10.0
+                continue
+            r_new = fun(x + step)
+            cost_new = float(r_new @ r_new)
+            if cost_new < cost:
+                improved = True
+                break
+            damping *= 10.0
+        if not improved:
+            break
+        x = x + step
+        r = r_new
+        gain = cost - cost_new
+        cost = cost_new
+        damping = max(damping / 10.0, 1e-12)
+        if np.linalg.norm(step) <= step_tolerance * (np.linalg.norm(x) + step_tolerance) or gain <= 1e-10 * (1.0 + cost):
+            break
+    return x, iterations
 
 
 def refit_planes(model: ContactModel, contacts: Contacts, theta: FloatArray, weights: Weights) -> FloatArray:
