@@ -24,6 +24,7 @@ from posegen.geometry import FloatArray
 from posegen.identifiability import BaseParameters, base_parameters
 from posegen.identification import Fit, Weights, identify, initial_planes, prior_scale, refit_planes
 from posegen.scene import Scene
+from posegen.simulation import settle_contacts
 
 LOG = logging.getLogger(__name__)
 
@@ -83,13 +84,7 @@ def weights_for(kappa: float, noise: Sequence[float]) -> Weights:
 def structural_base(model: ContactModel, contacts: Contacts, settings: Settings) -> BaseParameters:
     """Base parameters of the (chain, session) pairs present in ``contacts``."""
     scene = model.scene
-    rng = np.random.default_rng(settings.seed)
-    pairs = sorted(set(zip(contacts.chains, contacts.sessions, strict=True)))
-    n = settings.structural_postures
-    joints = rng.uniform(scene.lower, scene.upper, size=(n * len(pairs), len(scene.joint_names)))
-    chains = tuple(c for c, _ in pairs for _ in range(n))
-    sessions = tuple(s for _, s in pairs for _ in range(n))
-    rich = Contacts(joints, chains, sessions, ("",) * len(chains))
+    rich = level_postures(model, contacts, settings.structural_postures, settings.seed)
     theta = initial_planes(model, rich, model.nominal())
     _, jac = model.jacobian(theta, rich)
     noise = np.array(settings.noise)
@@ -99,6 +94,34 @@ def structural_base(model: ContactModel, contacts: Contacts, settings: Settings)
     planes = model.columns(Group.PLANE)
     robot = np.concatenate([model.columns(Group.PLACEMENT), model.columns(Group.CONTACT)])
     return base_parameters(regressor, scale, [planes, robot])
+
+
+def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -> Contacts:
+    """Random postures of each (chain, session) pair of ``contacts``, with level contact frames.
+
+    The regressor's structure depends on the contact being flush (to first order a
+    contact z offset is then a plane height), not on the height itself: uniform joint
+    samples whose contact frame points up are levelled (roll = pitch = 0) by the
+    smallest change of the chain's joints.
+    """
+    scene = model.scene
+    rng = np.random.default_rng(seed)
+    pairs = sorted(set(zip(contacts.chains, contacts.sessions, strict=True)))
+    theta = model.nominal()
+    joints, chains, sessions = [], [], []
+    for chain, session in pairs:
+        found = 0
+        while found < n:
+            batch = rng.uniform(scene.lower, scene.upper, size=(4 * n, len(scene.joint_names)))
+            trial = Contacts(batch, (chain,) * len(batch), (session,) * len(batch), ("",) * len(batch))
+            up = np.abs(model.residuals(theta, trial)[:, 1:]).max(axis=1) < np.deg2rad(45)
+            keep = np.flatnonzero(up)[: n - found]
+            joints.append(batch[keep])
+            found += len(keep)
+            chains += [chain] * len(keep)
+            sessions += [session] * len(keep)
+    rich = Contacts(np.vstack(joints), tuple(chains), tuple(sessions), ("",) * len(chains))
+    return settle_contacts(model, theta, rich, components=(1, 2))
 
 
 def _folds(contacts: Contacts, k: int, seed: int) -> FloatArray:

@@ -81,6 +81,103 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return 0 if result.ok else EXIT_VIOLATIONS
 
 
+def _load_postures(path: str, scene_joint_names: tuple[str, ...]):  # type: ignore[no-untyped-def]
+    """Postures (joints, chains, labels) of a pool or selection file."""
+    import numpy as np
+
+    from posegen.artefact import read_yaml
+    from posegen.errors import InputError
+    from posegen.pool import POOL_FORMAT, pool_from_dict
+
+    try:
+        data = read_yaml(path, POOL_FORMAT)
+    except InputError:
+        data = read_yaml(path, "posegen-selection")
+    pool = pool_from_dict(data, path)
+    if tuple(pool.joint_names) != scene_joint_names:
+        raise InputError(f"{path}: joint names differ from the robot model's")
+    if not pool.postures:
+        raise InputError(f"{path}: no postures")
+    labels = tuple(p.spot for p in pool.postures)
+    return np.array(pool.joints()), tuple(p.chain for p in pool.postures), labels
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from posegen.artefact import provenance, write_yaml
+    from posegen.config import load_config
+    from posegen.contact_model import Contacts
+    from posegen.measurements import write_measurements
+    from posegen.scene import Scene
+    from posegen.simulation import Perturbation, simulate
+
+    scene = Scene(load_config(args.config))
+    joints, chains, labels = _load_postures(args.postures, scene.joint_names)
+    planned = Contacts(joints, chains, (args.session,) * len(chains), labels)
+    perturbation = Perturbation(
+        length_m=args.error_mm * 1e-3,
+        angle_rad=float(np.deg2rad(args.error_deg)),
+        plane_height_m=float(scene.table_pose[2, 3]),
+        encoder_noise_rad=float(np.deg2rad(args.noise_deg)),
+    )
+    recorded, model, theta = simulate(scene, planned, perturbation, args.seed)
+    prov = provenance(scene.config.to_dict(), scene.files.sha256(), args.seed)
+    prov["simulation"] = {"postures": args.postures, "error_mm": args.error_mm, "error_deg": args.error_deg,
+                          "encoder_noise_deg": args.noise_deg}
+    output = Path(args.output)
+    truth = output.with_name(output.stem + ".truth.yaml")
+    nominal = model.nominal()
+    write_yaml(truth, {"format": "posegen-truth", "format_version": 1, "provenance": prov,
+                       "parameters": {p.name: {"true": float(theta[i]), "nominal": float(nominal[i])}
+                                      for i, p in enumerate(model.parameters)}})
+    write_measurements(output, scene, recorded, prov)
+    print(f"simulate: {len(recorded)} contacts of a perturbed robot -> {output} (true parameters: {truth})")
+    return 0
+
+
+def _measurement_args(items: list[str], scene):  # type: ignore[no-untyped-def]
+    """Read ``FILE[@SESSION]`` arguments into one set of contacts."""
+    from posegen.measurements import read_measurements
+
+    contacts = None
+    for item in items:
+        path, _, session = item.partition("@")
+        part = read_measurements(path, scene, session or None)
+        contacts = part if contacts is None else contacts.concat(part)
+    return contacts
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from posegen.calibration import Settings, calibrate
+    from posegen.calibration_report import format_table, write_calibration
+    from posegen.config import load_config
+    from posegen.scene import Scene
+
+    scene = Scene(load_config(args.config))
+    train = _measurement_args(args.measurements, scene)
+    held_out = _measurement_args(args.validate, scene) if args.validate else None
+    sessions = list(dict.fromkeys(train.sessions + (held_out.sessions if held_out else ())))
+    settings = Settings(kappa=args.prior_scale, drop_outliers=not args.keep_outliers, seed=args.seed)
+    steps = 3 + (1 if args.prior_scale else 2 * len(settings.kappas))
+    with _progress_bar(steps, "step", args.quiet) as bar:
+
+        def progress(step: str) -> None:
+            bar.set_description(step, refresh=False)
+            bar.update(1)
+
+        calibration = calibrate(scene, train, sessions, settings, progress)
+    report = write_calibration(calibration, held_out, Path(args.output), args.seed)
+    base = report["base_parameters"]
+    print(f"calibrate: {len(train)} training contacts, {base['total']} base parameters "
+          f"(robot per chain: {base['robot_parameters_per_chain']}), prior x{report['weights']['prior_length_mm']:g}")
+    for outlier in report["outliers"]:
+        print(f"  outlier left out: {outlier['contact']} (normalised CV residual {outlier['normalised_cv_residual']})")
+    print(format_table(report))
+    print(f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, parameters.png, residuals.png)")
+    return 0
+
+
 def _positive(text: str) -> int:
     value = int(text)
     if value <= 0:
@@ -109,6 +206,29 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
     check.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     check.set_defaults(run=_cmd_check)
+
+    sim = sub.add_parser("simulate", help="contacts of a perturbed robot at planned postures")
+    sim.add_argument("postures", help="pool or selection file")
+    sim.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
+    sim.add_argument("--seed", type=int, default=0, help="seed of the robot errors and noise (default 0)")
+    sim.add_argument("--error-mm", type=float, default=2.0, help="sigma of length errors (default 2 mm)")
+    sim.add_argument("--error-deg", type=float, default=0.5, help="sigma of angle errors (default 0.5 deg, clipped 1.5)")
+    sim.add_argument("--noise-deg", type=float, default=0.005, help="encoder noise sigma (default 0.005 deg)")
+    sim.add_argument("--session", default="sim", help="table session name (default sim)")
+    sim.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
+    sim.set_defaults(run=_cmd_simulate)
+
+    cal = sub.add_parser("calibrate", help="identify the kinematics from recorded contacts")
+    cal.add_argument("measurements", nargs="+", help="measurement files (posegen YAML or CSV), FILE[@SESSION]")
+    cal.add_argument("--validate", nargs="*", default=[], help="held-out measurement files, FILE[@SESSION]")
+    cal.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
+    cal.add_argument("--prior-scale", type=float, default=None,
+                     help="prior size x (1 mm, 0.1 deg); default: chosen by cross-validation")
+    cal.add_argument("--keep-outliers", action="store_true", help="report outliers but keep them in the fit")
+    cal.add_argument("--seed", type=int, default=0, help="seed of the CV folds (default 0)")
+    cal.add_argument("-o", "--output", default="plans/calibration", help="output folder (default plans/calibration)")
+    cal.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    cal.set_defaults(run=_cmd_calibrate)
     return parser
 
 

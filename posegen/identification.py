@@ -79,15 +79,15 @@ def identify(
         model: Measurement model.
         contacts: Training contacts.
         free: Parameter indices to estimate (base parameters); others stay at ``theta0``.
-        weights: Noise and prior.
-        theta0: (p,) starting point and prior mean for the robot parameters.
+        weights: Noise and prior; the prior is centred on the nominal (URDF) values.
+        theta0: (p,) starting point.
         max_iterations: Cap on Jacobian evaluations.
     """
     free_idx = np.array(free, dtype=int)
     noise = np.array(weights.noise)
     scale = prior_scale(model, weights)[free_idx]
     has_prior = np.isfinite(scale)
-    prior_mean = theta0[free_idx]
+    prior_mean = model.nominal()[free_idx]
 
     def unpack(x: FloatArray) -> FloatArray:
         theta = theta0.copy()
@@ -106,7 +106,7 @@ def identify(
         prior_j[:, has_prior] = prior_rows
         return np.vstack([j, prior_j])
 
-    x, iterations = levenberg_marquardt(fun, jac, prior_mean.copy(), max_iterations)
+    x, iterations = levenberg_marquardt(fun, jac, theta0[free_idx].copy(), max_iterations)
     theta = unpack(x)
     final_jac = jac(x)
     std = np.zeros(model.size)

@@ -54,26 +54,37 @@ def true_parameters(model: ContactModel, perturbation: Perturbation, seed: int) 
     return theta
 
 
-def settle_contacts(model: ContactModel, theta: FloatArray, contacts: Contacts) -> Contacts:
+def settle_contacts(
+    model: ContactModel, theta: FloatArray, contacts: Contacts, components: tuple[int, ...] = (0, 1, 2)
+) -> Contacts:
     """Move each contact's chain joints minimally until it is flush under ``theta``.
 
     Joints outside a contact's chain have no effect on it, so minimum-norm steps over the
     union of the chains' joints only move the chain's own.
 
+    Args:
+        model: Measurement model.
+        theta: (p,) parameters of the robot and planes.
+        contacts: Contacts to settle.
+        components: Measurement components to zero: (0, 1, 2) height, roll and pitch;
+            (1, 2) only level the contact frame.
+
     Raises:
         InfeasibleError: A contact cannot be made flush (the plane is out of reach).
     """
+    comp = list(components)
     cols = sorted({j for chain in model.chains.values() for j in chain.joint_indices})
     joints = contacts.joints.copy()
 
     def residuals(values: FloatArray) -> FloatArray:
-        return model.residuals(theta, Contacts(values, contacts.chains, contacts.sessions, contacts.labels))
+        full = model.residuals(theta, Contacts(values, contacts.chains, contacts.sessions, contacts.labels))
+        return full[:, comp]
 
-    res = residuals(joints)  # (n, 3)
+    res = residuals(joints)  # (n, k)
     for _ in range(MAX_STEPS):
         if np.max(np.abs(res)) < CONTACT_TOLERANCE:
             break
-        jac = np.zeros((len(contacts), 3, len(cols)))
+        jac = np.zeros((len(contacts), len(comp), len(cols)))
         for k, col in enumerate(cols):
             shifted = joints.copy()
             shifted[:, col] += FD_STEP_RAD
