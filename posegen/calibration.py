@@ -17,14 +17,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from posegen.contact_model import ContactModel, Contacts, Group
 from posegen.errors import InfeasibleError
-from posegen.geometry import FloatArray
+from posegen.geometry import FloatArray, Indices
 from posegen.identifiability import BaseParameters, base_parameters
 from posegen.identification import Fit, Weights, identify, initial_planes, prior_scale, refit_planes
 from posegen.scene import Scene
-from posegen.simulation import settle_contacts
+from posegen.simulation import settle
 
 LOG = logging.getLogger(__name__)
 
@@ -43,7 +44,7 @@ class Settings:
     folds: int = 5
     outlier_chi: float = 4.03  # sqrt of the 0.999 quantile of chi-square with 3 dof
     drop_outliers: bool = True
-    structural_postures: int = 200  # per (chain, session) pair
+    structural_postures: int = 100  # per (chain, session) pair
     seed: int = 0
 
 
@@ -72,7 +73,7 @@ class Calibration:
     kept: tuple[int, ...] = field(default=())  # indices in ``train`` used by the final fit
 
 
-def weights_for(kappa: float, noise: Sequence[float]) -> Weights:
+def weights_for(kappa: float, noise: Sequence[float] | FloatArray) -> Weights:
     """Weights with a prior of size kappa x (1 mm, 0.1 deg)."""
     return Weights(
         noise=(float(noise[0]), float(noise[1]), float(noise[2])),
@@ -83,7 +84,6 @@ def weights_for(kappa: float, noise: Sequence[float]) -> Weights:
 
 def structural_base(model: ContactModel, contacts: Contacts, settings: Settings) -> BaseParameters:
     """Base parameters of the (chain, session) pairs present in ``contacts``."""
-    scene = model.scene
     rich = level_postures(model, contacts, settings.structural_postures, settings.seed)
     theta = initial_planes(model, rich, model.nominal())
     _, jac = model.jacobian(theta, rich)
@@ -97,34 +97,63 @@ def structural_base(model: ContactModel, contacts: Contacts, settings: Settings)
 
 
 def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -> Contacts:
-    """Random postures of each (chain, session) pair of ``contacts``, with level contact frames.
+    """Random standing contacts of each (chain, session) pair of ``contacts``.
 
-    The regressor's structure depends on the contact being flush (to first order a
-    contact z offset is then a plane height), not on the height itself: uniform joint
-    samples whose contact frame points up are levelled (roll = pitch = 0) by the
-    smallest change of the chain's joints.
+    Shaped like real ones, because the regressor's rank depends on it: both soles on
+    the floor (the stance closure ties the two legs), and every contact flush with a
+    level plane at its session's mean contact height (one height per session removes
+    combinations that varying heights would show). Each is a training contact with
+    every joint perturbed at random (legs by up to 0.3 rad, the rest by up to 0.5 rad),
+    the second leg closed onto its sole and the contact settled by the smallest arm and
+    torso motion.
     """
     scene = model.scene
     rng = np.random.default_rng(seed)
+    legs = sorted({j for sole in scene.config.stance.sole_frames for j in scene.leg_joints(sole)})
+    spread = np.full(len(scene.joint_names), 0.5)
+    spread[legs] = 0.3
+    theta = initial_planes(model, contacts, model.nominal())
+    for session in model.sessions:  # level planes at the measured heights
+        theta[model.index[f"plane@{session}.roll"]] = theta[model.index[f"plane@{session}.pitch"]] = 0.0
     pairs = sorted(set(zip(contacts.chains, contacts.sessions, strict=True)))
-    theta = model.nominal()
-    joints, chains, sessions = [], [], []
+    parts: list[Contacts] = []
     for chain, session in pairs:
+        seeds = contacts.joints[
+            [
+                i
+                for i, (c, s) in enumerate(zip(contacts.chains, contacts.sessions, strict=True))
+                if (c, s) == (chain, session)
+            ]
+        ]
         found = 0
-        while found < n:
-            batch = rng.uniform(scene.lower, scene.upper, size=(4 * n, len(scene.joint_names)))
-            trial = Contacts(batch, (chain,) * len(batch), (session,) * len(batch), ("",) * len(batch))
-            up = np.abs(model.residuals(theta, trial)[:, 1:]).max(axis=1) < np.deg2rad(45)
-            keep = np.flatnonzero(up)[: n - found]
-            joints.append(batch[keep])
+        for _attempt in range(50):
+            samples = []
+            for _ in range(2 * (n - found)):
+                base = seeds[rng.integers(len(seeds))]
+                sample = np.clip(base + rng.uniform(-spread, spread), scene.lower, scene.upper)
+                closed = scene.close_stance(sample)
+                if closed is not None:
+                    samples.append(closed)
+            if not samples:
+                continue
+            batch = Contacts(
+                np.array(samples), (chain,) * len(samples), (session,) * len(samples), ("",) * len(samples)
+            )
+            settled, converged = settle(model, theta, batch)
+            keep = np.flatnonzero(converged)[: n - found]
+            parts.append(settled.subset(keep))
             found += len(keep)
-            chains += [chain] * len(keep)
-            sessions += [session] * len(keep)
-    rich = Contacts(np.vstack(joints), tuple(chains), tuple(sessions), ("",) * len(chains))
-    return settle_contacts(model, theta, rich, components=(1, 2))
+            if found >= n:
+                break
+        else:
+            raise InfeasibleError(f"cannot generate standing contacts like those of chain '{chain}'")
+    out = parts[0]
+    for part in parts[1:]:
+        out = out.concat(part)
+    return out
 
 
-def _folds(contacts: Contacts, k: int, seed: int) -> FloatArray:
+def _folds(contacts: Contacts, k: int, seed: int) -> NDArray[np.int_]:
     """Fold index per contact, stratified by session. Shape (n,)."""
     rng = np.random.default_rng(seed)
     fold = np.zeros(len(contacts), dtype=int)
@@ -136,7 +165,13 @@ def _folds(contacts: Contacts, k: int, seed: int) -> FloatArray:
 
 
 def cross_validate(
-    model: ContactModel, contacts: Contacts, free: Sequence[int], weights: Weights, theta0: FloatArray, k: int, seed: int
+    model: ContactModel,
+    contacts: Contacts,
+    free: Indices,
+    weights: Weights,
+    theta0: FloatArray,
+    k: int,
+    seed: int,
 ) -> FloatArray:
     """Residual of each contact predicted by a fit on the other folds. Shape (n, 3)."""
     fold = _folds(contacts, k, seed)
@@ -156,6 +191,7 @@ def calibrate(
     sessions: Sequence[str],
     settings: Settings | None = None,
     progress: Callable[[str], None] | None = None,
+    base: BaseParameters | None = None,
 ) -> Calibration:
     """Calibrate the chains seen in ``train``.
 
@@ -165,9 +201,12 @@ def calibrate(
         sessions: Every session the model must know (training and held-out).
         settings: How to run; defaults if None.
         progress: Called with a short description of each step.
+        base: Base parameters to use (of a model of the same chains and sessions);
+            None: found by :func:`structural_base`.
 
     Raises:
         InfeasibleError: Too few contacts to cross-validate or to fit.
+
     """
     settings = settings or Settings()
     say = progress or (lambda _: None)
@@ -175,11 +214,10 @@ def calibrate(
         raise InfeasibleError(f"{len(train)} training contacts: at least {2 * settings.folds} are needed")
     model = ContactModel(scene, sorted(set(train.chains)), sessions)
     say("base parameters")
-    base = structural_base(model, train, settings)
+    if base is None:
+        base = structural_base(model, train, settings)
     start = initial_planes(model, train, model.nominal())
-    side = np.array(
-        [i for i in base.columns if model.parameters[i].group in (Group.PLANE, Group.CONTACT)], dtype=int
-    )
+    side = np.array([i for i in base.columns if model.parameters[i].group in (Group.PLANE, Group.CONTACT)], dtype=int)
     say("before: plane and contact parameters")
     before = identify(model, train, side, weights_for(1e6, settings.noise), start)
 
@@ -197,7 +235,8 @@ def calibrate(
                 model, train, base.columns, weights_for(candidate, noise), before.theta, settings.folds, settings.seed
             )
             score = float(np.mean(np.sum((res / noise) ** 2, axis=1)))
-            cv_points.append(CvPoint(candidate, score, tuple(float(v) for v in np.mean(np.abs(res), axis=0))))
+            mean_abs = np.mean(np.abs(res), axis=0)
+            cv_points.append(CvPoint(candidate, score, (float(mean_abs[0]), float(mean_abs[1]), float(mean_abs[2]))))
             if score < best:
                 best, kappa, cv_res = score, candidate, res
         noise = np.maximum(np.sqrt(np.mean(cv_res**2, axis=0)), NOISE_FLOOR)  # re-estimated from CV
@@ -236,8 +275,10 @@ def held_out_theta(calibration: Calibration, fit: Fit, contacts: Contacts) -> Fl
     for session in sorted(set(contacts.sessions) - set(train.sessions)):
         chains = [c for c, s in zip(contacts.chains, contacts.sessions, strict=True) if s == session]
         chain = max(set(chains), key=chains.count)
-        counts = {s: sum(1 for c, t in zip(train.chains, train.sessions, strict=True) if c == chain and t == s)
-                  for s in set(train.sessions)}
+        counts = {
+            s: sum(1 for c, t in zip(train.chains, train.sessions, strict=True) if c == chain and t == s)
+            for s in set(train.sessions)
+        }
         source = max(sorted(counts), key=lambda s: counts[s])
         if counts[source] == 0:
             raise InfeasibleError(f"chain '{chain}' of held-out session '{session}' has no training contact")

@@ -41,7 +41,11 @@ def residual_tables(calibration: Calibration, held_out: Contacts | None) -> dict
     train_before = calibration.model.residuals(calibration.before.theta, calibration.train.subset(kept))
     train_after = calibration.model.residuals(calibration.after.theta, calibration.train.subset(kept))
     tables: dict[str, Any] = {
-        "training": {"before": residual_stats(train_before), "after": residual_stats(train_after), "contacts": len(kept)}
+        "training": {
+            "before": residual_stats(train_before),
+            "after": residual_stats(train_after),
+            "contacts": len(kept),
+        }
     }
     if held_out is not None:
         for protocol, by_model in held_out_residuals(calibration, held_out).items():
@@ -153,13 +157,18 @@ def write_calibration(
         "chains": sorted(model.chains),
         "sessions": list(model.sessions),
         "weights": {
-            "noise": dict(zip(COMPONENTS, (np.array(calibration.weights.noise) * DISPLAY).round(4).tolist(), strict=True)),
+            "noise": dict(
+                zip(COMPONENTS, (np.array(calibration.weights.noise) * DISPLAY).round(4).tolist(), strict=True)
+            ),
             "prior_length_mm": calibration.weights.prior_length_m * 1e3,
             "prior_angle_deg": float(np.rad2deg(calibration.weights.prior_angle_rad)),
         },
         "cross_validation": [
-            {"prior_scale": p.kappa, "score": round(p.score, 4),
-             "mean_abs": dict(zip(COMPONENTS, (np.array(p.mean_abs) * DISPLAY).round(3).tolist(), strict=True))}
+            {
+                "prior_scale": p.kappa,
+                "score": round(p.score, 4),
+                "mean_abs": dict(zip(COMPONENTS, (np.array(p.mean_abs) * DISPLAY).round(3).tolist(), strict=True)),
+            }
             for p in calibration.cv
         ],
         "outliers": [
@@ -186,7 +195,9 @@ def write_calibration(
     plot_parameters(calibration, out_dir / "parameters.png")
     if held_out is not None:
         res = held_out_residuals(calibration, held_out)["training_plane"]
-        plot_residuals(res["before"], res["after"], "Held-out residuals (plane from training)", out_dir / "residuals.png")
+        plot_residuals(
+            res["before"], res["after"], "Held-out residuals (plane from training)", out_dir / "residuals.png"
+        )
     else:
         sub = calibration.train.subset(list(calibration.kept))
         plot_residuals(
@@ -201,8 +212,10 @@ def write_calibration(
 
 def format_table(report: dict[str, Any]) -> str:
     """The before/after table printed by ``posegen calibrate`` (mean absolute; RMS)."""
-    lines = ["set                         contacts  model    z (mm)        roll (deg)    pitch (deg)",
-             "                                              mean   rms    mean   rms    mean   rms"]
+    lines = [
+        "set                         contacts  model    z (mm)        roll (deg)    pitch (deg)",
+        "                                              mean   rms    mean   rms    mean   rms",
+    ]
     for key, table in report["residuals"].items():
         for model in ("before", "after"):
             m, r = table[model]["mean_abs"], table[model]["rms"]

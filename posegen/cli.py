@@ -123,14 +123,26 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     )
     recorded, model, theta = simulate(scene, planned, perturbation, args.seed)
     prov = provenance(scene.config.to_dict(), scene.files.sha256(), args.seed)
-    prov["simulation"] = {"postures": args.postures, "error_mm": args.error_mm, "error_deg": args.error_deg,
-                          "encoder_noise_deg": args.noise_deg}
+    prov["simulation"] = {
+        "postures": args.postures,
+        "error_mm": args.error_mm,
+        "error_deg": args.error_deg,
+        "encoder_noise_deg": args.noise_deg,
+    }
     output = Path(args.output)
     truth = output.with_name(output.stem + ".truth.yaml")
     nominal = model.nominal()
-    write_yaml(truth, {"format": "posegen-truth", "format_version": 1, "provenance": prov,
-                       "parameters": {p.name: {"true": float(theta[i]), "nominal": float(nominal[i])}
-                                      for i, p in enumerate(model.parameters)}})
+    write_yaml(
+        truth,
+        {
+            "format": "posegen-truth",
+            "format_version": 1,
+            "provenance": prov,
+            "parameters": {
+                p.name: {"true": float(theta[i]), "nominal": float(nominal[i])} for i, p in enumerate(model.parameters)
+            },
+        },
+    )
     write_measurements(output, scene, recorded, prov)
     print(f"simulate: {len(recorded)} contacts of a perturbed robot -> {output} (true parameters: {truth})")
     return 0
@@ -169,8 +181,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         calibration = calibrate(scene, train, sessions, settings, progress)
     report = write_calibration(calibration, held_out, Path(args.output), args.seed)
     base = report["base_parameters"]
-    print(f"calibrate: {len(train)} training contacts, {base['total']} base parameters "
-          f"(robot per chain: {base['robot_parameters_per_chain']}), prior x{report['weights']['prior_length_mm']:g}")
+    print(
+        f"calibrate: {len(train)} training contacts, {base['total']} base parameters "
+        f"(robot per chain: {base['robot_parameters_per_chain']}), prior x{report['weights']['prior_length_mm']:g}"
+    )
     for outlier in report["outliers"]:
         print(f"  outlier left out: {outlier['contact']} (normalised CV residual {outlier['normalised_cv_residual']})")
     print(format_table(report))
@@ -212,7 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
     sim.add_argument("--seed", type=int, default=0, help="seed of the robot errors and noise (default 0)")
     sim.add_argument("--error-mm", type=float, default=2.0, help="sigma of length errors (default 2 mm)")
-    sim.add_argument("--error-deg", type=float, default=0.5, help="sigma of angle errors (default 0.5 deg, clipped 1.5)")
+    sim.add_argument(
+        "--error-deg", type=float, default=0.5, help="sigma of angle errors (default 0.5 deg, clipped 1.5)"
+    )
     sim.add_argument("--noise-deg", type=float, default=0.005, help="encoder noise sigma (default 0.005 deg)")
     sim.add_argument("--session", default="sim", help="table session name (default sim)")
     sim.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
@@ -222,8 +238,12 @@ def build_parser() -> argparse.ArgumentParser:
     cal.add_argument("measurements", nargs="+", help="measurement files (posegen YAML or CSV), FILE[@SESSION]")
     cal.add_argument("--validate", nargs="*", default=[], help="held-out measurement files, FILE[@SESSION]")
     cal.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
-    cal.add_argument("--prior-scale", type=float, default=None,
-                     help="prior size x (1 mm, 0.1 deg); default: chosen by cross-validation")
+    cal.add_argument(
+        "--prior-scale",
+        type=float,
+        default=None,
+        help="prior size x (1 mm, 0.1 deg); default: chosen by cross-validation",
+    )
     cal.add_argument("--keep-outliers", action="store_true", help="report outliers but keep them in the fit")
     cal.add_argument("--seed", type=int, default=0, help="seed of the CV folds (default 0)")
     cal.add_argument("-o", "--output", default="plans/calibration", help="output folder (default plans/calibration)")

@@ -13,8 +13,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
-from posegen.geometry import FloatArray
+from posegen.geometry import FloatArray, Indices
 from posegen.kinematics import (
     OFFSET_FIELDS,
     PLACEMENT_FIELDS,
@@ -55,7 +56,7 @@ class Contacts:
     def __len__(self) -> int:
         return len(self.chains)
 
-    def subset(self, rows: Sequence[int] | FloatArray) -> Contacts:
+    def subset(self, rows: Indices) -> Contacts:
         """The contacts at the given row indices (copies)."""
         idx = [int(i) for i in rows]
         return Contacts(
@@ -108,7 +109,9 @@ class ContactModel:
         for model in self.chains.values():
             for field in OFFSET_FIELDS:
                 unit = Unit.LENGTH if field == "z" else Unit.ANGLE
-                params.append(Parameter(f"{model.contact_frame}.{field}", model.contact_frame, field, unit, Group.CONTACT))
+                params.append(
+                    Parameter(f"{model.contact_frame}.{field}", model.contact_frame, field, unit, Group.CONTACT)
+                )
                 nominal.append(0.0)
         for session in self.sessions:
             for field in OFFSET_FIELDS:
@@ -128,14 +131,12 @@ class ContactModel:
         """Nominal parameter vector (URDF values, zero offsets). Shape (p,)."""
         return self._nominal.copy()
 
-    def columns(self, group: Group) -> FloatArray:
+    def columns(self, group: Group) -> NDArray[np.intp]:
         """Indices of the parameters of a group. Shape (k,)."""
         return np.array([i for i, p in enumerate(self.parameters) if p.group == group], dtype=int)
 
     def _placements(self, theta: FloatArray, model: ChainModel) -> dict[str, FloatArray]:
-        return {
-            name: theta[[self.index[f"{name}.{f}"] for f in PLACEMENT_FIELDS]] for name in model.placement_names
-        }
+        return {name: theta[[self.index[f"{name}.{f}"] for f in PLACEMENT_FIELDS]] for name in model.placement_names}
 
     def _offsets(self, theta: FloatArray, owner: str) -> FloatArray:
         return theta[[self.index[f"{owner}.{f}"] for f in OFFSET_FIELDS]]

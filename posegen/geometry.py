@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
+Indices = Sequence[int] | NDArray[np.integer[Any]]  # row or column indices
 
 
 def yaw_rotation(yaw_rad: float) -> FloatArray:

@@ -18,7 +18,7 @@ import numpy as np
 import scipy.linalg
 
 from posegen.errors import InfeasibleError
-from posegen.geometry import FloatArray
+from posegen.geometry import FloatArray, Indices
 
 RANK_TOLERANCE = 1e-4  # |R_ii| below this times |R_00| counts as zero (TALOS gap: 9e-3 down to 1e-14)
 
@@ -48,9 +48,7 @@ def _pivoted_block(matrix: FloatArray, scale_ref: float) -> tuple[list[int], Flo
     return [int(p) for p in perm[:rank]], diag[:rank]
 
 
-def base_parameters(
-    regressor: FloatArray, column_scale: FloatArray, priority: Sequence[Sequence[int]]
-) -> BaseParameters:
+def base_parameters(regressor: FloatArray, column_scale: FloatArray, priority: Sequence[Indices]) -> BaseParameters:
     """Find the base parameters of a stacked regressor.
 
     Args:
@@ -61,6 +59,7 @@ def base_parameters(
 
     Raises:
         InfeasibleError: The regressor has no identifiable parameter.
+
     """
     scaled = regressor * column_scale[None, :]
     chosen: list[int] = []
@@ -82,7 +81,9 @@ def base_parameters(
         raise InfeasibleError("no identifiable parameter: the regressor is zero (too few or identical postures?)")
     dependent = [c for c in range(scaled.shape[1]) if c not in set(chosen)]
     base = scaled[:, chosen]
-    grouping = np.linalg.lstsq(base, scaled[:, dependent], rcond=None)[0] if dependent else np.zeros((len(chosen), 0))
+    grouping = np.zeros((len(chosen), 0))
+    if dependent:
+        grouping = np.asarray(np.linalg.lstsq(base, scaled[:, dependent], rcond=None)[0], dtype=float)
     return BaseParameters(
         columns=tuple(chosen),
         dependent=tuple(dependent),
@@ -100,6 +101,7 @@ def observability_o1(regressor: FloatArray, n_postures: int) -> float:
 
     Returns:
         O1, or 0.0 when the regressor is rank deficient.
+
     """
     m, nb = regressor.shape
     if m < nb:

@@ -13,13 +13,13 @@ This is the maximum a posteriori estimate under Gaussian noise and a Gaussian pr
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from posegen.contact_model import ContactModel, Contacts, Group, Unit
-from posegen.geometry import FloatArray
+from posegen.geometry import FloatArray, Indices
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,7 @@ def initial_planes(model: ContactModel, contacts: Contacts, theta: FloatArray) -
 def identify(
     model: ContactModel,
     contacts: Contacts,
-    free: Sequence[int],
+    free: Indices,
     weights: Weights,
     theta0: FloatArray,
     max_iterations: int = 50,
@@ -82,6 +82,7 @@ def identify(
         weights: Noise and prior; the prior is centred on the nominal (URDF) values.
         theta0: (p,) starting point.
         max_iterations: Cap on Jacobian evaluations.
+
     """
     free_idx = np.array(free, dtype=int)
     noise = np.array(weights.noise)
@@ -138,6 +139,7 @@ def levenberg_marquardt(
 
     Returns:
         The minimiser and the number of Jacobian evaluations.
+
     """
     x = x0.copy()
     r = fun(x)
@@ -170,7 +172,9 @@ def levenberg_marquardt(
         gain = cost - cost_new
         cost = cost_new
         damping = max(damping / 10.0, 1e-12)
-        if np.linalg.norm(step) <= step_tolerance * (np.linalg.norm(x) + step_tolerance) or gain <= 1e-10 * (1.0 + cost):
+        if np.linalg.norm(step) <= step_tolerance * (np.linalg.norm(x) + step_tolerance) or gain <= 1e-10 * (
+            1.0 + cost
+        ):
             break
     return x, iterations
 

@@ -102,6 +102,7 @@ class ChainModel:
         elements: Placements from the sole to the gripper frame.
         contact_nominal: Nominal contact frame in the gripper frame, (4, 4).
         placement_names: Names of the placements, in chain order.
+
     """
 
     def __init__(self, scene: Scene, chain: str) -> None:
@@ -148,6 +149,7 @@ class ChainModel:
 
         Returns:
             A list of (n, 4, 4) element transforms and the (4, 4) gripper-to-contact transform.
+
         """
         n = joints.shape[0]
         out = []
@@ -202,6 +204,7 @@ def tilt_measurement(frames: FloatArray) -> FloatArray:
 
     Returns:
         (n, 3) measurements.
+
     """
     roll = np.arctan2(frames[:, 2, 1], frames[:, 2, 2])
     pitch = np.arcsin(np.clip(-frames[:, 2, 0], -1.0, 1.0))
@@ -217,6 +220,7 @@ def tilt_measurement_jacobian(row: FloatArray, d_row: FloatArray) -> FloatArray:
 
     Returns:
         (n, 3, p) derivatives of (z, roll, pitch).
+
     """
     r20, r21, r22 = row[:, 0, None], row[:, 1, None], row[:, 2, None]
     d_z = d_row[:, :, 3]

@@ -65,6 +65,7 @@ def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TO
 
     Raises:
         InputError: No header, an unknown gripper or joint, text or out-of-range angles.
+
     """
     try:
         rows = list(csv.reader(path.read_text().splitlines()))
@@ -127,6 +128,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
 
     Raises:
         InputError: The file is missing or malformed.
+
     """
     path = Path(path)
     if not path.is_file():

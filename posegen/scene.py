@@ -176,6 +176,7 @@ class Scene:
             _frame_id(nominal, frame)
         self.urdf_xml = augmented_urdf(nominal_text, nominal, config)
         self.model = pin.buildModelFromXML(self.urdf_xml, pin.JointModelFreeFlyer())
+        self._data = self.model.createData()  # scratch space of configuration()
         self.joint_names = tuple(
             str(self.model.names[j]) for j in range(1, self.model.njoints) if self.model.joints[j].nq == 1
         )
@@ -267,7 +268,7 @@ class Scene:
         """
         q = pin.neutral(self.model)
         q[self._q_index] = joints
-        data = self.model.createData()
+        data = self._data
         pin.framesForwardKinematics(self.model, data, q)
         base_to_sole = data.oMf[self.model.getFrameId(self.anchor_sole)]
         base = pin.SE3(self.sole_poses[self.anchor_sole]) * base_to_sole.inverse()
@@ -277,6 +278,46 @@ class Scene:
     def joints_of(self, q: FloatArray) -> FloatArray:
         """Actuated joint angles (rad) of a full configuration. Shape (nj,)."""
         return np.array(q[self._q_index], dtype=float)
+
+    def leg_joints(self, sole_frame: str) -> list[int]:
+        """Indices (in :attr:`joint_names`) of the joints from a sole up to the root, sole first."""
+        joint = self.model.frames[self.frame_id(sole_frame)].parentJoint
+        out = []
+        while joint > 1:  # 0: universe, 1: the floating base
+            out.append(self.joint_index(str(self.model.names[joint])))
+            joint = self.model.parents[joint]
+        return out
+
+    def close_stance(self, joints: FloatArray, iterations: int = 30) -> FloatArray | None:
+        """Move the second leg so that its sole meets its fixed pose (Gauss-Newton).
+
+        Args:
+            joints: (nj,) joint angles; the anchor sole is placed by :meth:`configuration`.
+            iterations: Cap on Gauss-Newton steps.
+
+        Returns:
+            New joint angles with both soles at their poses (1e-10 m/rad), or None if the
+            second sole cannot be reached.
+
+        """
+        frame = self.config.stance.sole_frames[1]
+        frame_id = self.frame_id(frame)
+        leg = self.leg_joints(frame)
+        out = np.array(joints, dtype=float)
+        target = pin.SE3(self.sole_poses[frame])
+        data = self._data
+        for _ in range(iterations):
+            q = self.configuration(out)
+            pin.framesForwardKinematics(self.model, data, q)
+            error = pin.log6(data.oMf[frame_id].actInv(target)).vector
+            if np.linalg.norm(error) < 1e-10:
+                return out
+            pin.computeJointJacobians(self.model, data, q)
+            jac = pin.getFrameJacobian(self.model, data, frame_id, pin.LOCAL)[:, self._v_index[leg]]
+            out[leg] += np.linalg.lstsq(jac, error, rcond=None)[0]
+            if np.any(out[leg] < self.lower[leg]) or np.any(out[leg] > self.upper[leg]):
+                return None
+        return None
 
     def velocity_indices(self) -> FloatArray:
         """Indices of the actuated joints in the velocity vector. Shape (nj,)."""

@@ -17,7 +17,7 @@ import pinocchio as pin
 from posegen.contact_model import ContactModel
 from posegen.errors import InputError
 from posegen.geometry import FloatArray
-from posegen.kinematics import PLACEMENT_FIELDS, OFFSET_FIELDS, offset_matrix, placement_matrix
+from posegen.kinematics import OFFSET_FIELDS, PLACEMENT_FIELDS, offset_matrix, placement_matrix
 
 
 def _format(values: FloatArray) -> str:
@@ -49,6 +49,7 @@ def calibrated_urdf(urdf_text: str, model: ContactModel, theta: FloatArray) -> s
         urdf_text: The original (nominal) URDF.
         model: The measurement model the parameters belong to.
         theta: (p,) identified parameters.
+
     """
     root = ET.fromstring(urdf_text)
     pin_model = model.scene.model

@@ -91,3 +91,46 @@ def test_check_rejects_files_that_are_not_pools(tmp_path, capsys):
     code, _, err = run(["check", str(tmp_path / "missing.yaml")], capsys)
     assert code == 2
     assert_one_line_error(err)
+
+
+def test_simulate_then_calibrate(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    meas = tmp_path / "meas.yaml"
+    code, stdout, _ = run(["simulate", str(EXAMPLE_POOL), "--seed", "2", "-o", str(meas)], capsys)
+    assert code == 0 and meas.exists() and (tmp_path / "meas.truth.yaml").exists()
+    out = tmp_path / "cal"
+    code, stdout, _ = run(["calibrate", f"{meas}@day1", "--prior-scale", "5", "-q", "-o", str(out)], capsys)
+    assert code == 0, stdout
+    assert "training" in stdout and (out / "calibrated.urdf").exists()
+
+
+def test_calibrate_real_csv(tmp_path, capsys):
+    from tests.conftest import REAL_DATA
+
+    out = tmp_path / "real"
+    code, stdout, _ = run(
+        [
+            "calibrate",
+            str(REAL_DATA / "left_train.csv"),
+            str(REAL_DATA / "right_train.csv"),
+            "--validate",
+            str(REAL_DATA / "left_validation.csv"),
+            "-q",
+            "-o",
+            str(out),
+        ],
+        capsys,
+    )
+    assert code == 0
+    assert "held_out_training_plane" in stdout and "held_out_refitted_plane" in stdout
+
+
+def test_calibrate_bad_file(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("joint_names,arm_left_1_joint\ngripper,talos/left_gripper,handle,x,joint_states,abc\n")
+    out = tmp_path / "out"
+    code, _, err = run(["calibrate", str(bad), "-q", "-o", str(out)], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    assert not out.exists()

@@ -28,7 +28,7 @@ def test_malformed_yaml_is_a_config_error(tmp_path):
 def test_missing_key_names_its_path():
     data = raw()
     del data["table"]["size_m"]
-    with pytest.raises(ConfigError, match="table.size_m: missing"):
+    with pytest.raises(ConfigError, match=r"table\.size_m: missing"):
         parse_config(data)
 
 

@@ -16,7 +16,7 @@ def independent_invariants(scene, config, posture):
     model = pin.buildModelFromUrdf(str(scene.files.urdf), pin.JointModelFreeFlyer())
     data = model.createData()
     q = pin.neutral(model)
-    for name, value in zip(scene.joint_names, posture.joints):
+    for name, value in zip(scene.joint_names, posture.joints, strict=True):
         q[model.joints[model.getJointId(name)].idx_q] = value
     left, right = config.stance.sole_frames
     pin.framesForwardKinematics(model, data, q)
