@@ -80,9 +80,46 @@ def bench_pool(workdir: Path, n: int) -> Path:
     return out
 
 
+def bench_calibration() -> None:
+    from posegen.calibration import calibrate, held_out_residuals
+    from posegen.config import load_config
+    from posegen.identification import identify
+    from posegen.measurements import read_measurements
+    from posegen.scene import Scene
+
+    data = ROOT.parent / "shared" / "data" / "talos_real"
+    scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
+    train = read_measurements(data / "left_train.csv", scene).concat(read_measurements(data / "right_train.csv", scene))
+    held_out = read_measurements(data / "left_validation.csv", scene)
+    start = time.perf_counter()
+    cal = calibrate(scene, train, ["left_train", "right_train", "left_validation"])
+    total = time.perf_counter() - start
+    runs = []
+    for _ in range(5):
+        start = time.perf_counter()
+        fit = identify(cal.model, train.subset(list(cal.kept)), cal.base.columns, cal.weights, cal.before.theta)
+        runs.append(time.perf_counter() - start)
+    res = held_out_residuals(cal, held_out)
+    show = np.array([1e3, 180 / np.pi, 180 / np.pi])
+    print(f"\n### calibration: real TALOS data, two chains ({machine()})\n")
+    print("| figure | value |\n|---|---|")
+    print(
+        f"| identification (LM on {cal.base.size} base parameters, {len(train)} contacts) | "
+        f"{1000 * min(runs):.0f} ms ({fit.iterations} iterations) |"
+    )
+    print(f"| whole `calibrate` (base parameters, CV of prior and noise, before/after) | {total:.1f} s |")
+    for protocol in ("training_plane", "refitted_plane"):
+        b = np.mean(np.abs(res[protocol]["before"]), axis=0) * show
+        a = np.mean(np.abs(res[protocol]["after"]), axis=0) * show
+        print(
+            f"| held-out mean abs, {protocol} (z mm, roll deg, pitch deg) | "
+            f"{b[0]:.2f}, {b[1]:.2f}, {b[2]:.2f} -> {a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f} |"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--only", nargs="*", default=["pool"], help="stages to run")
+    parser.add_argument("--only", nargs="*", default=["pool", "calibration"], help="stages to run")
     parser.add_argument("--n", type=int, default=1500, help="pool size")
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
@@ -90,6 +127,8 @@ def main() -> None:
     workdir.mkdir(parents=True, exist_ok=True)
     if "pool" in args.only:
         bench_pool(workdir, args.n)
+    if "calibration" in args.only:
+        bench_calibration()
 
 
 if __name__ == "__main__":

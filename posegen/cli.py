@@ -254,6 +254,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit code."""
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        # Before numpy loads: small matrices run faster on one BLAS thread (we parallelise
+        # over processes), and results are bit-identical however the command is launched.
+        os.environ.setdefault(var, "1")
     args = build_parser().parse_args(argv)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING, format="posegen: %(message)s", stream=sys.stderr

@@ -134,3 +134,11 @@ def test_malformed_pool_is_an_input_error():
 
     with pytest.raises(InputError, match="posture 0"):
         pool_from_dict({"format_version": 1, "joint_names": ["a"], "postures": [{"joints": [0.1]}]})
+
+
+def test_example_pool_is_reproducible_and_valid(scene, config, example_pool):
+    """plans/talos/pool.yaml is what posegen makes today, and it passes the mesh check."""
+    again = generate_pool(config, n=15, seed=example_pool.provenance["seed"], workers=1)
+    assert [p.joints for p in again.postures] == [p.joints for p in example_pool.postures[:15]]
+    assert example_pool.provenance["config"] == config.to_dict()
+    assert verify_postures(scene, example_pool.postures).ok
