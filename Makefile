@@ -19,9 +19,10 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/posegen pool --n 120 --seed 1 -o $(DEMO)/pool.yaml
+	$(VENV)/bin/posegen pool --n 300 --seed 1 -o $(DEMO)/pool.yaml
 	$(VENV)/bin/posegen check $(DEMO)/pool.yaml
-	$(VENV)/bin/posegen simulate $(DEMO)/pool.yaml --seed 7 -o $(DEMO)/sim_train.yaml
+	$(VENV)/bin/posegen select $(DEMO)/pool.yaml --runs 2 -o $(DEMO)/selected.yaml
+	$(VENV)/bin/posegen simulate $(DEMO)/selected.yaml --seed 7 -o $(DEMO)/sim_train.yaml
 	$(VENV)/bin/posegen simulate plans/talos/pool.yaml --seed 7 -o $(DEMO)/sim_heldout.yaml
 	$(VENV)/bin/posegen calibrate $(DEMO)/sim_train.yaml --validate $(DEMO)/sim_heldout.yaml -o $(DEMO)/calibration
 

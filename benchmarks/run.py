@@ -80,6 +80,61 @@ def bench_pool(workdir: Path, n: int) -> Path:
     return out
 
 
+def bench_select(pool_path: Path, workdir: Path) -> None:
+    from posegen.config import parse_config
+    from posegen.design import build_design
+    from posegen.pool import load_pool
+    from posegen.scene import Scene
+    from posegen.selection import detmax_runs, iroc, select_k
+
+    start = time.perf_counter()
+    subprocess.run(
+        [POSEGEN, "select", str(pool_path), "-q", "-o", str(workdir / "selected.yaml")],
+        check=True,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+    )
+    total = time.perf_counter() - start
+    pool = load_pool(pool_path)
+    scene = Scene(parse_config(pool.provenance["config"]))
+    start = time.perf_counter()
+    design, _ = build_design(scene, pool.joints(), [p.chain for p in pool.postures])
+    t_design = time.perf_counter() - start
+    start = time.perf_counter()
+    result = iroc(design)
+    t_iroc = time.perf_counter() - start
+    print(f"\n### select: {design.size}-posture pool, {design.n_params} base parameters ({machine()})\n")
+    print("| figure | value |\n|---|---|")
+    print(f"| total `posegen select` (IROC, incl. start-up and pool loading) | {total:.1f} s |")
+    print(f"| information matrices | {t_design:.2f} s |")
+    print(
+        f"| IROC weights + O1 curve | {t_iroc:.2f} s, gap {result.weights.gap:.1e}, {result.weights.iterations} steps |"
+    )
+    print(
+        f"| IROC selection | k = {len(result.selected.rows)}, O1 {result.selected.o1:.2f} "
+        f"({100 * result.selected.o1 / result.o1_star:.1f}% of O1* {result.o1_star:.2f}) |"
+    )
+    print(f"| smallest k reaching 90% / 95% of O1* | {result.fractions[0.9]} / {result.fractions[0.95]} |")
+    for k in (41, 60):
+        start = time.perf_counter()
+        runs = detmax_runs(design, k, 10, 0)
+        t_detmax = time.perf_counter() - start
+        start = time.perf_counter()
+        chosen = select_k(design, k, result.ranking, runs)
+        t_k = time.perf_counter() - start
+        best = max(runs, key=lambda r: r.score)
+        top = design.o1(result.ranking[:k])
+        print(f"| k = {k}: IROC top-k | O1 {top:.2f}, identifies {design.rank(result.ranking[:k])}/{design.n_params} |")
+        print(
+            f"| k = {k}: DETMAX best of 10 | O1 {best.o1:.2f}, identifies {best.rank}/{design.n_params}, "
+            f"{t_detmax:.1f} s for 10 runs |"
+        )
+        print(
+            f"| k = {k}: `--k` (greedy, top-k, DETMAX, exchange) | O1 {chosen.o1:.2f}, identifies "
+            f"{chosen.rank}/{design.n_params}, {t_k:.1f} s after DETMAX |"
+        )
+
+
 def bench_calibration() -> None:
     from posegen.calibration import calibrate, held_out_residuals
     from posegen.config import load_config
@@ -119,14 +174,17 @@ def bench_calibration() -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--only", nargs="*", default=["pool", "calibration"], help="stages to run")
+    parser.add_argument("--only", nargs="*", default=["pool", "select", "calibration"], help="stages to run")
     parser.add_argument("--n", type=int, default=1500, help="pool size")
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
     workdir = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="posegen-bench-"))
     workdir.mkdir(parents=True, exist_ok=True)
+    pool_path = workdir / "pool.yaml"
     if "pool" in args.only:
-        bench_pool(workdir, args.n)
+        pool_path = bench_pool(workdir, args.n)
+    if "select" in args.only:
+        bench_select(pool_path, workdir)
     if "calibration" in args.only:
         bench_calibration()
 

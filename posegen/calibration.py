@@ -7,7 +7,8 @@
   ``kappa`` and the measurement noise per component are chosen by K-fold
   cross-validation on the training contacts only.
 * Outliers: training contacts whose cross-validated residual, scaled by the noise,
-  exceeds a chi (3 dof) threshold are reported and left out of the final fit.
+  exceeds a chi (3 dof) bound (Bonferroni: 1 % chance of any false alarm in a clean
+  data set) are reported and left out of the final fit.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.stats
 from numpy.typing import NDArray
 
 from posegen.contact_model import ContactModel, Contacts, Group
@@ -42,7 +44,7 @@ class Settings:
     kappa: float | None = None  # fixed prior size: skips cross-validation
     noise: tuple[float, float, float] = (1e-3, UNIT_PRIOR_ANGLE_RAD, UNIT_PRIOR_ANGLE_RAD)  # initial sigma
     folds: int = 5
-    outlier_chi: float = 4.03  # sqrt of the 0.999 quantile of chi-square with 3 dof
+    outlier_false_alarm: float = 0.01  # chance of flagging any contact of a clean data set (Bonferroni)
     drop_outliers: bool = True
     structural_postures: int = 100  # per (chain, session) pair
     seed: int = 0
@@ -71,6 +73,15 @@ class Calibration:
     outliers: tuple[int, ...]  # indices in ``train`` left out of the final fit
     outlier_scores: tuple[float, ...]  # their normalised CV residual
     kept: tuple[int, ...] = field(default=())  # indices in ``train`` used by the final fit
+
+
+def outlier_threshold(n: int, false_alarm: float) -> float:
+    """Normalised residual above which one of n contacts is an outlier.
+
+    sqrt of the chi-square (3 dof) quantile at 1 - false_alarm / n: a clean data set of n
+    contacts has a chance ``false_alarm`` of showing any.
+    """
+    return float(np.sqrt(scipy.stats.chi2.ppf(1.0 - false_alarm / max(n, 1), 3)))
 
 
 def weights_for(kappa: float, noise: Sequence[float] | FloatArray) -> Weights:
@@ -224,7 +235,7 @@ def calibrate(
     noise = np.array(settings.noise)
     kappas = (settings.kappa,) if settings.kappa is not None else settings.kappas
     cv_points: list[CvPoint] = []
-    cv_res = np.zeros((len(train), 3))
+    cv_res: FloatArray = np.zeros((len(train), 3))
     kappa = kappas[0]
     for _round in range(2 if len(kappas) > 1 else 1):
         cv_points = []
@@ -242,7 +253,8 @@ def calibrate(
         noise = np.maximum(np.sqrt(np.mean(cv_res**2, axis=0)), NOISE_FLOOR)  # re-estimated from CV
     weights = weights_for(kappa, noise)
     scores = np.sqrt(np.sum((cv_res / noise) ** 2, axis=1))
-    outliers = np.flatnonzero(scores > settings.outlier_chi) if settings.drop_outliers else np.array([], dtype=int)
+    threshold = outlier_threshold(len(train), settings.outlier_false_alarm)
+    outliers = np.flatnonzero(scores > threshold) if settings.drop_outliers else np.array([], dtype=int)
     kept = np.setdiff1d(np.arange(len(train)), outliers)
     for i in outliers:
         LOG.warning("outlier contact %s: normalised CV residual %.1f", train.labels[i], scores[i])

@@ -192,6 +192,87 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_select(args: argparse.Namespace) -> int:
+    import time
+
+    from posegen.artefact import write_yaml
+    from posegen.config import load_config, parse_config
+    from posegen.design import build_design
+    from posegen.pool import load_pool
+    from posegen.scene import Scene
+    from posegen.selection import detmax_runs, iroc, select_k
+    from posegen.selection_report import plot_detmax, plot_o1, selection_to_dict
+    from posegen.subset_selection import Subset
+
+    pool = load_pool(args.pool)
+    config = load_config(args.config) if args.config else parse_config(pool.provenance.get("config"), "")
+    scene = Scene(config)
+    timings: dict[str, float] = {}
+    with _progress_bar(4 + args.runs, "step", args.quiet) as bar:
+
+        def step(name: str) -> None:
+            bar.set_description(name, refresh=False)
+            bar.update(1)
+
+        start = time.perf_counter()
+        step("information matrices")
+        design, _ = build_design(scene, pool.joints(), [p.chain for p in pool.postures])
+        timings["design"] = time.perf_counter() - start
+        start = time.perf_counter()
+        step("IROC weights")
+        result = iroc(design)
+        timings["iroc"] = time.perf_counter() - start
+        k = args.k if args.k else len(result.selected.rows)
+        start = time.perf_counter()
+        runs: list[Subset] = []
+        for r in range(args.runs):
+            step(f"DETMAX run {r + 1}")
+            runs.extend(detmax_runs(design, k, 1, args.seed * 1000 + r))
+        timings["detmax"] = time.perf_counter() - start
+        start = time.perf_counter()
+        step("exact design" if args.k else "write")
+        chosen = select_k(design, k, result.ranking, tuple(runs)) if args.k else result.selected
+        timings["k_selection"] = time.perf_counter() - start
+    data = selection_to_dict(
+        pool, args.pool, design, result, chosen, "k" if args.k else "iroc", tuple(runs), timings, args.seed
+    )
+    output = Path(args.output)
+    write_yaml(output, data)
+    plot_o1(result, output.with_name(output.stem + "_o1.png"))
+    if runs:
+        iroc_k = (
+            result.selected
+            if not args.k
+            else type(result.selected)(
+                tuple(result.ranking[:k]),
+                design.score(result.ranking[:k]),
+                design.rank(result.ranking[:k]),
+                design.o1(result.ranking[:k]),
+            )
+        )
+        plot_detmax(iroc_k, chosen, tuple(runs), output.with_name(output.stem + "_detmax.png"))
+    fig = data["figures"]
+    print(
+        f"select: {fig['selected']} of {design.size} postures ({data['method']}), O1 {fig['o1']:.2f} = "
+        f"{100 * fig['o1_over_o1_star']:.1f}% of O1* {fig['o1_star']:.2f}; identifies {chosen.rank} of "
+        f"{design.n_params} base parameters -> {output}"
+    )
+    cert = fig["certificate"]
+    print(
+        f"  weights: Kiefer-Wolfowitz gap {cert['kiefer_wolfowitz_gap']:.1e} (D-efficiency >= "
+        f"{cert['d_efficiency_at_least']:.5f}); IROC stops at k = {fig['iroc']['selected_k']}; "
+        f"90% of O1* at k = {fig['iroc']['k_reaching_fraction_of_o1_star']['0.9']}"
+    )
+    if runs:
+        print(f"  DETMAX best of {len(runs)} (k = {k}): O1 {fig['detmax']['best_o1']:.2f}")
+    if chosen.rank < design.n_params:
+        print(
+            f"  warning: {len(chosen.rows)} postures identify only {chosen.rank} of {design.n_params} base "
+            "parameters; translation parameters are seen through heights only (one per posture): choose a larger k"
+        )
+    return 0
+
+
 def _positive(text: str) -> int:
     value = int(text)
     if value <= 0:
@@ -220,6 +301,18 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
     check.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     check.set_defaults(run=_cmd_check)
+
+    sel = sub.add_parser("select", help="choose optimal postures from a pool (IROC, DETMAX, exact k)")
+    sel.add_argument("pool", nargs="?", default="plans/pool.yaml", help="pool file (default plans/pool.yaml)")
+    sel.add_argument("--k", type=_positive, default=None, help="exactly K postures (default: where IROC's O1 peaks)")
+    sel.add_argument("--runs", type=int, default=0, help="DETMAX runs from seeded random starts (default 0)")
+    sel.add_argument("--seed", type=int, default=0, help="seed of the DETMAX starts (default 0)")
+    sel.add_argument("--config", default=None, help="scene config (default: the one saved in the pool)")
+    sel.add_argument(
+        "-o", "--output", default="plans/selected.yaml", help="selection file (default plans/selected.yaml)"
+    )
+    sel.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    sel.set_defaults(run=_cmd_select)
 
     sim = sub.add_parser("simulate", help="contacts of a perturbed robot at planned postures")
     sim.add_argument("postures", help="pool or selection file")

@@ -134,3 +134,30 @@ def test_calibrate_bad_file(tmp_path, capsys):
     assert code == 2
     assert_one_line_error(err)
     assert not out.exists()
+
+
+def test_select_then_simulate_the_selection(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    out = tmp_path / "selected.yaml"
+    code, stdout, _ = run(["select", str(EXAMPLE_POOL), "--k", "70", "--runs", "1", "-q", "-o", str(out)], capsys)
+    assert code == 0, stdout
+    assert "70 of 200 postures" in stdout and "DETMAX best of 1" in stdout
+    data = yaml.safe_load(out.read_text())
+    assert data["format"] == "posegen-selection" and len(data["postures"]) == 70
+    assert data["provenance"]["robot_model_sha256"] and data["figures"]["certificate"]["kiefer_wolfowitz_gap"] <= 1e-4
+    assert (tmp_path / "selected_o1.png").exists() and (tmp_path / "selected_detmax.png").exists()
+    code, _, _ = run(["simulate", str(out), "-o", str(tmp_path / "m.yaml")], capsys)
+    assert code == 0
+
+
+def test_select_on_an_empty_pool(small_pool, tmp_path, capsys):
+    data = small_pool.to_dict()
+    data["postures"] = []
+    path = tmp_path / "empty.yaml"
+    write_yaml(path, data)
+    out = tmp_path / "sel.yaml"
+    code, _, err = run(["select", str(path), "-q", "-o", str(out)], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    assert "empty" in err and not out.exists()
