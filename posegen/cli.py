@@ -11,9 +11,13 @@ import logging
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from posegen import __version__
 from posegen.errors import PosegenError
+
+if TYPE_CHECKING:
+    from posegen.scene import Scene
 
 DEFAULT_CONFIG = "configs/talos_table.yaml"
 EXIT_VIOLATIONS = 1
@@ -52,31 +56,55 @@ def _cmd_pool(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_check(args: argparse.Namespace) -> int:
-    from posegen.artefact import read_yaml
+def _scene_for(provenance: dict[str, Any], config_path: str | None, where: str) -> Scene:
+    """The scene an artefact was made for (or the one of ``--config``), model hash checked."""
     from posegen.config import load_config, parse_config
     from posegen.errors import InputError
-    from posegen.pool import POOL_FORMAT, pool_from_dict
     from posegen.scene import Scene
+
+    config = load_config(config_path) if config_path else parse_config(provenance.get("config"), "")
+    scene = Scene(config)
+    recorded = provenance.get("robot_model_sha256")
+    if recorded and recorded != scene.files.sha256():
+        raise InputError(f"{where} was made for another robot model (sha256 {recorded[:12]}...)")
+    return scene
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+
+    from posegen.artefact import read_yaml
+    from posegen.errors import InputError
+    from posegen.pool import POOL_FORMAT, pool_from_dict
+    from posegen.route_check import verify_route
+    from posegen.route_io import ROUTE_FORMAT, read_route
     from posegen.verification import verify_postures
 
-    data = read_yaml(args.file, POOL_FORMAT)
-    pool = pool_from_dict(data, args.file)
-    config = load_config(args.config) if args.config else parse_config(pool.provenance.get("config"), "")
-    scene = Scene(config)
-    recorded = pool.provenance.get("robot_model_sha256")
-    if recorded and recorded != scene.files.sha256():
-        raise InputError(f"{args.file} was made for another robot model (sha256 {recorded[:12]}...)")
-    if tuple(pool.joint_names) != scene.joint_names:
-        raise InputError(f"{args.file}: joint names differ from the robot model's")
-    with _progress_bar(len(pool.postures), "posture", args.quiet) as bar:
-        result = verify_postures(scene, pool.postures, lambda k: bar.update(k - bar.n))
-    print(f"checked {result.checked} postures of {args.file} (meshes, pinocchio; not the solver's word)")
+    path = Path(args.file)
+    try:
+        head = path.read_text()[:4096]
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror}") from exc
+    is_route = path.suffix.lower() == ".json" or f"format: {ROUTE_FORMAT}" in head
+    if is_route:
+        data = read_route(path)
+        scene = _scene_for(data.get("provenance") or {}, args.config, args.file)
+        total, unit, what = len(data["trajectory"]["points"]), "point", "points"
+    else:
+        pool = pool_from_dict(read_yaml(path, POOL_FORMAT), args.file)
+        scene = _scene_for(pool.provenance, args.config, args.file)
+        if tuple(pool.joint_names) != scene.joint_names:
+            raise InputError(f"{args.file}: joint names differ from the robot model's")
+        total, unit, what = len(pool.postures), "posture", "postures"
+    with _progress_bar(total, unit, args.quiet) as bar:
+        step = lambda k: bar.update(k - bar.n)  # noqa: E731
+        result = verify_route(scene, data, step) if is_route else verify_postures(scene, pool.postures, step)
+    print(f"checked {result.checked} {what} of {args.file} (meshes, pinocchio; not the planner's word)")
+    unit = "point" if is_route else "posture"
     for worst in result.worst:
         status = "OK  " if worst.violations == 0 else "FAIL"
         print(
             f"  {status} {worst.invariant.value:<13} violations {worst.violations:>4}  "
-            f"worst: posture {worst.posture} ({worst.detail})"
+            f"worst: {unit} {worst.posture} ({worst.detail})"
         )
     return 0 if result.ok else EXIT_VIOLATIONS
 
@@ -100,6 +128,67 @@ def _load_postures(path: str, scene_joint_names: tuple[str, ...]):  # type: igno
         raise InputError(f"{path}: no postures")
     labels = tuple(p.spot for p in pool.postures)
     return np.array(pool.joints()), tuple(p.chain for p in pool.postures), labels
+
+
+def _cmd_route(args: argparse.Namespace) -> int:
+    import hashlib
+    import time
+
+    from posegen.artefact import read_yaml
+    from posegen.errors import InputError
+    from posegen.motion import seed_planner
+    from posegen.pool import POOL_FORMAT, pool_from_dict
+    from posegen.route import plan_route
+    from posegen.route_io import route_to_dict, write_route
+
+    try:
+        data = read_yaml(args.selection, "posegen-selection")
+    except InputError:
+        data = read_yaml(args.selection, POOL_FORMAT)
+    plan = pool_from_dict(data, args.selection)
+    if not plan.postures:
+        raise InputError(f"{args.selection}: no postures to route")
+    scene = _scene_for(plan.provenance, args.config, args.selection)
+    if tuple(plan.joint_names) != scene.joint_names:
+        raise InputError(f"{args.selection}: joint names differ from the robot model's")
+    seed_planner(args.seed)
+    start = time.perf_counter()
+    with _progress_bar(len(plan.postures), "posture", args.quiet) as bar:
+        route = plan_route(scene, plan.postures, args.seed, lambda k: bar.update(k - bar.n))
+    elapsed = time.perf_counter() - start
+    visited = len(route.visited)
+    summary = {
+        "postures": len(plan.postures),
+        "routed": visited,
+        "skipped": len(route.skipped),
+        "points": len(route.times),
+        "duration_s": float(route.times[-1]),
+        "robot_time_per_contact_s": float(route.times[-1]) / max(visited, 1),
+        "tsp_length_s": route.order.length_s,
+        "nearest_neighbour_length_s": route.order.nearest_neighbour_s,
+    }
+    provenance = dict(plan.provenance)
+    provenance.update(
+        {
+            "seed": args.seed,
+            "selection": args.selection,
+            "selection_sha256": hashlib.sha256(Path(args.selection).read_bytes()).hexdigest(),
+        }
+    )
+    output = Path(args.output)
+    csv_path = write_route(output, route_to_dict(route, list(data["postures"]), provenance, summary))
+    print(
+        f"route: {visited} of {len(plan.postures)} postures, {len(route.times)} points, "
+        f"{summary['duration_s']:.1f} s of robot time ({summary['robot_time_per_contact_s']:.1f} s per contact), "
+        f"planned in {elapsed:.1f} s -> {output} (and {csv_path.name})"
+    )
+    print(
+        f"  order: TSP {route.order.length_s:.1f} s vs nearest neighbour {route.order.nearest_neighbour_s:.1f} s "
+        "(time-like distance at the velocity limits)"
+    )
+    for index, reason in route.skipped:
+        print(f"  skipped posture {index}: {reason}")
+    return 0
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -296,8 +385,8 @@ def build_parser() -> argparse.ArgumentParser:
     pool.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     pool.set_defaults(run=_cmd_pool)
 
-    check = sub.add_parser("check", help="re-verify a pool from scratch (exit 1 on any violation)")
-    check.add_argument("file", help="pool file")
+    check = sub.add_parser("check", help="re-verify a pool or a route from scratch (exit 1 on any violation)")
+    check.add_argument("file", help="pool or route file")
     check.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
     check.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     check.set_defaults(run=_cmd_check)
@@ -313,6 +402,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sel.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     sel.set_defaults(run=_cmd_select)
+
+    rt = sub.add_parser("route", help="order, plan and time a trajectory through selected postures")
+    rt.add_argument("selection", nargs="?", default="plans/selected.yaml", help="selection or pool file")
+    rt.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
+    rt.add_argument("--seed", type=int, default=0, help="seed of the ordering and of OMPL (default 0)")
+    rt.add_argument(
+        "-o", "--output", default="plans/route.yaml", help="route file, .yaml or .json (a .csv is written beside)"
+    )
+    rt.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    rt.set_defaults(run=_cmd_route)
 
     sim = sub.add_parser("simulate", help="contacts of a perturbed robot at planned postures")
     sim.add_argument("postures", help="pool or selection file")
@@ -363,6 +462,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("posegen: interrupted; rerun the same command to resume", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":

@@ -83,6 +83,7 @@ class CollisionChecker:
                 if table_index in (p.first, p.second) and frame_of[min(p.first, p.second)] in tips
             ]
         self._model_data = model.createData()
+        self._fast: dict[str | None, pin.GeometryData] = {}
 
     def _fresh_data(self, contact_chain: str | None) -> pin.GeometryData:
         # coal's solvers warm-start from earlier queries; fresh data (~1.5 ms) makes every
@@ -116,6 +117,19 @@ class CollisionChecker:
         distances[~active] = np.inf
         k = int(np.argmin(distances))
         return Proximity(distance_m=float(distances[k]), pair=self._pair_names(k))
+
+    def collides(self, q: FloatArray, contact_chain: str | None, margin_m: float) -> bool:
+        """Whether any active pair is closer than ``margin_m`` (a fast yes/no for planning).
+
+        Reuses one GeometryData per contact chain: coal's warm starts could only change
+        a verdict for a pair within numerical precision (1e-15 m) of the margin.
+        """
+        if contact_chain not in self._fast:
+            self._fast[contact_chain] = self._fresh_data(contact_chain)
+        data = self._fast[contact_chain]
+        for request in data.collisionRequests:
+            request.security_margin = margin_m
+        return bool(pin.computeCollisions(self.scene.model, self._model_data, self.geom, data, q, True))
 
     def colliding_pairs(self, q: FloatArray, contact_chain: str | None, margin_m: float) -> list[Proximity]:
         """Pairs closer than ``margin_m`` (coal collision queries with a security margin).

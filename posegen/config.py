@@ -85,6 +85,22 @@ class SamplingConfig:
 
 
 @dataclass(frozen=True)
+class RouteConfig:
+    """How the contact postures are visited."""
+
+    acceleration_limit_rad_s2: float = 1.5  # every joint
+    velocity_scale_free: float = 0.5  # fraction of the URDF velocity limits away from the table
+    velocity_scale_near: float = 0.15  # approach and release
+    velocity_scale_contact: float = 0.05  # go-to-contact, where force control takes over
+    overshoot_m: float = 0.003  # go-to-contact ends this far below the nominal plane
+    pre_contact_m: float = 0.01  # approach ends, and go-to-contact starts, this far above it
+    hold_s: float = 1.0  # time held in contact
+    waypoint_step_rad: float = 0.02  # largest joint change between checked waypoints
+    planning_checks: float = 4000  # OMPL budget per free motion, in state checks (repeatable, unlike seconds)
+    return_to_start: bool = True  # end the route at the start posture
+
+
+@dataclass(frozen=True)
 class Config:
     """A whole scene: robot, stance, chains, table, margins, sampling."""
 
@@ -95,6 +111,7 @@ class Config:
     table: TableConfig
     margins: MarginConfig
     sampling: SamplingConfig
+    route: RouteConfig = RouteConfig()
     source_path: str = ""
 
     def chain(self, name: str) -> ChainConfig:
@@ -124,6 +141,7 @@ class Config:
             "table": dataclasses.asdict(self.table),
             "margins": dataclasses.asdict(self.margins),
             "sampling": dataclasses.asdict(self.sampling),
+            "route": dataclasses.asdict(self.route),
         }
         return dict(_plain(data))
 
@@ -297,6 +315,23 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         spot_tolerance_m=sp.number("spot_tolerance_m", minimum=0.0),
         chunk_size=sp.integer("chunk_size"),
     )
+    route = RouteConfig()
+    if "route" in top.data:
+        rt = top.sub("route")
+        defaults = dataclasses.asdict(route)
+        values: dict[str, Any] = {}
+        for key, default in defaults.items():
+            if isinstance(default, bool):
+                flag = rt.raw(key, default)
+                if not isinstance(flag, bool):
+                    raise ConfigError(f"route.{key}: expected true or false, got {flag!r}")
+                values[key] = flag
+            else:
+                values[key] = rt.number(key, default, minimum=0.0)
+        unknown = set(rt.data) - set(defaults)
+        if unknown:
+            raise ConfigError(f"route: unknown keys {sorted(unknown)}; valid keys: {', '.join(defaults)}")
+        route = RouteConfig(**values)
     return Config(
         robot=source,
         locked_joints={str(k): float(v) for k, v in locked.items()},
@@ -305,6 +340,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         table=table,
         margins=margins,
         sampling=sampling,
+        route=route,
         source_path=source_path,
     )
 

@@ -6,6 +6,7 @@ original meshes (not the convex hulls the sampler used), with the configured mar
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -21,7 +22,7 @@ from posegen.scene import Scene
 class Worst:
     """The worst case of one invariant over a set of postures."""
 
-    invariant: Invariant
+    invariant: enum.Enum  # an Invariant, or a route's invariant
     excess: float  # how far past its bound (> 0: violated), in the invariant's unit
     posture: int  # index of the posture where it occurs
     violations: int  # number of postures violating it

@@ -161,3 +161,33 @@ def test_select_on_an_empty_pool(small_pool, tmp_path, capsys):
     assert code == 2
     assert_one_line_error(err)
     assert "empty" in err and not out.exists()
+
+
+def test_route_errors(small_pool, tmp_path, capsys):
+    garbage = tmp_path / "garbage.yaml"
+    garbage.write_text("format: posegen-selection\nformat_version: 1\njoint_names: 3\n")
+    out = tmp_path / "route.yaml"
+    code, _, err = run(["route", str(garbage), "-q", "-o", str(out)], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    data = small_pool.to_dict()
+    data["postures"] = []
+    empty = tmp_path / "empty.yaml"
+    write_yaml(empty, data)
+    code, _, err = run(["route", str(empty), "-q", "-o", str(out)], capsys)
+    assert code == 2 and "no postures" in err
+    assert not out.exists()
+
+
+def test_route_then_check(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    data = yaml.safe_load(EXAMPLE_POOL.read_text())
+    data["postures"] = data["postures"][3:5]
+    two = tmp_path / "two.yaml"
+    write_yaml(two, data)
+    out = tmp_path / "route.json"
+    code, stdout, _ = run(["route", str(two), "-q", "-o", str(out)], capsys)
+    assert code == 0 and "2 of 2 postures" in stdout and out.exists() and (tmp_path / "route.csv").exists()
+    code, stdout, _ = run(["check", str(out), "-q"], capsys)
+    assert code == 0 and "FAIL" not in stdout and "points" in stdout
