@@ -135,6 +135,50 @@ def bench_select(pool_path: Path, workdir: Path) -> None:
         )
 
 
+def bench_route(pool_path: Path, workdir: Path, k: int = 41) -> None:
+    import yaml
+
+    selection = workdir / f"selected_k{k}.yaml"
+    subprocess.run(
+        [POSEGEN, "select", str(pool_path), "--k", str(k), "-q", "-o", str(selection)],
+        check=True,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+    )
+    route = workdir / "route.yaml"
+    start = time.perf_counter()
+    subprocess.run(
+        [POSEGEN, "route", str(selection), "-q", "-o", str(route)],
+        check=True,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    wall = time.perf_counter() - start
+    data = yaml.load(route.read_text(), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+    summary = data["summary"]
+    by_type: dict[str, float] = {}
+    for seg in data["segments"]:
+        by_type[seg["type"]] = by_type.get(seg["type"], 0.0) + seg["end_s"] - seg["start_s"]
+    start = time.perf_counter()
+    check = subprocess.run([POSEGEN, "check", str(route), "-q"], cwd=ROOT, capture_output=True, text=True)
+    t_check = time.perf_counter() - start
+    print(f"\n### route: {k} selected postures ({machine()})\n")
+    print("| figure | value |\n|---|---|")
+    print(f"| wall time, `posegen route` (incl. start-up) | {wall:.1f} s |")
+    print(f"| postures routed / skipped | {summary['routed']} / {summary['skipped']} |")
+    total, per = summary["duration_s"], summary["robot_time_per_contact_s"]
+    print(f"| robot time, total / per contact | {total:.0f} s / {per:.1f} s |")
+    print("| robot time by segment type | " + ", ".join(f"{t} {v:.0f} s" for t, v in by_type.items()) + " |")
+    print(
+        f"| TSP order vs nearest neighbour (time-like length) | {summary['tsp_length_s']:.1f} s vs "
+        f"{summary['nearest_neighbour_length_s']:.1f} s |"
+    )
+    print(f"| trajectory points | {summary['points']} |")
+    verdict = "no violation" if check.returncode == 0 else "VIOLATIONS"
+    print(f"| `posegen check` of every point (meshes) | {t_check:.1f} s, {verdict} |")
+
+
 def bench_calibration() -> None:
     from posegen.calibration import calibrate, held_out_residuals
     from posegen.config import load_config
@@ -174,7 +218,7 @@ def bench_calibration() -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--only", nargs="*", default=["pool", "select", "calibration"], help="stages to run")
+    parser.add_argument("--only", nargs="*", default=["pool", "select", "route", "calibration"], help="stages to run")
     parser.add_argument("--n", type=int, default=1500, help="pool size")
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
@@ -185,6 +229,8 @@ def main() -> None:
         pool_path = bench_pool(workdir, args.n)
     if "select" in args.only:
         bench_select(pool_path, workdir)
+    if "route" in args.only:
+        bench_route(pool_path, workdir)
     if "calibration" in args.only:
         bench_calibration()
 

@@ -139,7 +139,7 @@ def plan_route(
                 ]
                 current, current_high = vertical.approach[0], vertical.clearance
         if skipped and skipped[-1][0] == index:
-            LOG.warning("posture %d skipped: %s", index, skipped[-1][1])
+            LOG.info("posture %d skipped: %s", index, skipped[-1][1])
         if progress:
             progress(done)
     if not pieces:
