@@ -10,7 +10,7 @@ from typing import Any
 import yaml
 
 from posegen import __version__
-from posegen.errors import InputError
+from posegen.errors import InputError, PosegenError
 
 try:
     _Dumper: Any = yaml.CSafeDumper
@@ -57,6 +57,18 @@ def write_yaml(path: str | Path, data: dict[str, Any]) -> None:
     write_atomic(path, dump_yaml(data))
 
 
+def load_yaml_file(path: Path, error: type[PosegenError]) -> Any:
+    """Parse a YAML file; a missing file or bad YAML raises ``error`` with a one-line message."""
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise error(f"cannot read {path}: {exc.strerror}") from exc
+    try:
+        return yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        raise error(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+
+
 def read_yaml(path: str | Path, kind: str) -> dict[str, Any]:
     """Read a posegen artefact and check its kind.
 
@@ -69,14 +81,7 @@ def read_yaml(path: str | Path, kind: str) -> dict[str, Any]:
 
     """
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise InputError(f"cannot read {path}: {exc.strerror}") from exc
-    try:
-        data = yaml.load(text, Loader=_Loader)
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+    data = load_yaml_file(path, InputError)
     if not isinstance(data, dict) or data.get("format") != kind:
         found = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise InputError(f"{path}: not a {kind} file (format: {found!r})")

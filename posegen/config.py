@@ -13,8 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from posegen.artefact import load_yaml_file
 from posegen.errors import ConfigError
 
 
@@ -353,14 +352,7 @@ def load_config(path: str | Path) -> Config:
 
     """
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"cannot read config {path}: {exc.strerror}") from exc
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+    data = load_yaml_file(path, ConfigError)
     try:
         return parse_config(data, str(path))
     except ConfigError as exc:
