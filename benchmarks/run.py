@@ -188,8 +188,10 @@ def bench_calibration() -> None:
 
     data = ROOT.parent / "shared" / "data" / "talos_real"
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
-    train = read_measurements(data / "left_train.csv", scene).concat(read_measurements(data / "right_train.csv", scene))
-    held_out = read_measurements(data / "left_validation.csv", scene)
+    train = read_measurements(data / "left_train.csv", scene).contacts.concat(
+        read_measurements(data / "right_train.csv", scene).contacts
+    )
+    held_out = read_measurements(data / "left_validation.csv", scene).contacts
     start = time.perf_counter()
     cal = calibrate(scene, train, ["left_train", "right_train", "left_validation"])
     total = time.perf_counter() - start

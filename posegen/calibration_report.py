@@ -11,6 +11,7 @@ Output folder::
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -143,9 +144,22 @@ def plot_residuals(before: FloatArray, after: FloatArray, title: str, path: Path
 
 
 def write_calibration(
-    calibration: Calibration, held_out: Contacts | None, out_dir: Path, seed: int | None
+    calibration: Calibration,
+    held_out: Contacts | None,
+    out_dir: Path,
+    seed: int | None,
+    rejected_rows: Sequence[str] = (),
 ) -> dict[str, Any]:
-    """Write every output of a calibration into ``out_dir`` and return the report."""
+    """Write every output of a calibration into ``out_dir`` and return the report.
+
+    Args:
+        calibration: The calibration.
+        held_out: Held-out contacts, if any.
+        out_dir: Output folder (created).
+        seed: Seed recorded in the provenance.
+        rejected_rows: Input rows left out as unusable, one message each.
+
+    """
     scene = calibration.model.scene
     out_dir.mkdir(parents=True, exist_ok=True)
     tables = residual_tables(calibration, held_out)
@@ -171,6 +185,7 @@ def write_calibration(
             }
             for p in calibration.cv
         ],
+        "rejected_rows": list(rejected_rows),
         "outliers": [
             {"contact": calibration.train.labels[i], "normalised_cv_residual": round(s, 2)}
             for i, s in zip(calibration.outliers, calibration.outlier_scores, strict=True)

@@ -17,6 +17,7 @@ from posegen import __version__
 from posegen.errors import PosegenError
 
 if TYPE_CHECKING:
+    from posegen.contact_model import Contacts
     from posegen.scene import Scene
 
 DEFAULT_CONFIG = "configs/talos_table.yaml"
@@ -237,15 +238,17 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _measurement_args(items: list[str], scene):  # type: ignore[no-untyped-def]
-    """Read ``FILE[@SESSION]`` arguments into one set of contacts."""
+def _measurement_args(items: list[str], scene: Scene, rejected: list[str]) -> Contacts:
+    """Read ``FILE[@SESSION]`` arguments into one set of contacts; rejected rows go to ``rejected``."""
     from posegen.measurements import read_measurements
 
-    contacts = None
+    contacts: Contacts | None = None
     for item in items:
         path, _, session = item.partition("@")
         part = read_measurements(path, scene, session or None)
-        contacts = part if contacts is None else contacts.concat(part)
+        rejected.extend(part.rejected)
+        contacts = part.contacts if contacts is None else contacts.concat(part.contacts)
+    assert contacts is not None  # argparse requires at least one file
     return contacts
 
 
@@ -256,8 +259,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from posegen.scene import Scene
 
     scene = Scene(load_config(args.config))
-    train = _measurement_args(args.measurements, scene)
-    held_out = _measurement_args(args.validate, scene) if args.validate else None
+    rejected: list[str] = []
+    train = _measurement_args(args.measurements, scene, rejected)
+    held_out = _measurement_args(args.validate, scene, rejected) if args.validate else None
     sessions = list(dict.fromkeys(train.sessions + (held_out.sessions if held_out else ())))
     settings = Settings(kappa=args.prior_scale, drop_outliers=not args.keep_outliers, seed=args.seed)
     steps = 3 + (1 if args.prior_scale else 2 * len(settings.kappas))
@@ -268,12 +272,14 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             bar.update(1)
 
         calibration = calibrate(scene, train, sessions, settings, progress)
-    report = write_calibration(calibration, held_out, Path(args.output), args.seed)
+    report = write_calibration(calibration, held_out, Path(args.output), args.seed, rejected)
     base = report["base_parameters"]
     print(
         f"calibrate: {len(train)} training contacts, {base['total']} base parameters "
         f"(robot per chain: {base['robot_parameters_per_chain']}), prior x{report['weights']['prior_length_mm']:g}"
     )
+    for message in rejected:
+        print(f"  row left out: {message}")
     for outlier in report["outliers"]:
         print(f"  outlier left out: {outlier['contact']} (normalised CV residual {outlier['normalised_cv_residual']})")
     print(format_table(report))

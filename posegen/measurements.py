@@ -16,7 +16,8 @@ Two inputs are read as they are:
   followed by the names of the angles (leading or trailing empty fields are tolerated).
 
 Every angle is checked against the URDF limits widened by a tolerance: a shifted column
-shows up as text or as an angle far out of range, and the row is reported.
+shows up as text or as an angle far out of range. Such a CSV row is reported (file,
+line, reason) and left out; posegen's own format is read strictly.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from __future__ import annotations
 import csv
 import logging
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -60,11 +62,50 @@ def _full_joints(scene: Scene, names: Sequence[str], values: np.ndarray) -> np.n
     return joints
 
 
-def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TOLERANCE_RAD) -> Contacts:
-    """Read a recorded CSV file (layout in the module docstring).
+@dataclass(frozen=True)
+class Recording:
+    """Contacts read from a file, and the rows that were not usable."""
+
+    contacts: Contacts
+    rejected: tuple[str, ...]  # one line per rejected row: "file:line: reason"
+
+
+def _parse_row(
+    row: list[str], names: list[str], by_recording: dict[str, str], scene: Scene, where: str, tolerance: float
+) -> tuple[np.ndarray, str, str]:
+    """Joint angles (nj,), chain and spot of one data row.
 
     Raises:
-        InputError: No header, an unknown gripper or joint, text or out-of-range angles.
+        InputError: The row is not usable (the message says why).
+
+    """
+    if "joint_states" not in row:
+        raise InputError(f"{where}: no 'joint_states' field in a data row")
+    start = row.index("joint_states") + 1
+    cells = row[start : start + len(names)]
+    if len(cells) != len(names):
+        raise InputError(f"{where}: expected {len(names)} angles, found {len(cells)}")
+    try:
+        values = np.array([float(c) for c in cells])
+    except ValueError:
+        bad = next(c for c in cells if not _is_float(c))
+        raise InputError(f"{where}: angle field {bad!r} is not a number (shifted column?)") from None
+    _check_angles(scene, names, values, where, tolerance)
+    gripper = next((c.strip() for c in row[:start] if c.strip() in by_recording), None)
+    if gripper is None:
+        raise InputError(f"{where}: no known gripper in {row[: start - 1]}; known: {', '.join(sorted(by_recording))}")
+    spot = next((c.strip() for c in row[:start] if c.strip().startswith(("table/", "contact"))), "")
+    return _full_joints(scene, names, values), by_recording[gripper], spot
+
+
+def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TOLERANCE_RAD) -> Recording:
+    """Read a recorded CSV file (layout in the module docstring).
+
+    A data row that is not usable (text or out-of-range angles, as a shifted column
+    gives; a missing field; an unknown gripper) is reported in ``rejected`` and left out.
+
+    Raises:
+        InputError: Unreadable file, no header, an unknown joint, or no usable row.
 
     """
     try:
@@ -78,35 +119,25 @@ def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TO
     for name in names:
         scene.joint_index(name)
     by_recording = {c.recorded_as: c.name for c in scene.config.chains}
-    joints, chains, labels = [], [], []
+    joints, chains, labels, rejected = [], [], [], []
     for line, row in enumerate(rows, start=1):
         if row is header or not any(c.strip() for c in row):
             continue
-        where = f"{path}:{line}"
-        if "joint_states" not in row:
-            raise InputError(f"{where}: no 'joint_states' field in a data row")
-        start = row.index("joint_states") + 1
-        cells = row[start : start + len(names)]
-        if len(cells) != len(names):
-            raise InputError(f"{where}: expected {len(names)} angles, found {len(cells)}")
         try:
-            values = np.array([float(c) for c in cells])
-        except ValueError:
-            bad = next(c for c in cells if not _is_float(c))
-            raise InputError(f"{where}: angle field {bad!r} is not a number (shifted column?)") from None
-        _check_angles(scene, names, values, where, tolerance)
-        gripper = next((c.strip() for c in row[:start] if c.strip() in by_recording), None)
-        if gripper is None:
-            raise InputError(
-                f"{where}: no known gripper in {row[: start - 1]}; known: {', '.join(sorted(by_recording))}"
-            )
-        spot = next((c.strip() for c in row[:start] if c.strip().startswith(("table/", "contact"))), f"row{line}")
-        joints.append(_full_joints(scene, names, values))
-        chains.append(by_recording[gripper])
-        labels.append(f"{path.stem}:{line}:{spot}")
+            values, chain, spot = _parse_row(row, names, by_recording, scene, f"{path}:{line}", tolerance)
+        except InputError as exc:
+            rejected.append(str(exc))
+            continue
+        joints.append(values)
+        chains.append(chain)
+        labels.append(f"{path.stem}:{line}:{spot or 'row'}")
     if not joints:
-        raise InputError(f"{path}: no data rows")
-    return Contacts(np.array(joints), tuple(chains), (session,) * len(chains), tuple(labels))
+        first = f": {rejected[0]}" if rejected else ""
+        raise InputError(f"{path}: no usable data row ({len(rejected)} rejected){first}")
+    for message in rejected:
+        LOG.warning("row left out: %s", message)
+    contacts = Contacts(np.array(joints), tuple(chains), (session,) * len(chains), tuple(labels))
+    return Recording(contacts, tuple(rejected))
 
 
 def _is_float(text: str) -> bool:
@@ -117,8 +148,8 @@ def _is_float(text: str) -> bool:
     return True
 
 
-def read_measurements(path: str | Path, scene: Scene, session: str | None = None) -> Contacts:
-    """Read contacts from posegen's format or a recorded CSV file.
+def read_measurements(path: str | Path, scene: Scene, session: str | None = None) -> Recording:
+    """Read contacts from posegen's format (strict) or a recorded CSV file.
 
     Args:
         path: The file.
@@ -160,7 +191,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         chains.append(chain)
         sessions.append(session or str(item.get("session", path.stem)))
         labels.append(str(item.get("label", f"{path.stem}:{i}")))
-    return Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels))
+    return Recording(Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels)), ())
 
 
 def measurements_to_dict(scene: Scene, contacts: Contacts, provenance: dict[str, Any]) -> dict[str, Any]:

@@ -81,10 +81,10 @@ def test_too_few_contacts(scene, example_pool):
 
 @pytest.fixture(scope="module")
 def real(scene):
-    train = read_measurements(REAL_DATA / "left_train.csv", scene).concat(
-        read_measurements(REAL_DATA / "right_train.csv", scene)
+    train = read_measurements(REAL_DATA / "left_train.csv", scene).contacts.concat(
+        read_measurements(REAL_DATA / "right_train.csv", scene).contacts
     )
-    held_out = read_measurements(REAL_DATA / "left_validation.csv", scene)
+    held_out = read_measurements(REAL_DATA / "left_validation.csv", scene).contacts
     sessions = ["left_train", "right_train", "left_validation"]
     return calibrate(scene, train, sessions), held_out
 
