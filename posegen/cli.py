@@ -208,7 +208,6 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     perturbation = Perturbation(
         length_m=args.error_mm * 1e-3,
         angle_rad=float(np.deg2rad(args.error_deg)),
-        plane_height_m=float(scene.table_pose[2, 3]),
         encoder_noise_rad=float(np.deg2rad(args.noise_deg)),
     )
     recorded, model, theta = simulate(scene, planned, perturbation, args.seed)

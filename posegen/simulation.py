@@ -31,7 +31,7 @@ class Perturbation:
     length_m: float = 2e-3  # sigma of placement length errors
     angle_rad: float = float(np.deg2rad(0.5))  # sigma of placement angle errors
     max_angle_rad: float = float(np.deg2rad(1.5))  # angle errors are clipped here
-    plane_height_m: float = 0.68  # true table height above the soles
+    plane_height_m: float | None = None  # true table height above the soles; None: the scene's table
     plane_tilt_rad: float = float(np.deg2rad(0.5))  # sigma of the table's roll and pitch
     encoder_noise_rad: float = 0.0  # sigma of the encoder readings' noise
 
@@ -51,8 +51,11 @@ def true_parameters(model: ContactModel, perturbation: Perturbation, seed: int) 
                     rng.normal(0.0, perturbation.angle_rad), -perturbation.max_angle_rad, perturbation.max_angle_rad
                 )
             )
+    height = perturbation.plane_height_m
+    if height is None:
+        height = float(model.scene.table_pose[2, 3])
     for session in model.sessions:
-        theta[model.index[f"plane@{session}.z"]] = perturbation.plane_height_m
+        theta[model.index[f"plane@{session}.z"]] = height
         for field in ("roll", "pitch"):
             theta[model.index[f"plane@{session}.{field}"]] = rng.normal(0.0, perturbation.plane_tilt_rad)
     return theta
