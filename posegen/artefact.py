@@ -69,12 +69,12 @@ def load_yaml_file(path: Path, error: type[PosegenError]) -> Any:
         raise error(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
 
 
-def read_yaml(path: str | Path, kind: str) -> dict[str, Any]:
+def read_yaml(path: str | Path, kind: str | tuple[str, ...]) -> dict[str, Any]:
     """Read a posegen artefact and check its kind.
 
     Args:
         path: File to read.
-        kind: Expected value of the ``format`` field ("posegen-pool", ...).
+        kind: Expected value(s) of the ``format`` field ("posegen-pool", ...).
 
     Raises:
         InputError: The file is missing, not YAML, or not an artefact of that kind.
@@ -82,7 +82,8 @@ def read_yaml(path: str | Path, kind: str) -> dict[str, Any]:
     """
     path = Path(path)
     data = load_yaml_file(path, InputError)
-    if not isinstance(data, dict) or data.get("format") != kind:
+    kinds = (kind,) if isinstance(kind, str) else kind
+    if not isinstance(data, dict) or data.get("format") not in kinds:
         found = data.get("format") if isinstance(data, dict) else type(data).__name__
-        raise InputError(f"{path}: not a {kind} file (format: {found!r})")
+        raise InputError(f"{path}: not a {' or '.join(kinds)} file (format: {found!r})")
     return data

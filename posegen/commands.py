@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from posegen.contact_model import Contacts
+    from posegen.pool import Pool
     from posegen.scene import Scene
 
 EXIT_VIOLATIONS = 1
@@ -103,25 +104,22 @@ def run_check(args: argparse.Namespace) -> int:
     return 0 if result.ok else EXIT_VIOLATIONS
 
 
-def _load_postures(path: str, scene_joint_names: tuple[str, ...]):  # type: ignore[no-untyped-def]
-    """Postures (joints, chains, labels) of a pool or selection file."""
-    import numpy as np
-
-    from posegen.artefact import read_yaml
+def _load_plan(path: str) -> tuple[Pool, list[dict[str, Any]]]:
+    """A pool or selection that has postures."""
     from posegen.errors import InputError
-    from posegen.pool import POOL_FORMAT, pool_from_dict
+    from posegen.pool import load_plan
 
-    try:
-        data = read_yaml(path, POOL_FORMAT)
-    except InputError:
-        data = read_yaml(path, "posegen-selection")
-    pool = pool_from_dict(data, path)
-    if tuple(pool.joint_names) != scene_joint_names:
-        raise InputError(f"{path}: joint names differ from the robot model's")
-    if not pool.postures:
+    plan, entries = load_plan(path)
+    if not plan.postures:
         raise InputError(f"{path}: no postures")
-    labels = tuple(p.spot for p in pool.postures)
-    return np.array(pool.joints()), tuple(p.chain for p in pool.postures), labels
+    return plan, entries
+
+
+def _check_joints(plan: Pool, scene: Scene, path: str) -> None:
+    from posegen.errors import InputError
+
+    if tuple(plan.joint_names) != scene.joint_names:
+        raise InputError(f"{path}: joint names differ from the robot model's")
 
 
 def run_route(args: argparse.Namespace) -> int:
@@ -129,23 +127,13 @@ def run_route(args: argparse.Namespace) -> int:
     import hashlib
     import time
 
-    from posegen.artefact import read_yaml
-    from posegen.errors import InputError
     from posegen.motion import seed_planner
-    from posegen.pool import POOL_FORMAT, pool_from_dict
     from posegen.route import plan_route
     from posegen.route_io import route_to_dict, write_route
 
-    try:
-        data = read_yaml(args.selection, "posegen-selection")
-    except InputError:
-        data = read_yaml(args.selection, POOL_FORMAT)
-    plan = pool_from_dict(data, args.selection)
-    if not plan.postures:
-        raise InputError(f"{args.selection}: no postures to route")
+    plan, entries = _load_plan(args.selection)
     scene = _scene_for(plan.provenance, args.config, args.selection)
-    if tuple(plan.joint_names) != scene.joint_names:
-        raise InputError(f"{args.selection}: joint names differ from the robot model's")
+    _check_joints(plan, scene, args.selection)
     seed_planner(args.seed)
     start = time.perf_counter()
     with _progress_bar(len(plan.postures), "posture", args.quiet) as bar:
@@ -171,7 +159,7 @@ def run_route(args: argparse.Namespace) -> int:
         }
     )
     output = Path(args.output)
-    csv_path = write_route(output, route_to_dict(route, list(data["postures"]), provenance, summary))
+    csv_path = write_route(output, route_to_dict(route, entries, provenance, summary))
     print(
         f"route: {visited} of {len(plan.postures)} postures, {len(route.times)} points, "
         f"{summary['duration_s']:.1f} s of robot time ({summary['robot_time_per_contact_s']:.1f} s per contact), "
@@ -198,8 +186,10 @@ def run_simulate(args: argparse.Namespace) -> int:
     from posegen.simulation import Perturbation, simulate
 
     scene = Scene(load_config(args.config))
-    joints, chains, labels = _load_postures(args.postures, scene.joint_names)
-    planned = Contacts(joints, chains, (args.session,) * len(chains), labels)
+    plan, _ = _load_plan(args.postures)
+    _check_joints(plan, scene, args.postures)
+    chains = tuple(p.chain for p in plan.postures)
+    planned = Contacts(plan.joints(), chains, (args.session,) * len(chains), tuple(p.spot for p in plan.postures))
     perturbation = Perturbation(
         length_m=args.error_mm * 1e-3,
         angle_rad=float(np.deg2rad(args.error_deg)),

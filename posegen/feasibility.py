@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.collision import CollisionChecker, Proximity
-from posegen.geometry import FloatArray, polygon_margin, tilt_angles
+from posegen.geometry import FloatArray, tilt_angles
 from posegen.scene import Scene
 
 SOLE_POSITION_TOL_M = 1e-4
@@ -97,9 +97,7 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
     sole_error = pin.SE3(scene.sole_poses[other]).actInv(data.oMf[scene.frame_id(other)])
     contact = contact_in_table(scene, data, chain)
     roll, pitch = tilt_angles(contact.rotation)
-    com = pin.centerOfMass(model, data, q)
-    free = ~scene.locked  # locked joints sit where the config puts them, possibly on a limit
-    limit_margin = float(np.min(np.minimum(joints - scene.lower, scene.upper - joints)[free]))
+    limit_margin = float(scene.limit_margin(joints))  # locked joints may sit on a limit: not counted
     closest = checker.closest(q, chain) if checker is not None else None
     return Assessment(
         sole_position_error_m=float(np.linalg.norm(sole_error.translation)),
@@ -109,7 +107,7 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
         contact_pitch_rad=pitch,
         contact_xy_table_m=(float(contact.translation[0]), float(contact.translation[1])),
         contact_yaw_rad=float(np.arctan2(contact.rotation[1, 0], contact.rotation[0, 0])),
-        com_margin_m=polygon_margin(scene.support_polygon, com[:2]),
+        com_margin_m=scene.com_margin(q, data),
         joint_limit_margin_rad=limit_margin,
         closest=closest,
     )

@@ -27,6 +27,7 @@ from posegen.geometry import FloatArray
 from posegen.sampler import Posture, Rejection
 
 POOL_FORMAT = "posegen-pool"
+SELECTION_FORMAT = "posegen-selection"  # a pool's fields plus the selection's (posegen.selection_report)
 POOL_VERSION = 1
 
 
@@ -140,6 +141,17 @@ def load_pool(path: str | Path) -> Pool:
 
     """
     return pool_from_dict(read_yaml(path, POOL_FORMAT), str(path))
+
+
+def load_plan(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
+    """Read a pool or a selection: the postures, and their entries as plain data.
+
+    Raises:
+        InputError: The file is missing, malformed, or neither a pool nor a selection.
+
+    """
+    data = read_yaml(path, (POOL_FORMAT, SELECTION_FORMAT))
+    return pool_from_dict(data, str(path)), list(data["postures"])
 
 
 def rejection_counts(outcomes: list[Posture | Rejection]) -> dict[str, int]:

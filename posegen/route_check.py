@@ -21,11 +21,10 @@ import pinocchio as pin
 from posegen.collision import CollisionChecker
 from posegen.errors import InputError
 from posegen.feasibility import SOLE_ANGLE_TOL_RAD, SOLE_POSITION_TOL_M
-from posegen.geometry import polygon_margin
 from posegen.route import SegmentType
 from posegen.route_io import arrays
 from posegen.scene import Scene
-from posegen.verification import Verification, Worst
+from posegen.verification import Verification, summarize
 
 TOLERANCE = 1e-6  # relative, on velocity and acceleration limits
 
@@ -68,9 +67,8 @@ def verify_route(scene: Scene, data: dict[str, Any], progress: Callable[[int], N
     excess[RouteInvariant.TIMES][1:] = -dt
     for k in range(1, m):
         detail[RouteInvariant.TIMES][k] = f"dt {dt[k - 1]:.2e} s"
-    free = ~scene.locked
     margin = cfg.margins.joint_limit_rad
-    limit_gap = np.minimum(positions - scene.lower, scene.upper - positions)[:, free].min(axis=1)
+    limit_gap = scene.limit_margin(positions)
     excess[RouteInvariant.JOINT_LIMITS] = margin - 1e-9 - limit_gap
     v_ratio = np.max(np.abs(velocities) / scene.velocity_limit, axis=1)
     mean_v = np.zeros(m)
@@ -98,8 +96,7 @@ def verify_route(scene: Scene, data: dict[str, Any], progress: Callable[[int], N
         angle_error = float(np.linalg.norm(pin.log3(error.rotation)))
         excess[RouteInvariant.SOLE][k] = max(position_error - SOLE_POSITION_TOL_M, angle_error - SOLE_ANGLE_TOL_RAD)
         detail[RouteInvariant.SOLE][k] = f"sole {position_error:.2e} m, {angle_error:.2e} rad"
-        com = pin.centerOfMass(scene.model, data_pin, q)
-        com_margin = polygon_margin(scene.support_polygon, com[:2])
+        com_margin = scene.com_margin(q, data_pin)
         excess[RouteInvariant.COM][k] = cfg.margins.com_m - com_margin
         detail[RouteInvariant.COM][k] = f"CoM margin {com_margin:.4f} m"
         margin_k = contact_margin if in_contact[k] else cfg.margins.collision_m
@@ -112,9 +109,4 @@ def verify_route(scene: Scene, data: dict[str, Any], progress: Callable[[int], N
             detail[RouteInvariant.COLLISION][k] = f"no pair closer than {margin_k} m (meshes)"
         if progress:
             progress(k + 1)
-    worst = []
-    for key in RouteInvariant:
-        values = excess[key]
-        i = int(np.argmax(values))
-        worst.append(Worst(key, float(values[i]), i, int(np.sum(values > 0)), detail[key][i]))
-    return Verification(checked=m, worst=tuple(worst))
+    return summarize(m, excess, detail)

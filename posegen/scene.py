@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from posegen.config import ChainConfig, Config
 from posegen.errors import ConfigError, unknown_name
-from posegen.geometry import FloatArray, convex_hull_clockwise, flatten_on_floor, yaw_rotation
+from posegen.geometry import FloatArray, convex_hull_clockwise, flatten_on_floor, polygon_margin, yaw_rotation
 
 LOG = logging.getLogger(__name__)
 
@@ -278,6 +278,30 @@ class Scene:
     def joints_of(self, q: FloatArray) -> FloatArray:
         """Actuated joint angles (rad) of a full configuration. Shape (nj,)."""
         return np.array(q[self._q_index], dtype=float)
+
+    def limit_margin(self, joints: FloatArray) -> FloatArray:
+        """Smallest distance (rad) of the free (not locked) joints to their limits.
+
+        Args:
+            joints: (nj,) or (m, nj) joint angles.
+
+        Returns:
+            A scalar array, or (m,); negative when a limit is exceeded.
+
+        """
+        gap = np.minimum(joints - self.lower, self.upper - joints)
+        return np.asarray(gap[..., ~self.locked].min(axis=-1))
+
+    def com_margin(self, q: FloatArray, data: pin.Data) -> float:
+        """Signed distance (m) of the CoM ground projection inside the support polygon.
+
+        Args:
+            q: Full configuration, shape (nq,).
+            data: pinocchio data to compute in.
+
+        """
+        com = pin.centerOfMass(self.model, data, q)
+        return polygon_margin(self.support_polygon, com[:2])
 
     def leg_joints(self, sole_frame: str) -> list[int]:
         """Indices (in :attr:`joint_names`) of the joints from a sole up to the root, sole first."""

@@ -22,11 +22,9 @@ from typing import Any
 import numpy as np
 
 from posegen.design import Design
-from posegen.pool import POOL_VERSION, Pool
+from posegen.pool import POOL_VERSION, SELECTION_FORMAT, Pool
 from posegen.selection import Iroc
 from posegen.subset_selection import Subset
-
-SELECTION_FORMAT = "posegen-selection"
 
 
 def selection_to_dict(

@@ -11,10 +11,9 @@ pose. Both soles are therefore exact at every state, and an ordinary sampling pl
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from posegen.collision import CollisionChecker
-from posegen.geometry import FloatArray, polygon_margin
+from posegen.geometry import FloatArray
 from posegen.scene import Scene
 
 
@@ -66,14 +65,10 @@ class StanceSpace:
         """
         scene = self.scene
         margins = scene.config.margins
-        free = ~scene.locked
-        if np.any(joints[free] < scene.lower[free] + margins.joint_limit_rad - 1e-9) or np.any(
-            joints[free] > scene.upper[free] - margins.joint_limit_rad + 1e-9
-        ):
+        if scene.limit_margin(joints) < margins.joint_limit_rad - 1e-9:
             return False
         q = scene.configuration(joints)
-        com = pin.centerOfMass(scene.model, self._data, q)
-        if polygon_margin(scene.support_polygon, com[:2]) < margins.com_m:
+        if scene.com_margin(q, self._data) < margins.com_m:
             return False
         margin = margins.collision_m if collision_margin_m is None else collision_margin_m
         return not self.checker.collides(q, contact_chain, margin)

@@ -7,15 +7,19 @@ original meshes (not the convex hulls the sampler used), with the configured mar
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
 from posegen.collision import CollisionChecker
 from posegen.feasibility import Invariant, assess
+from posegen.geometry import FloatArray
 from posegen.sampler import Posture
 from posegen.scene import Scene
+
+K = TypeVar("K", bound=enum.Enum)
 
 
 @dataclass(frozen=True)
@@ -82,12 +86,26 @@ def verify_postures(
             details[key].append(text)
         if progress:
             progress(index + 1)
+    return summarize(len(postures), excess, details)
+
+
+def summarize(
+    checked: int, excess: Mapping[K, Sequence[float] | FloatArray], details: Mapping[K, Sequence[str]]
+) -> Verification:
+    """The worst case of each invariant, in the mapping's order.
+
+    Args:
+        checked: Number of items checked.
+        excess: Per invariant, each item's excess over its bound (> 0: violated).
+        details: Per invariant, each item's description of what was measured.
+
+    """
     worst = []
-    for key in Invariant:
-        if not postures:
-            worst.append(Worst(key, 0.0, -1, 0, "no posture"))
+    for key, values in excess.items():
+        array = np.asarray(values, dtype=float)
+        if array.size == 0:
+            worst.append(Worst(key, 0.0, -1, 0, "nothing checked"))
             continue
-        i = int(np.argmax(excess[key]))
-        count = int(sum(v > 0 for v in excess[key]))
-        worst.append(Worst(key, float(excess[key][i]), i, count, details[key][i]))
-    return Verification(checked=len(postures), worst=tuple(worst))
+        i = int(np.argmax(array))
+        worst.append(Worst(key, float(array[i]), i, int(np.sum(array > 0)), details[key][i]))
+    return Verification(checked=checked, worst=tuple(worst))

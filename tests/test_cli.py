@@ -27,6 +27,14 @@ def bad_config(tmp_path, edit):
     return str(path)
 
 
+def empty_pool_file(pool, tmp_path):
+    data = pool.to_dict()
+    data["postures"] = []
+    path = tmp_path / "empty.yaml"
+    write_yaml(path, data)
+    return path
+
+
 def test_pool_writes_file_and_summary(tmp_path, capsys):
     out = tmp_path / "pool.yaml"
     code, stdout, _ = run(["pool", "--n", "6", "--workers", "1", "-q", "-o", str(out)], capsys)
@@ -152,10 +160,7 @@ def test_select_then_simulate_the_selection(tmp_path, capsys):
 
 
 def test_select_on_an_empty_pool(small_pool, tmp_path, capsys):
-    data = small_pool.to_dict()
-    data["postures"] = []
-    path = tmp_path / "empty.yaml"
-    write_yaml(path, data)
+    path = empty_pool_file(small_pool, tmp_path)
     out = tmp_path / "sel.yaml"
     code, _, err = run(["select", str(path), "-q", "-o", str(out)], capsys)
     assert code == 2
@@ -170,10 +175,7 @@ def test_route_errors(small_pool, tmp_path, capsys):
     code, _, err = run(["route", str(garbage), "-q", "-o", str(out)], capsys)
     assert code == 2
     assert_one_line_error(err)
-    data = small_pool.to_dict()
-    data["postures"] = []
-    empty = tmp_path / "empty.yaml"
-    write_yaml(empty, data)
+    empty = empty_pool_file(small_pool, tmp_path)
     code, _, err = run(["route", str(empty), "-q", "-o", str(out)], capsys)
     assert code == 2 and "no postures" in err
     assert not out.exists()
