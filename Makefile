@@ -21,9 +21,8 @@ install: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/posegen pool --n 300 --seed 1 -o $(DEMO)/pool.yaml
 	$(VENV)/bin/posegen check $(DEMO)/pool.yaml
-	$(VENV)/bin/posegen select $(DEMO)/pool.yaml --runs 2 -o $(DEMO)/selected.yaml
-	$(VENV)/bin/posegen select $(DEMO)/pool.yaml --k 40 -o $(DEMO)/selected_k40.yaml
-	$(VENV)/bin/posegen route $(DEMO)/selected_k40.yaml -o $(DEMO)/route.yaml
+	$(VENV)/bin/posegen select $(DEMO)/pool.yaml --k 60 --runs 2 -o $(DEMO)/selected.yaml
+	$(VENV)/bin/posegen route $(DEMO)/selected.yaml -o $(DEMO)/route.yaml
 	$(VENV)/bin/posegen check $(DEMO)/route.yaml
 	$(VENV)/bin/posegen simulate $(DEMO)/selected.yaml --seed 7 -o $(DEMO)/sim_train.yaml
 	$(VENV)/bin/posegen simulate plans/talos/pool.yaml --seed 7 -o $(DEMO)/sim_heldout.yaml
