@@ -26,6 +26,13 @@ def _positive(text: str) -> int:
     return value
 
 
+def _fraction(text: str) -> float:
+    value = float(text)
+    if not 0.0 < value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="posegen", description=__doc__.splitlines()[0])
@@ -53,6 +60,13 @@ def build_parser() -> argparse.ArgumentParser:
     sel.add_argument("--k", type=_positive, default=None, help="exactly K postures (default: where IROC's O1 peaks)")
     sel.add_argument("--runs", type=int, default=0, help="DETMAX runs from seeded random starts (default 0)")
     sel.add_argument("--seed", type=int, default=0, help="seed of the DETMAX starts (default 0)")
+    sel.add_argument(
+        "--fraction",
+        type=_fraction,
+        nargs="+",
+        default=[0.9, 0.95],
+        help="report the smallest k reaching these fractions of O1* (default 0.9 0.95)",
+    )
     sel.add_argument("--config", default=None, help="scene config (default: the one saved in the pool)")
     sel.add_argument(
         "-o", "--output", default="plans/selected.yaml", help="selection file (default plans/selected.yaml)"

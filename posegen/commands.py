@@ -301,7 +301,7 @@ def run_select(args: argparse.Namespace) -> int:
         timings["design"] = time.perf_counter() - start
         start = time.perf_counter()
         step("IROC weights")
-        result = iroc(design)
+        result = iroc(design, fractions=tuple(args.fraction))
         timings["iroc"] = time.perf_counter() - start
         k = args.k if args.k else len(result.selected.rows)
         start = time.perf_counter()
@@ -342,7 +342,9 @@ def run_select(args: argparse.Namespace) -> int:
     print(
         f"  weights: Kiefer-Wolfowitz gap {cert['kiefer_wolfowitz_gap']:.1e} (D-efficiency >= "
         f"{cert['d_efficiency_at_least']:.5f}); IROC stops at k = {fig['iroc']['selected_k']}; "
-        f"90% of O1* at k = {fig['iroc']['k_reaching_fraction_of_o1_star']['0.9']}"
+        + "; ".join(
+            f"{100 * float(f):g}% of O1* at k = {k}" for f, k in fig["iroc"]["k_reaching_fraction_of_o1_star"].items()
+        )
     )
     if runs:
         print(f"  DETMAX best of {len(runs)} (k = {k}): O1 {fig['detmax']['best_o1']:.2f}")

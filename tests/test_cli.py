@@ -148,9 +148,10 @@ def test_select_then_simulate_the_selection(tmp_path, capsys):
     from tests.conftest import EXAMPLE_POOL
 
     out = tmp_path / "selected.yaml"
-    code, stdout, _ = run(["select", str(EXAMPLE_POOL), "--k", "70", "--runs", "1", "-q", "-o", str(out)], capsys)
+    argv = ["select", str(EXAMPLE_POOL), "--k", "70", "--runs", "1", "--fraction", "0.8", "-q", "-o", str(out)]
+    code, stdout, _ = run(argv, capsys)
     assert code == 0, stdout
-    assert "70 of 200 postures" in stdout and "DETMAX best of 1" in stdout
+    assert "70 of 200 postures" in stdout and "DETMAX best of 1" in stdout and "80% of O1* at k = " in stdout
     data = yaml.safe_load(out.read_text())
     assert data["format"] == "posegen-selection" and len(data["postures"]) == 70
     assert data["provenance"]["robot_model_sha256"] and data["figures"]["certificate"]["kiefer_wolfowitz_gap"] <= 1e-4
