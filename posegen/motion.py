@@ -29,6 +29,7 @@ LOG = logging.getLogger(__name__)
 HEIGHT_STEP_M = 0.005  # between the projected heights of a vertical path
 SEARCH_STEP_RAD = 0.05  # OMPL's validity-checking resolution while searching
 CLEARANCE_M = 0.15  # height of the via posture above a contact
+MAX_HALVINGS = 4  # of one interval of a straight line, to keep every joint's step small
 SIMPLIFY_STEPS = 100  # vertex-reduction attempts when shortening OMPL's path
 
 
@@ -91,17 +92,32 @@ def vertical_paths(space: StanceSpace, projector: Projector, joints: FloatArray,
 
 
 def straight(space: StanceSpace, start: FloatArray, goal: FloatArray) -> list[FloatArray] | None:
-    """Waypoints of the straight line in stance coordinates, each checked; None if blocked."""
+    """Waypoints of the straight line in stance coordinates, each checked; None if blocked.
+
+    No joint moves more than ``waypoint_step_rad`` between consecutive waypoints: the
+    coordinates are split evenly, and an interval where the solved second leg moves
+    further is halved until it does not (or until MAX_HALVINGS).
+    """
     a, b = space.coordinates_of(start), space.coordinates_of(goal)
     step = space.scene.config.route.waypoint_step_rad
     count = max(1, int(np.ceil(np.max(np.abs(b - a)) / step)))
     path = [np.array(start, dtype=float)]
-    for k in range(1, count + 1):
-        x = a + (b - a) * k / count
-        state = space.joints_of(x, path[-1])
-        if state is None or not space.is_valid(state, None):
+    fractions = [k / count for k in range(count, 0, -1)]  # a stack: the next fraction is last
+    done, halvings = 0.0, 0
+    while fractions:
+        f = fractions[-1]
+        state = space.joints_of(a + (b - a) * f, path[-1])
+        if state is None:
+            return None
+        if np.max(np.abs(state - path[-1])) > step * (1 + 1e-9) and halvings < MAX_HALVINGS:
+            fractions.append((done + f) / 2)  # the leg moved too far: check halfway first
+            halvings += 1
+            continue
+        if not space.is_valid(state, None):
             return None
         path.append(state)
+        fractions.pop()
+        done, halvings = f, 0
     path[-1] = np.array(goal, dtype=float)  # the same state, to the closure's 1e-10: segments join exactly
     return path
 

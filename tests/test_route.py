@@ -133,3 +133,13 @@ def test_csv_beside_the_route(routed):
     lines = path.with_suffix(".csv").read_text().splitlines()
     assert lines[0].startswith("time_s,segment,chain,posture,")
     assert len(lines) - 1 == len(read_route(path)["trajectory"]["points"])
+
+
+def test_no_joint_jumps_between_free_motion_waypoints(scene, routed):
+    """Every exported step of a free motion is within the waypoint step (legs included)."""
+    route, _ = routed
+    step = scene.config.route.waypoint_step_rad
+    for seg in route.segments:
+        if seg.type == SegmentType.FREE:
+            moves = np.abs(np.diff(route.positions[seg.first : seg.last + 1], axis=0)).max()
+            assert moves <= step * (1 + 1e-6), (seg, moves)
