@@ -120,7 +120,7 @@ def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -
     """
     scene = model.scene
     rng = np.random.default_rng(seed)
-    legs = sorted({j for sole in scene.config.stance.sole_frames for j in scene.leg_joints(sole)})
+    legs = scene.stance_leg_joints()
     spread = np.full(len(scene.joint_names), 0.5)
     spread[legs] = 0.3
     theta = initial_planes(model, contacts, model.nominal())

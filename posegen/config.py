@@ -126,6 +126,11 @@ class Config:
         valid = ", ".join(c.name for c in self.chains)
         raise ConfigError(f"unknown chain '{name}'; valid chains: {valid}")
 
+    @property
+    def contact_collision_margin_m(self) -> float:
+        """Collision margin during contact segments: the margin less the commanded overshoot."""
+        return max(self.margins.collision_m - self.route.overshoot_m, 0.0)
+
     def to_dict(self) -> dict[str, Any]:
         """Plain-data form, as saved in every artefact (re-loadable by :func:`parse_config`)."""
         source = {k: v for k, v in dataclasses.asdict(self.robot).items() if v not in (None, ())}

@@ -42,12 +42,6 @@ class Vertical:
     clearance: FloatArray | None  # the contact lifted by CLEARANCE_M, a via point of free motions
 
 
-def contact_margin(space: StanceSpace) -> float:
-    """Collision margin during contact segments: the configured one less the overshoot."""
-    cfg = space.scene.config
-    return max(cfg.margins.collision_m - cfg.route.overshoot_m, 0.0)
-
-
 def vertical_paths(space: StanceSpace, projector: Projector, joints: FloatArray, chain: str) -> Vertical | None:
     """Approach and go-to-contact waypoints above a contact posture, or None if infeasible."""
     scene = space.scene
@@ -84,7 +78,7 @@ def vertical_paths(space: StanceSpace, projector: Projector, joints: FloatArray,
         if not space.is_valid(state, None):
             return None
     for state in contact:
-        if not space.is_valid(state, chain, contact_margin(space)):
+        if not space.is_valid(state, chain, scene.config.contact_collision_margin_m):
             return None
     high = projector.project(joints, chain, point + CLEARANCE_M * normal)
     clearance = high.joints if high.converged and space.is_valid(high.joints, None) else None

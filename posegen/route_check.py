@@ -87,7 +87,7 @@ def verify_route(scene: Scene, data: dict[str, Any], progress: Callable[[int], N
     data_pin = scene.model.createData()
     second = cfg.stance.sole_frames[1]
     target = pin.SE3(scene.sole_poses[second])
-    contact_margin = max(cfg.margins.collision_m - cfg.route.overshoot_m, 0.0)
+    contact_margin = cfg.contact_collision_margin_m
     for k in range(m):
         q = scene.configuration(positions[k])
         pin.framesForwardKinematics(scene.model, data_pin, q)

@@ -312,6 +312,10 @@ class Scene:
             joint = self.model.parents[joint]
         return out
 
+    def stance_leg_joints(self) -> list[int]:
+        """Indices of the joints of both legs (from each sole up to the root), sorted."""
+        return sorted({j for sole in self.config.stance.sole_frames for j in self.leg_joints(sole)})
+
     def close_stance(self, joints: FloatArray, iterations: int = 30) -> FloatArray | None:
         """Move the second leg so that its sole meets its fixed pose (Gauss-Newton).
 

@@ -81,7 +81,7 @@ def settle_contacts(model: ContactModel, theta: FloatArray, contacts: Contacts) 
 def settle(model: ContactModel, theta: FloatArray, contacts: Contacts) -> tuple[Contacts, NDArray[np.bool_]]:
     """Batch Gauss-Newton of :func:`settle_contacts`; also returns which contacts converged (n,)."""
     scene = model.scene
-    legs = {j for sole in scene.config.stance.sole_frames for j in scene.leg_joints(sole)}
+    legs = set(scene.stance_leg_joints())
     own_joints = {name: set(chain.joint_indices) - legs for name, chain in model.chains.items()}
     cols = sorted(set().union(*own_joints.values()))
     own = {name: [k for k, col in enumerate(cols) if col in joints] for name, joints in own_joints.items()}

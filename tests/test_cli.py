@@ -19,6 +19,15 @@ def assert_one_line_error(err):
     assert "Traceback" not in err
 
 
+def assert_fails_cleanly(argv, out, capsys):
+    """The command exits 2 with a one-line error and writes no output file; returns the error."""
+    code, _, err = run(argv, capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    assert not out.exists()
+    return err
+
+
 def bad_config(tmp_path, edit):
     data = yaml.safe_load(CONFIG.read_text())
     edit(data)
@@ -48,28 +57,20 @@ def test_pool_writes_file_and_summary(tmp_path, capsys):
 def test_unknown_frame_in_config(tmp_path, capsys):
     path = bad_config(tmp_path, lambda d: d["chains"]["left"].update(gripper_frame="left_hand"))
     out = tmp_path / "pool.yaml"
-    code, _, err = run(["pool", "--n", "3", "--config", path, "-o", str(out), "-q"], capsys)
-    assert code == 2
-    assert_one_line_error(err)
+    err = assert_fails_cleanly(["pool", "--n", "3", "--config", path, "-o", str(out), "-q"], out, capsys)
     assert "unknown frame 'left_hand'" in err and "gripper_left_base_link" in err
-    assert not out.exists()
 
 
 def test_table_out_of_reach(tmp_path, capsys):
     path = bad_config(tmp_path, lambda d: d["table"].update(top_center_m=[2.5, 0.0, 0.7]))
     out = tmp_path / "pool.yaml"
-    code, _, err = run(["pool", "--n", "3", "--workers", "1", "--config", path, "-o", str(out), "-q"], capsys)
-    assert code == 2
-    assert_one_line_error(err)
-    assert "within reach" in err and not out.exists()
+    argv = ["pool", "--n", "3", "--workers", "1", "--config", path, "-o", str(out), "-q"]
+    assert "within reach" in assert_fails_cleanly(argv, out, capsys)
 
 
 def test_nonpositive_n(tmp_path, capsys):
     out = tmp_path / "pool.yaml"
-    code, _, err = run(["pool", "--n", "0", "-o", str(out), "-q"], capsys)
-    assert code == 2
-    assert_one_line_error(err)
-    assert not out.exists()
+    assert_fails_cleanly(["pool", "--n", "0", "-o", str(out), "-q"], out, capsys)
 
 
 def test_malformed_config_yaml(tmp_path, capsys):
@@ -138,10 +139,7 @@ def test_calibrate_bad_file(tmp_path, capsys):
     bad = tmp_path / "bad.csv"
     bad.write_text("joint_names,arm_left_1_joint\ngripper,talos/left_gripper,handle,x,joint_states,abc\n")
     out = tmp_path / "out"
-    code, _, err = run(["calibrate", str(bad), "-q", "-o", str(out)], capsys)
-    assert code == 2
-    assert_one_line_error(err)
-    assert not out.exists()
+    assert_fails_cleanly(["calibrate", str(bad), "-q", "-o", str(out)], out, capsys)
 
 
 def test_select_then_simulate_the_selection(tmp_path, capsys):
@@ -163,23 +161,17 @@ def test_select_then_simulate_the_selection(tmp_path, capsys):
 def test_select_on_an_empty_pool(small_pool, tmp_path, capsys):
     path = empty_pool_file(small_pool, tmp_path)
     out = tmp_path / "sel.yaml"
-    code, _, err = run(["select", str(path), "-q", "-o", str(out)], capsys)
-    assert code == 2
-    assert_one_line_error(err)
-    assert "empty" in err and not out.exists()
+    err = assert_fails_cleanly(["select", str(path), "-q", "-o", str(out)], out, capsys)
+    assert "empty" in err
 
 
 def test_route_errors(small_pool, tmp_path, capsys):
     garbage = tmp_path / "garbage.yaml"
     garbage.write_text("format: posegen-selection\nformat_version: 1\njoint_names: 3\n")
     out = tmp_path / "route.yaml"
-    code, _, err = run(["route", str(garbage), "-q", "-o", str(out)], capsys)
-    assert code == 2
-    assert_one_line_error(err)
+    assert_fails_cleanly(["route", str(garbage), "-q", "-o", str(out)], out, capsys)
     empty = empty_pool_file(small_pool, tmp_path)
-    code, _, err = run(["route", str(empty), "-q", "-o", str(out)], capsys)
-    assert code == 2 and "no postures" in err
-    assert not out.exists()
+    assert "no postures" in assert_fails_cleanly(["route", str(empty), "-q", "-o", str(out)], out, capsys)
 
 
 def test_route_then_check(tmp_path, capsys):
