@@ -35,7 +35,7 @@ def machine() -> str:
 
 
 def bench_pool(workdir: Path, n: int) -> Path:
-    from posegen.pool import load_pool
+    from posegen.robot import load_pool
 
     out = workdir / "pool.yaml"
     start = time.perf_counter()
@@ -81,11 +81,8 @@ def bench_pool(workdir: Path, n: int) -> Path:
 
 
 def bench_select(pool_path: Path, workdir: Path) -> None:
-    from posegen.config import parse_config
-    from posegen.design import build_design
-    from posegen.pool import load_pool
-    from posegen.scene import Scene
-    from posegen.selection import detmax_runs, iroc, select_k
+    from posegen.robot import Scene, load_pool, parse_config
+    from posegen.select import build_design, detmax_runs, iroc, select_k
 
     start = time.perf_counter()
     subprocess.run(
@@ -180,11 +177,8 @@ def bench_route(pool_path: Path, workdir: Path, k: int = 41) -> None:
 
 
 def bench_calibration() -> None:
-    from posegen.calibration import calibrate, held_out_residuals
-    from posegen.config import load_config
-    from posegen.identification import identify
-    from posegen.measurements import read_measurements
-    from posegen.scene import Scene
+    from posegen.calibrate import calibrate, held_out_residuals, identify, read_measurements
+    from posegen.robot import Scene, load_config
 
     data = ROOT.parent / "shared" / "data" / "talos_real"
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))

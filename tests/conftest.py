@@ -9,10 +9,8 @@ import pytest
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from posegen.config import Config, load_config
-from posegen.generation import generate_pool
-from posegen.pool import Pool
-from posegen.scene import Scene
+from posegen.pool import generate_pool
+from posegen.robot import Config, Pool, Scene, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "talos_table.yaml"
@@ -37,6 +35,6 @@ def small_pool(config: Config) -> Pool:
 
 @pytest.fixture(scope="session")
 def example_pool() -> Pool:
-    from posegen.pool import load_pool
+    from posegen.robot import load_pool
 
     return load_pool(EXAMPLE_POOL)

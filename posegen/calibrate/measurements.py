@@ -1,0 +1,213 @@
+"""Reading and writing recorded contacts.
+
+Two inputs are read as they are:
+
+* posegen's measurement format (YAML, ``format: posegen-measurements``)::
+
+      format: posegen-measurements
+      format_version: 1
+      provenance: {...}
+      joint_names: [...]
+      contacts:
+        - {chain: left, session: day1, label: contact_03, joints: [rad, ...]}
+
+* recorded CSV files, one contact per row: ``gripper, <recorded gripper name>, handle,
+  <target spot>, joint_states, <angles>``, with a header row holding ``joint_names``
+  followed by the names of the angles (leading or trailing empty fields are tolerated).
+
+Every angle is checked against the URDF limits widened by a tolerance: a shifted column
+shows up as text or as an angle far out of range. Such a CSV row is reported (file,
+line, reason) and left out; posegen's own format is read strictly.
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posegen.errors import InputError
+from posegen.io import read_yaml, write_yaml
+from posegen.model import Contacts
+from posegen.robot import Scene
+
+LOG = logging.getLogger(__name__)
+
+MEASUREMENT_FORMAT = "posegen-measurements"
+MEASUREMENT_VERSION = 1
+LIMIT_TOLERANCE_RAD = 0.25  # real robots park joints a little past URDF limits (TALOS: arm_*_1 by 0.2 rad)
+
+
+def _check_angles(scene: Scene, names: Sequence[str], values: np.ndarray, where: str, tolerance: float) -> None:
+    idx = [scene.joint_index(n) for n in names]
+    low = scene.lower[idx] - tolerance
+    high = scene.upper[idx] + tolerance
+    bad = np.flatnonzero((values < low) | (values > high) | ~np.isfinite(values))
+    if len(bad):
+        k = int(bad[0])
+        raise InputError(
+            f"{where}: {names[k]} = {values[k]:.4f} rad is outside its limits "
+            f"[{scene.lower[idx[k]]:.3f}, {scene.upper[idx[k]]:.3f}] +/- {tolerance} rad (shifted column?)"
+        )
+
+
+def _full_joints(scene: Scene, names: Sequence[str], values: np.ndarray) -> np.ndarray:
+    joints = scene.reference.copy()  # joints absent from a recording keep the reference value
+    joints[[scene.joint_index(n) for n in names]] = values
+    return joints
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Contacts read from a file, and the rows that were not usable."""
+
+    contacts: Contacts
+    rejected: tuple[str, ...]  # one line per rejected row: "file:line: reason"
+
+
+def _parse_row(
+    row: list[str], names: list[str], by_recording: dict[str, str], scene: Scene, where: str, tolerance: float
+) -> tuple[np.ndarray, str, str]:
+    """Joint angles (nj,), chain and spot of one data row.
+
+    Raises:
+        InputError: The row is not usable (the message says why).
+
+    """
+    if "joint_states" not in row:
+        raise InputError(f"{where}: no 'joint_states' field in a data row")
+    start = row.index("joint_states") + 1
+    cells = row[start : start + len(names)]
+    if len(cells) != len(names):
+        raise InputError(f"{where}: expected {len(names)} angles, found {len(cells)}")
+    try:
+        values = np.array([float(c) for c in cells])
+    except ValueError:
+        bad = next(c for c in cells if not _is_float(c))
+        raise InputError(f"{where}: angle field {bad!r} is not a number (shifted column?)") from None
+    _check_angles(scene, names, values, where, tolerance)
+    gripper = next((c.strip() for c in row[:start] if c.strip() in by_recording), None)
+    if gripper is None:
+        raise InputError(f"{where}: no known gripper in {row[: start - 1]}; known: {', '.join(sorted(by_recording))}")
+    spot = next((c.strip() for c in row[:start] if c.strip().startswith(("table/", "contact"))), "")
+    return _full_joints(scene, names, values), by_recording[gripper], spot
+
+
+def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TOLERANCE_RAD) -> Recording:
+    """Read a recorded CSV file (layout in the module docstring).
+
+    A data row that is not usable (text or out-of-range angles, as a shifted column
+    gives; a missing field; an unknown gripper) is reported in ``rejected`` and left out.
+
+    Raises:
+        InputError: Unreadable file, no header, an unknown joint, or no usable row.
+
+    """
+    try:
+        rows = list(csv.reader(path.read_text().splitlines()))
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"cannot read {path}: {exc}") from exc
+    header = next((r for r in rows if "joint_names" in r), None)
+    if header is None:
+        raise InputError(f"{path}: no header row with 'joint_names'")
+    names = [c.strip() for c in header[header.index("joint_names") + 1 :] if c.strip()]
+    for name in names:
+        scene.joint_index(name)
+    by_recording = {c.recorded_as: c.name for c in scene.chains}
+    joints, chains, labels, rejected = [], [], [], []
+    for line, row in enumerate(rows, start=1):
+        if row is header or not any(c.strip() for c in row):
+            continue
+        try:
+            values, chain, spot = _parse_row(row, names, by_recording, scene, f"{path}:{line}", tolerance)
+        except InputError as exc:
+            rejected.append(str(exc))
+            continue
+        joints.append(values)
+        chains.append(chain)
+        labels.append(f"{path.stem}:{line}:{spot or 'row'}")
+    if not joints:
+        first = f": {rejected[0]}" if rejected else ""
+        raise InputError(f"{path}: no usable data row ({len(rejected)} rejected){first}")
+    for message in rejected:
+        LOG.warning("row left out: %s", message)
+    contacts = Contacts(np.array(joints), tuple(chains), (session,) * len(chains), tuple(labels))
+    return Recording(contacts, tuple(rejected))
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def read_measurements(path: str | Path, scene: Scene, session: str | None = None) -> Recording:
+    """Read contacts from posegen's format (strict) or a recorded CSV file.
+
+    Args:
+        path: The file.
+        scene: Scene the joints belong to.
+        session: Table session of every contact (CSV default: the file name; YAML
+            default: the session saved per contact).
+
+    Raises:
+        InputError: The file is missing or malformed.
+
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"measurement file not found: {path}")
+    if path.suffix.lower() == ".csv":
+        return read_csv(path, scene, session or path.stem)
+    data = read_yaml(path, MEASUREMENT_FORMAT)
+    names = data.get("joint_names")
+    raw = data.get("contacts")
+    if not isinstance(names, list) or not isinstance(raw, list) or not raw:
+        raise InputError(f"{path}: 'joint_names' and a non-empty 'contacts' list are required")
+    for name in names:
+        scene.joint_index(str(name))
+    chains_known = {c.name for c in scene.chains}
+    joints, chains, sessions, labels = [], [], [], []
+    for i, item in enumerate(raw):
+        where = f"{path}: contact {i}"
+        try:
+            values = np.array([float(v) for v in item["joints"]])
+            chain = str(item["chain"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InputError(f"{where}: malformed ({type(exc).__name__}: {exc})") from exc
+        if chain not in chains_known:
+            raise InputError(f"{where}: unknown chain '{chain}'; valid chains: {', '.join(sorted(chains_known))}")
+        if len(values) != len(names):
+            raise InputError(f"{where}: expected {len(names)} angles, got {len(values)}")
+        _check_angles(scene, names, values, where, LIMIT_TOLERANCE_RAD)
+        joints.append(_full_joints(scene, names, values))
+        chains.append(chain)
+        sessions.append(session or str(item.get("session", path.stem)))
+        labels.append(str(item.get("label", f"{path.stem}:{i}")))
+    return Recording(Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels)), ())
+
+
+def measurements_to_dict(scene: Scene, contacts: Contacts, provenance: dict[str, Any]) -> dict[str, Any]:
+    """Plain data in posegen's measurement format."""
+    return {
+        "format": MEASUREMENT_FORMAT,
+        "format_version": MEASUREMENT_VERSION,
+        "provenance": provenance,
+        "joint_names": list(scene.joint_names),
+        "contacts": [
+            {"chain": c, "session": s, "label": lbl, "joints": [float(v) for v in j]}
+            for c, s, lbl, j in zip(contacts.chains, contacts.sessions, contacts.labels, contacts.joints, strict=True)
+        ],
+    }
+
+
+def write_measurements(path: str | Path, scene: Scene, contacts: Contacts, provenance: dict[str, Any]) -> None:
+    """Atomically write contacts in posegen's measurement format."""
+    write_yaml(path, measurements_to_dict(scene, contacts, provenance))

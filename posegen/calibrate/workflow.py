@@ -1,0 +1,150 @@
+"""The calibrate stage's commands, from files to files: ``posegen simulate`` and ``posegen calibrate``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posegen.calibrate.calibration import Settings, calibrate
+from posegen.calibrate.measurements import read_measurements, write_measurements
+from posegen.calibrate.report import write_calibration
+from posegen.calibrate.simulation import Perturbation, simulate
+from posegen.io import write_yaml
+from posegen.model import Contacts
+from posegen.progress import ProgressCallback, ignore_progress
+from posegen.robot import Scene, load_config, load_plan
+
+TRUTH_FORMAT = "posegen-truth"
+
+
+@dataclass(frozen=True)
+class Simulated:
+    """What ``posegen simulate`` wrote."""
+
+    contacts: int  # number of simulated contacts
+    measurements: Path
+    truth: Path  # the true parameters, beside the measurements
+
+
+@dataclass(frozen=True)
+class Calibrated:
+    """What ``posegen calibrate`` found and wrote."""
+
+    report: dict[str, Any]  # the content of calibration.yaml
+    training_contacts: int  # read from the training files (outliers included)
+
+
+def simulate_plan_file(
+    plan_path: str,
+    output: str,
+    *,
+    config_path: str,
+    seed: int,
+    error_mm: float,
+    error_deg: float,
+    noise_deg: float,
+    session: str,
+) -> Simulated:
+    """Contacts of a perturbed robot at the postures of a pool or selection file.
+
+    Args:
+        plan_path: Pool or selection file.
+        output: Measurement file to write; the truth goes beside it (``*.truth.yaml``).
+        config_path: Scene config.
+        seed: Seed of the robot's errors and of the encoder noise.
+        error_mm: Sigma of placement length errors (mm).
+        error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
+        noise_deg: Sigma of the encoder noise (deg).
+        session: Table session of every contact.
+
+    Raises:
+        PosegenError: Bad config or plan, or a contact that does not settle.
+
+    """
+    scene = Scene(load_config(config_path))
+    plan, _ = load_plan(plan_path)
+    plan.check_joints(scene.joint_names, plan_path)
+    chains = tuple(p.chain for p in plan.postures)
+    planned = Contacts(plan.joints(), chains, (session,) * len(chains), tuple(p.spot for p in plan.postures))
+    perturbation = Perturbation(
+        length_m=error_mm * 1e-3,
+        angle_rad=float(np.deg2rad(error_deg)),
+        encoder_noise_rad=float(np.deg2rad(noise_deg)),
+    )
+    recorded, model, theta = simulate(scene, planned, perturbation, seed)
+    prov = scene.provenance(seed)
+    prov["simulation"] = {
+        "postures": plan_path,
+        "error_mm": error_mm,
+        "error_deg": error_deg,
+        "encoder_noise_deg": noise_deg,
+    }
+    measurements = Path(output)
+    truth = measurements.with_name(measurements.stem + ".truth.yaml")
+    nominal = model.nominal()
+    write_yaml(
+        truth,
+        {
+            "format": TRUTH_FORMAT,
+            "format_version": 1,
+            "provenance": prov,
+            "parameters": {
+                p.name: {"true": float(theta[i]), "nominal": float(nominal[i])} for i, p in enumerate(model.parameters)
+            },
+        },
+    )
+    write_measurements(measurements, scene, recorded, prov)
+    return Simulated(contacts=len(recorded), measurements=measurements, truth=truth)
+
+
+def read_contacts(items: Sequence[str], scene: Scene, rejected: list[str]) -> Contacts:
+    """Read ``FILE[@SESSION]`` items into one set of contacts; unusable rows go to ``rejected``.
+
+    Raises:
+        InputError: A file is missing or malformed, or no item is given.
+
+    """
+    contacts: Contacts | None = None
+    for item in items:
+        path, _, session = item.partition("@")
+        part = read_measurements(path, scene, session or None)
+        rejected.extend(part.rejected)
+        contacts = part.contacts if contacts is None else contacts.concat(part.contacts)
+    assert contacts is not None, "at least one measurement file"
+    return contacts
+
+
+def calibrate_files(
+    measurements: Sequence[str],
+    held_out: Sequence[str],
+    output: str,
+    settings: Settings,
+    config_path: str,
+    progress: ProgressCallback = ignore_progress,
+) -> Calibrated:
+    """Calibrate from measurement files and write the calibration folder.
+
+    Args:
+        measurements: Training files (posegen YAML or recorded CSV), ``FILE[@SESSION]``.
+        held_out: Held-out files, judged but not fitted; may be empty.
+        output: Output folder.
+        settings: How to calibrate (its seed is recorded in the provenance).
+        config_path: Scene config.
+        progress: Told when each step starts.
+
+    Raises:
+        PosegenError: Bad config or input, or too few contacts.
+
+    """
+    scene = Scene(load_config(config_path))
+    rejected: list[str] = []
+    train = read_contacts(measurements, scene, rejected)
+    validation = read_contacts(held_out, scene, rejected) if held_out else None
+    sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
+    calibration = calibrate(scene, train, sessions, settings, progress)
+    report = write_calibration(calibration, validation, Path(output), settings.seed, rejected)
+    return Calibrated(report=report, training_contacts=len(train))

@@ -1,0 +1,71 @@
+"""The ``posegen`` command line. The only place errors become exit codes.
+
+Each subcommand is a module of this package: its name and help, its arguments, and a
+``run`` that calls one public function of its stage and prints the result.
+
+Exit codes: 0 success, 1 a check found violations, 2 bad input or infeasible problem,
+130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import sys
+
+from posegen import __version__
+from posegen.cli import calibrate, check, pool, route, select, simulate
+from posegen.errors import PosegenError
+
+COMMANDS = (pool, check, select, route, simulate, calibrate)  # in pipeline order, as --help lists them
+EXIT_ERROR = 2
+EXIT_INTERRUPTED = 130
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of every subcommand."""
+    parser = argparse.ArgumentParser(
+        prog="posegen",
+        description="Plan and run the whole-body geometric calibration of a humanoid touching a table.",
+        epilog="pipeline: pool -> select -> route -> (record on the robot) -> calibrate; "
+        "simulate rehearses it on a perturbed robot. Exit codes: 0 ok, 1 check found violations, "
+        "2 bad input or infeasible problem, 130 interrupted.",
+    )
+    parser.add_argument("--version", action="version", version=f"posegen {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    commands = parser.add_subparsers(dest="command", required=True)
+    for command in COMMANDS:
+        sub = commands.add_parser(command.NAME, help=command.HELP)
+        command.add_arguments(sub)
+        if command.PROGRESS:
+            sub.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+        sub.set_defaults(run=command.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; return the exit code."""
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        # Before numpy loads: small matrices run faster on one BLAS thread (we parallelise
+        # over processes), and results are bit-identical however the command is launched.
+        os.environ.setdefault(var, "1")
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING, format="posegen: %(message)s", stream=sys.stderr
+    )
+    try:
+        return int(args.run(args))
+    except PosegenError as exc:
+        print(f"posegen: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
+    except KeyboardInterrupt:
+        print("posegen: interrupted; rerun the same command to resume", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,39 @@
+"""``posegen pool``: generate (or resume) a pool of feasible contact postures."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from posegen.cli.options import DEFAULT_CONFIG, positive
+from posegen.cli.progress import ProgressBar
+
+NAME = "pool"
+HELP = "generate feasible contact postures"
+PROGRESS = True  # draws a progress bar (and takes -q)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declare the command's arguments."""
+    parser.add_argument("--n", type=int, default=1500, help="number of postures (default 1500)")
+    parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--workers", type=positive, default=os.cpu_count() or 1, help="processes (default: cores)")
+    parser.add_argument("-o", "--output", default="plans/pool.yaml", help="pool file (default plans/pool.yaml)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Generate the pool and print its summary."""
+    from posegen.pool import generate_pool_file
+
+    with ProgressBar(args.quiet) as bar:
+        pool = generate_pool_file(args.config, args.output, args.n, args.seed, args.workers, bar)
+    rate = 100.0 * len(pool.postures) / max(pool.attempted, 1)
+    print(
+        f"pool: {len(pool.postures)} postures accepted of {pool.attempted} samples ({rate:.1f}%) -> {Path(args.output)}"
+    )
+    print("rejected: " + (", ".join(f"{k} {v}" for k, v in pool.rejected.items()) or "none"))
+    for spot, counts in pool.per_spot().items():
+        print(f"  {spot}: " + ", ".join(f"{chain} {n}" for chain, n in counts.items()))
+    return 0

@@ -1,0 +1,71 @@
+"""posegen's YAML artefacts: their text, provenance, atomic writes and kind-checked reads."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from posegen import __version__
+from posegen.errors import InputError, PosegenError
+from posegen.io.atomic import write_atomic
+
+try:
+    _Dumper: Any = yaml.CSafeDumper
+    _Loader: Any = yaml.CSafeLoader
+except AttributeError:  # PyYAML built without libyaml
+    _Dumper = yaml.SafeDumper
+    _Loader = yaml.SafeLoader
+
+
+def provenance(config: dict[str, Any], model_sha256: str, seed: int | None) -> dict[str, Any]:
+    """What made an artefact: config, robot model hash, seed and posegen version."""
+    return {
+        "posegen_version": __version__,
+        "robot_model_sha256": model_sha256,
+        "seed": seed,
+        "config": config,
+    }
+
+
+def dump_yaml(data: dict[str, Any]) -> str:
+    """YAML text of plain data: block mappings, lists of numbers inline."""
+    return str(yaml.dump(data, Dumper=_Dumper, sort_keys=False, default_flow_style=None, width=1 << 16))
+
+
+def write_yaml(path: str | Path, data: dict[str, Any]) -> None:
+    """Atomically write plain data as YAML."""
+    write_atomic(path, dump_yaml(data))
+
+
+def load_yaml_file(path: Path, error: type[PosegenError]) -> Any:
+    """Parse a YAML file; a missing file or bad YAML raises ``error`` with a one-line message."""
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise error(f"cannot read {path}: {exc.strerror}") from exc
+    try:
+        return yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        raise error(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+
+
+def read_yaml(path: str | Path, kind: str | tuple[str, ...]) -> dict[str, Any]:
+    """Read a posegen artefact and check its kind.
+
+    Args:
+        path: File to read.
+        kind: Expected value(s) of the ``format`` field ("posegen-pool", ...).
+
+    Raises:
+        InputError: The file is missing, not YAML, or not an artefact of that kind.
+
+    """
+    path = Path(path)
+    data = load_yaml_file(path, InputError)
+    kinds = (kind,) if isinstance(kind, str) else kind
+    if not isinstance(data, dict) or data.get("format") not in kinds:
+        found = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise InputError(f"{path}: not a {' or '.join(kinds)} file (format: {found!r})")
+    return data

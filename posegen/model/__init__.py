@@ -1,0 +1,57 @@
+"""The calibration model that selection and identification share.
+
+Parametric sole-to-contact kinematics of each chain, the plane-constrained contact
+model with its analytic Jacobian, the parameters and their names, noise and prior
+weights, initial plane estimates, the settle step of a force-controlled contact, and
+identifiability (base parameters by QR, structural base parameters, O1).
+"""
+
+from posegen.model.contact_model import ContactModel, Contacts
+from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
+from posegen.model.kinematics import ChainModel, offset_matrix, placement_derivatives, placement_matrix, rpy_matrix
+from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter, Unit
+from posegen.model.planes import initial_planes, level_planes
+from posegen.model.settle import settle, settle_contacts
+from posegen.model.structural import STRUCTURAL_POSTURES, level_postures, structural_base
+from posegen.model.weights import (
+    DEFAULT_NOISE,
+    NOISE_FLOOR,
+    UNIT_PRIOR_ANGLE_RAD,
+    UNIT_PRIOR_LENGTH_M,
+    Weights,
+    prior_scale,
+    weights_for,
+)
+
+__all__ = [
+    "DEFAULT_NOISE",
+    "NOISE_FLOOR",
+    "OFFSET_FIELDS",
+    "PLACEMENT_FIELDS",
+    "RANK_TOLERANCE",
+    "STRUCTURAL_POSTURES",
+    "UNIT_PRIOR_ANGLE_RAD",
+    "UNIT_PRIOR_LENGTH_M",
+    "BaseParameters",
+    "ChainModel",
+    "ContactModel",
+    "Contacts",
+    "Group",
+    "Parameter",
+    "Unit",
+    "Weights",
+    "base_parameters",
+    "initial_planes",
+    "level_planes",
+    "level_postures",
+    "observability_o1",
+    "offset_matrix",
+    "placement_derivatives",
+    "placement_matrix",
+    "prior_scale",
+    "rpy_matrix",
+    "settle",
+    "settle_contacts",
+    "structural_base",
+    "weights_for",
+]

@@ -1,0 +1,225 @@
+"""Parametric sole-to-contact kinematics of one chain, with its analytic Jacobian.
+
+A chain is read from the scene's pinocchio model: the sole frame, the joints up to the
+root (traversed against the URDF direction), the joints down to the gripper, the
+gripper frame and posegen's contact frame. Every placement carries the six URDF
+parameters (px, py, pz in m; phix, phiy, phiz in rad, URDF rpy: R = Rz Ry Rx); the
+contact frame adds three (z, roll, pitch offsets in the gripper frame) and each table
+session a plane (z, roll, pitch in the sole frame).
+
+The measurement of a flush contact is the contact frame's height, roll and pitch in the
+plane frame, zero at every recorded contact.
+
+Everything is vectorised over postures: shapes ``(n, ...)`` with n postures.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.errors import ConfigError
+from posegen.robot import FloatArray, Scene, contact_placement
+
+
+def rpy_matrix(phi: FloatArray) -> FloatArray:
+    """URDF rpy rotation Rz(phiz) Ry(phiy) Rx(phix). phi: (3,), returns (3, 3)."""
+    return np.asarray(pin.rpy.rpyToMatrix(float(phi[0]), float(phi[1]), float(phi[2])))
+
+
+def _skew(axis: int) -> FloatArray:
+    e = np.zeros(3)
+    e[axis] = 1.0
+    return np.asarray(pin.skew(e))
+
+
+def rpy_derivatives(phi: FloatArray) -> FloatArray:
+    """Derivatives of the rpy rotation with respect to phix, phiy, phiz. Shape (3, 3, 3)."""
+    rx = pin.rpy.rpyToMatrix(float(phi[0]), 0.0, 0.0)
+    ry = pin.rpy.rpyToMatrix(0.0, float(phi[1]), 0.0)
+    rz = pin.rpy.rpyToMatrix(0.0, 0.0, float(phi[2]))
+    return np.array([rz @ ry @ rx @ _skew(0), rz @ ry @ _skew(1) @ rx, _skew(2) @ rz @ ry @ rx])
+
+
+def placement_matrix(params: FloatArray) -> FloatArray:
+    """Homogeneous transform of (px, py, pz, phix, phiy, phiz). Shape (4, 4)."""
+    out = np.eye(4)
+    out[:3, :3] = rpy_matrix(params[3:])
+    out[:3, 3] = params[:3]
+    return out
+
+
+def placement_derivatives(params: FloatArray) -> FloatArray:
+    """Derivatives of :func:`placement_matrix` w.r.t. its six parameters. Shape (6, 4, 4)."""
+    out = np.zeros((6, 4, 4))
+    for i in range(3):
+        out[i, i, 3] = 1.0
+    out[3:, :3, :3] = rpy_derivatives(params[3:])
+    return out
+
+
+def offset_matrix(z: float, roll: float, pitch: float) -> FloatArray:
+    """Transform Trans(0, 0, z) Rot_rpy(roll, pitch, 0) (a plane or contact offset). Shape (4, 4)."""
+    return placement_matrix(np.array([0.0, 0.0, z, roll, pitch, 0.0]))
+
+
+@dataclass(frozen=True)
+class Element:
+    """One placement of the chain, possibly followed by a revolute joint."""
+
+    name: str  # joint or frame whose placement this is
+    nominal: FloatArray  # (6,) URDF xyz rpy
+    reverse: bool  # traversed against the URDF direction (sole up to the root)
+    axis: FloatArray | None  # (3,) unit joint axis, None for a fixed placement
+    joint: int | None  # index of the joint in Scene.joint_names
+
+
+def _axis(joint: pin.JointModel) -> FloatArray:
+    short = joint.shortname()
+    for letter, axis in (("RX", 0), ("RY", 1), ("RZ", 2)):
+        if short.endswith(letter):
+            return np.eye(3)[axis]
+    if "RevoluteUnaligned" in short:
+        return np.array(joint.axis, dtype=float)
+    raise ConfigError(f"joint type {short} is not supported in a calibration chain (revolute joints only)")
+
+
+def _xyz_rpy(placement: pin.SE3) -> FloatArray:
+    return np.concatenate([placement.translation, pin.rpy.matrixToRpy(placement.rotation)])
+
+
+class ChainModel:
+    """Sole-to-contact kinematics of one chain.
+
+    Attributes:
+        chain: Chain name.
+        elements: Placements from the sole to the gripper frame.
+        contact_nominal: Nominal contact frame in the gripper frame, (4, 4).
+        placement_names: Names of the placements, in chain order.
+
+    """
+
+    def __init__(self, scene: Scene, chain: str) -> None:
+        cfg = scene.chain(chain)
+        model = scene.model
+        self.chain = chain
+        sole = model.frames[scene.frame_id(cfg.sole_frame)]
+        grip = model.frames[scene.frame_id(cfg.gripper_frame)]
+        up = _ancestors(model, sole.parentJoint)  # sole joint .. first joint below the root
+        down = _ancestors(model, grip.parentJoint)[::-1]  # first joint below the root .. gripper joint
+        shared = set(up) & set(down)
+        up = [j for j in up if j not in shared]
+        down = [j for j in down if j not in shared]
+        name_of = {model.getJointId(n): i for i, n in enumerate(scene.joint_names)}
+        elements = [Element(cfg.sole_frame, _xyz_rpy(sole.placement), True, None, None)]
+        for j in up:
+            elements.append(
+                Element(model.names[j], _xyz_rpy(model.jointPlacements[j]), True, _axis(model.joints[j]), name_of[j])
+            )
+        for j in down:
+            elements.append(
+                Element(model.names[j], _xyz_rpy(model.jointPlacements[j]), False, _axis(model.joints[j]), name_of[j])
+            )
+        elements.append(Element(cfg.gripper_frame, _xyz_rpy(grip.placement), False, None, None))
+        self.elements = tuple(elements)
+        self.contact_nominal = contact_placement(model, cfg).homogeneous
+        self.contact_frame = cfg.contact_frame
+        self.placement_names = tuple(e.name for e in elements)
+
+    @property
+    def joint_indices(self) -> list[int]:
+        """Indices (in Scene.joint_names) of the chain's joints, sole to gripper."""
+        return [e.joint for e in self.elements if e.joint is not None]
+
+    def transforms(
+        self, joints: FloatArray, placements: dict[str, FloatArray], contact: FloatArray
+    ) -> tuple[list[FloatArray], FloatArray]:
+        """Per-element transforms and the contact offset.
+
+        Args:
+            joints: (n, nj) joint angles, rad.
+            placements: Placement name -> (6,) parameters.
+            contact: (3,) contact offsets (z m, roll rad, pitch rad).
+
+        Returns:
+            A list of (n, 4, 4) element transforms and the (4, 4) gripper-to-contact transform.
+
+        """
+        n = joints.shape[0]
+        out = []
+        for e in self.elements:
+            m = placement_matrix(placements[e.name])
+            if e.axis is None:
+                t = np.broadcast_to(np.linalg.inv(m) if e.reverse else m, (n, 4, 4))
+            else:
+                rot = _rotations(e.axis, joints[:, e.joint])  # (n, 4, 4)
+                t = np.linalg.inv(m @ rot) if e.reverse else m @ rot
+            out.append(t)
+        return out, self.contact_nominal @ offset_matrix(*contact)
+
+    def sole_to_contact(self, joints: FloatArray, placements: dict[str, FloatArray], contact: FloatArray) -> FloatArray:
+        """Contact frame in the sole frame. Shape (n, 4, 4)."""
+        elements, tip = self.transforms(joints, placements, contact)
+        total = elements[0]
+        for t in elements[1:]:
+            total = total @ t
+        return np.asarray(total @ tip)
+
+    def nominal_placements(self) -> dict[str, FloatArray]:
+        """Placement name -> nominal (6,) parameters (copies)."""
+        return {e.name: e.nominal.copy() for e in self.elements}
+
+
+def _rotations(axis: FloatArray, angles: FloatArray) -> FloatArray:
+    """Homogeneous rotations about ``axis`` by each angle. Shape (n, 4, 4)."""
+    k = np.asarray(pin.skew(axis))
+    s = np.sin(angles)[:, None, None]
+    c = np.cos(angles)[:, None, None]
+    out = np.zeros((len(angles), 4, 4))
+    out[:, :3, :3] = np.eye(3) + s * k + (1 - c) * (k @ k)
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def _ancestors(model: pin.Model, joint: int) -> list[int]:
+    """Joint ids from ``joint`` up to (excluding) the root joint."""
+    out = []
+    while joint > 1:  # 0 is the universe, 1 the free flyer
+        out.append(joint)
+        joint = model.parents[joint]
+    return out
+
+
+def tilt_measurement(frames: FloatArray) -> FloatArray:
+    """Height (m), roll and pitch (rad) of frames expressed in the plane frame.
+
+    Args:
+        frames: (n, 4, 4) contact frames in the plane frame.
+
+    Returns:
+        (n, 3) measurements.
+
+    """
+    roll = np.arctan2(frames[:, 2, 1], frames[:, 2, 2])
+    pitch = np.arcsin(np.clip(-frames[:, 2, 0], -1.0, 1.0))
+    return np.column_stack([frames[:, 2, 3], roll, pitch])
+
+
+def tilt_measurement_jacobian(row: FloatArray, d_row: FloatArray) -> FloatArray:
+    """Derivative of :func:`tilt_measurement` given the third row of the frame.
+
+    Args:
+        row: (n, 4) third row of the frame (R20, R21, R22, z).
+        d_row: (n, p, 4) its derivatives with respect to p parameters.
+
+    Returns:
+        (n, 3, p) derivatives of (z, roll, pitch).
+
+    """
+    r20, r21, r22 = row[:, 0, None], row[:, 1, None], row[:, 2, None]
+    d_z = d_row[:, :, 3]
+    d_roll = (r22 * d_row[:, :, 1] - r21 * d_row[:, :, 2]) / (r21**2 + r22**2)
+    d_pitch = -d_row[:, :, 0] / np.sqrt(np.maximum(1.0 - r20**2, 1e-12))
+    return np.stack([d_z, d_roll, d_pitch], axis=1)

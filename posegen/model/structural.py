@@ -1,0 +1,107 @@
+"""Structural base parameters: what real contacts can identify, whatever their number.
+
+The regressor's rank depends on the shape of the postures, so it is evaluated at
+seeded random postures shaped like real contacts (both soles on the floor, every
+contact flush at one table height per session) around the given ones, and reduced by
+:func:`posegen.model.identifiability.base_parameters` (planes first). Selection builds
+its design and calibration its fit on these base parameters.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from posegen.errors import InfeasibleError
+from posegen.model.contact_model import ContactModel, Contacts
+from posegen.model.identifiability import BaseParameters, base_parameters
+from posegen.model.parameters import Group
+from posegen.model.planes import initial_planes, level_planes
+from posegen.model.settle import settle
+from posegen.model.weights import DEFAULT_NOISE, UNIT_PRIOR_LENGTH_M, prior_scale, weights_for
+
+STRUCTURAL_POSTURES = 100  # generated per (chain, session) pair
+
+
+def structural_base(
+    model: ContactModel,
+    contacts: Contacts,
+    noise: tuple[float, float, float] = DEFAULT_NOISE,
+    postures: int = STRUCTURAL_POSTURES,
+    seed: int = 0,
+) -> BaseParameters:
+    """Base parameters of the (chain, session) pairs present in ``contacts``.
+
+    Args:
+        model: Measurement model.
+        contacts: Contacts whose (chain, session) pairs, joints and heights the
+            regressor's postures are drawn around.
+        noise: Measurement noise (m, rad, rad) scaling the regressor's rows.
+        postures: Postures generated per (chain, session) pair.
+        seed: Seed of the generated postures.
+
+    """
+    rich = level_postures(model, contacts, postures, seed)
+    theta = initial_planes(model, rich, model.nominal())
+    _, jac = model.jacobian(theta, rich)
+    sigma = np.array(noise)
+    regressor = (jac / sigma[None, :, None]).reshape(-1, model.size)
+    scale = prior_scale(model, weights_for(1.0, noise))
+    scale[~np.isfinite(scale)] = UNIT_PRIOR_LENGTH_M
+    planes = model.columns(Group.PLANE)
+    robot = np.concatenate([model.columns(Group.PLACEMENT), model.columns(Group.CONTACT)])
+    return base_parameters(regressor, scale, [planes, robot])
+
+
+def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -> Contacts:
+    """Random standing contacts of each (chain, session) pair of ``contacts``.
+
+    Shaped like real ones, because the regressor's rank depends on it: both soles on
+    the floor (the stance closure ties the two legs), and every contact flush with a
+    level plane at its session's mean contact height (one height per session removes
+    combinations that varying heights would show). Each is a training contact with
+    every joint perturbed at random (legs by up to 0.3 rad, the rest by up to 0.5 rad),
+    the second leg closed onto its sole and the contact settled by the smallest arm and
+    torso motion.
+    """
+    scene = model.scene
+    rng = np.random.default_rng(seed)
+    legs = scene.stance_leg_joints()
+    spread = np.full(len(scene.joint_names), 0.5)
+    spread[legs] = 0.3
+    theta = level_planes(model, initial_planes(model, contacts, model.nominal()))  # at the measured heights
+    pairs = sorted(set(zip(contacts.chains, contacts.sessions, strict=True)))
+    parts: list[Contacts] = []
+    for chain, session in pairs:
+        seeds = contacts.joints[
+            [
+                i
+                for i, (c, s) in enumerate(zip(contacts.chains, contacts.sessions, strict=True))
+                if (c, s) == (chain, session)
+            ]
+        ]
+        found = 0
+        for _attempt in range(50):
+            samples = []
+            for _ in range(2 * (n - found)):
+                base = seeds[rng.integers(len(seeds))]
+                sample = np.clip(base + rng.uniform(-spread, spread), scene.lower, scene.upper)
+                closed = scene.close_stance(sample)
+                if closed is not None:
+                    samples.append(closed)
+            if not samples:
+                continue
+            batch = Contacts(
+                np.array(samples), (chain,) * len(samples), (session,) * len(samples), ("",) * len(samples)
+            )
+            settled, converged = settle(model, theta, batch)
+            keep = np.flatnonzero(converged)[: n - found]
+            parts.append(settled.subset(keep))
+            found += len(keep)
+            if found >= n:
+                break
+        else:
+            raise InfeasibleError(f"cannot generate standing contacts like those of chain '{chain}'")
+    out = parts[0]
+    for part in parts[1:]:
+        out = out.concat(part)
+    return out

@@ -1,0 +1,58 @@
+"""The pool stage's commands, from files to files: ``posegen pool`` and ``posegen check POOL``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from posegen.io import read_yaml, write_yaml
+from posegen.pool.check import verify_postures
+from posegen.pool.generation import generate_pool
+from posegen.progress import Progress, ProgressCallback, ignore_progress
+from posegen.robot import POOL_FORMAT, Pool, Verification, load_config, pool_from_dict, scene_for
+
+
+def generate_pool_file(
+    config_path: str,
+    output: str,
+    n: int,
+    seed: int,
+    workers: int = 1,
+    progress: ProgressCallback = ignore_progress,
+) -> Pool:
+    """Generate (or resume) a pool and write it to ``output``.
+
+    Finished chunks are recorded in ``<output>.partial.jsonl``: rerunning the same
+    command after a kill resumes from there. The pool file is written once, atomically,
+    and the checkpoint removed after it.
+
+    Raises:
+        PosegenError: Bad config, an infeasible scene, or a checkpoint of another run.
+
+    """
+    config = load_config(config_path)
+    path = Path(output)
+    checkpoint = path.with_name(path.name + ".partial.jsonl")
+    pool = generate_pool(config, n, seed, workers, checkpoint, progress)
+    write_yaml(path, pool.to_dict())
+    checkpoint.unlink(missing_ok=True)
+    return pool
+
+
+def check_pool_file(path: str, config_path: str | None, progress: ProgressCallback = ignore_progress) -> Verification:
+    """Re-verify every posture of a pool file from scratch, on the robot's meshes.
+
+    Args:
+        path: Pool file.
+        config_path: Scene config; None: the one saved in the pool.
+        progress: Told after each posture.
+
+    Raises:
+        PosegenError: Not a pool, or a pool made for another robot model.
+
+    """
+    pool = pool_from_dict(read_yaml(path, POOL_FORMAT), path)
+    scene = scene_for(pool.provenance, config_path)
+    scene.check_made_for(pool.provenance, path)
+    pool.check_joints(scene.joint_names, path)
+    progress(Progress(0, len(pool.postures), "posture"))
+    return verify_postures(scene, pool.postures, progress)

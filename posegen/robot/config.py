@@ -1,0 +1,364 @@
+"""Typed configuration of a robot-and-table scene, loaded and validated once.
+
+Every robot-specific name (frames, joints, chains, table) comes from a YAML file in
+``configs/``; this module turns it into frozen dataclasses. Structural errors (missing
+keys, wrong types, bad numbers) are reported here; names are checked against the
+robot model by :class:`posegen.robot.scene.Scene`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from posegen.errors import ConfigError
+from posegen.io import load_yaml_file
+
+
+@dataclass(frozen=True)
+class RobotSource:
+    """Where the robot model comes from: an example-robot-data name or URDF/SRDF paths."""
+
+    example_robot_data: str | None = None
+    urdf: str | None = None
+    srdf: str | None = None
+    package_dirs: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class ChainConfig:
+    """One foot-to-gripper chain (one arm)."""
+
+    name: str
+    sole_frame: str
+    gripper_frame: str  # the link the fingertips are rigidly attached to
+    fingertip_frames: tuple[str, ...]
+    fingertip_length_m: float  # from a fingertip link origin to its end, along -z of gripper_frame
+    contact_frame: str  # name given to the contact frame that posegen adds to the model
+    spot_y_range_m: tuple[float, float]  # table-frame y range of the spots this arm serves
+    recorded_as: str = ""  # the name recordings give this gripper (e.g. "talos/left_gripper")
+
+
+@dataclass(frozen=True)
+class StanceConfig:
+    """Both feet flat on the floor at the poses of a reference posture."""
+
+    reference_posture: str  # SRDF group state, e.g. half_sitting
+    sole_frames: tuple[str, str]  # the first is the anchor the floating base is solved from
+    foot_x_m: tuple[float, float]  # sole rectangle along the sole frame's x
+    foot_y_m: tuple[float, float]  # sole rectangle along the sole frame's y
+    floor_contact_frames: tuple[str, ...]  # links allowed to touch the floor
+
+
+@dataclass(frozen=True)
+class TableConfig:
+    """A flat table: box whose top face holds the contact spots."""
+
+    top_center_m: tuple[float, float, float]  # world position of the top face's centre
+    yaw_deg: float
+    size_m: tuple[float, float, float]  # length (x), width (y), thickness (z)
+    spots_x_m: tuple[float, ...]  # grid of target spots, table frame
+    spots_y_m: tuple[float, ...]
+    approach_standoff_m: float
+
+
+@dataclass(frozen=True)
+class MarginConfig:
+    """Safety margins of feasibility."""
+
+    com_m: float  # CoM ground projection inside the support polygon by at least this
+    collision_m: float  # minimum distance between bodies that must not touch
+    joint_limit_rad: float  # distance kept from every joint limit
+
+
+@dataclass(frozen=True)
+class SamplingConfig:
+    """Settings of the Gauss-Newton projection of random samples."""
+
+    soft_iterations: int  # iterations with every task soft
+    hard_iterations: int  # iterations with feet and contact hard
+    spot_tolerance_m: float  # accepted distance of the contact point from its target spot
+    chunk_size: int  # samples per unit of work (checkpointing and parallelism)
+
+
+@dataclass(frozen=True)
+class RouteConfig:
+    """How the contact postures are visited."""
+
+    acceleration_limit_rad_s2: float = 1.5  # every joint
+    velocity_scale_free: float = 0.5  # fraction of the URDF velocity limits away from the table
+    velocity_scale_near: float = 0.15  # approach and release
+    velocity_scale_contact: float = 0.05  # go-to-contact, where force control takes over
+    overshoot_m: float = 0.003  # go-to-contact ends this far below the nominal plane
+    pre_contact_m: float = 0.01  # approach ends, and go-to-contact starts, this far above it
+    hold_s: float = 1.0  # time held in contact
+    waypoint_step_rad: float = 0.02  # largest joint change between checked waypoints
+    planning_checks: float = 4000  # OMPL budget per free motion, in state checks (repeatable, unlike seconds)
+    return_to_start: bool = True  # end the route at the start posture
+
+
+@dataclass(frozen=True)
+class Config:
+    """A whole scene: robot, stance, chains, table, margins, sampling."""
+
+    robot: RobotSource
+    locked_joints: dict[str, float]  # rad, held fixed during sampling
+    stance: StanceConfig
+    chains: tuple[ChainConfig, ...]
+    table: TableConfig
+    margins: MarginConfig
+    sampling: SamplingConfig
+    route: RouteConfig = RouteConfig()
+    source_path: str = ""
+
+    def chain(self, name: str) -> ChainConfig:
+        """Return the chain called ``name``.
+
+        Raises:
+            ConfigError: No chain has that name.
+
+        """
+        for chain in self.chains:
+            if chain.name == name:
+                return chain
+        valid = ", ".join(c.name for c in self.chains)
+        raise ConfigError(f"unknown chain '{name}'; valid chains: {valid}")
+
+    @property
+    def contact_collision_margin_m(self) -> float:
+        """Collision margin during contact segments: the margin less the commanded overshoot."""
+        return max(self.margins.collision_m - self.route.overshoot_m, 0.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data form, as saved in every artefact (re-loadable by :func:`parse_config`)."""
+        source = {k: v for k, v in dataclasses.asdict(self.robot).items() if v not in (None, ())}
+        chains = {}
+        for chain in self.chains:
+            fields = dataclasses.asdict(chain)
+            chains[fields.pop("name")] = fields
+        data = {
+            "robot": {"source": source, "locked_joints": dict(self.locked_joints)},
+            "stance": dataclasses.asdict(self.stance),
+            "chains": chains,
+            "table": dataclasses.asdict(self.table),
+            "margins": dataclasses.asdict(self.margins),
+            "sampling": dataclasses.asdict(self.sampling),
+            "route": dataclasses.asdict(self.route),
+        }
+        return dict(_plain(data))
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+class _Reader:
+    """Reads typed fields from a nested mapping, with the key path in every error."""
+
+    def __init__(self, data: Any, where: str) -> None:
+        if not isinstance(data, dict):
+            raise ConfigError(f"{where or 'config'}: expected a mapping, got {type(data).__name__}")
+        self.data = data
+        self.where = where
+
+    def _path(self, key: str) -> str:
+        return f"{self.where}.{key}" if self.where else key
+
+    def raw(self, key: str, default: Any = ...) -> Any:
+        if key not in self.data:
+            if default is ...:
+                raise ConfigError(f"{self._path(key)}: missing")
+            return default
+        return self.data[key]
+
+    def sub(self, key: str) -> _Reader:
+        return _Reader(self.raw(key), self._path(key))
+
+    def text(self, key: str, default: Any = ...) -> str:
+        value = self.raw(key, default)
+        if not isinstance(value, str) or not value:
+            raise ConfigError(f"{self._path(key)}: expected a non-empty string, got {value!r}")
+        return value
+
+    def number(self, key: str, default: Any = ..., minimum: float | None = None) -> float:
+        value = self.raw(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f"{self._path(key)}: expected a number, got {value!r}")
+        if minimum is not None and value < minimum:
+            raise ConfigError(f"{self._path(key)}: must be >= {minimum}, got {value}")
+        return float(value)
+
+    def integer(self, key: str, default: Any = ..., minimum: int = 1) -> int:
+        value = self.raw(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise ConfigError(f"{self._path(key)}: expected an integer >= {minimum}, got {value!r}")
+        return value
+
+    def numbers(self, key: str, length: int | None = None, default: Any = ...) -> tuple[float, ...]:
+        value = self.raw(key, default)
+        ok = isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        if not ok or (length is not None and len(value) != length) or not value:
+            size = f"{length} " if length is not None else ""
+            raise ConfigError(f"{self._path(key)}: expected a list of {size}numbers, got {value!r}")
+        return tuple(float(v) for v in value)
+
+    def texts(self, key: str, default: Any = ...) -> tuple[str, ...]:
+        value = self.raw(key, default)
+        if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
+            raise ConfigError(f"{self._path(key)}: expected a list of names, got {value!r}")
+        return tuple(value)
+
+    def interval(self, key: str) -> tuple[float, float]:
+        low, high = self.numbers(key, 2)
+        if low >= high:
+            raise ConfigError(f"{self._path(key)}: expected [low, high] with low < high")
+        return low, high
+
+
+def parse_config(data: Any, source_path: str = "") -> Config:
+    """Build a :class:`Config` from plain data (a parsed YAML document).
+
+    Raises:
+        ConfigError: A field is missing, of the wrong type or out of range.
+
+    """
+    top = _Reader(data, "")
+    robot = top.sub("robot")
+    src = robot.sub("source")
+    base = Path(source_path).parent if source_path else Path.cwd()
+
+    def absolute(value: str | None) -> str | None:  # relative paths are relative to the config file
+        return None if value is None else str((base / value).resolve())
+
+    source = RobotSource(
+        example_robot_data=src.raw("example_robot_data", None),
+        urdf=absolute(src.raw("urdf", None)),
+        srdf=absolute(src.raw("srdf", None)),
+        package_dirs=tuple(str(absolute(d)) for d in src.texts("package_dirs", [])),
+    )
+    if (source.example_robot_data is None) == (source.urdf is None):
+        raise ConfigError("robot.source: give either example_robot_data or urdf (with srdf)")
+    if source.urdf is not None and source.srdf is None:
+        raise ConfigError("robot.source.srdf: missing (needed with urdf)")
+    locked = robot.raw("locked_joints", {})
+    if not isinstance(locked, dict) or not all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in locked.values()
+    ):
+        raise ConfigError("robot.locked_joints: expected a mapping joint name -> angle (rad)")
+
+    st = top.sub("stance")
+    soles = st.texts("sole_frames")
+    if len(soles) != 2:
+        raise ConfigError("stance.sole_frames: expected exactly two sole frames")
+    stance = StanceConfig(
+        reference_posture=st.text("reference_posture"),
+        sole_frames=(soles[0], soles[1]),
+        foot_x_m=st.interval("foot_x_m"),
+        foot_y_m=st.interval("foot_y_m"),
+        floor_contact_frames=st.texts("floor_contact_frames"),
+    )
+
+    chains_raw = top.raw("chains")
+    if not isinstance(chains_raw, dict) or not chains_raw:
+        raise ConfigError("chains: expected a mapping chain name -> chain settings")
+    chains = []
+    for name, _ in chains_raw.items():
+        ch = top.sub("chains").sub(str(name))
+        tips = ch.texts("fingertip_frames")
+        if len(tips) < 3:
+            raise ConfigError(f"chains.{name}.fingertip_frames: a flush contact needs 3 fingertips")
+        chains.append(
+            ChainConfig(
+                name=str(name),
+                sole_frame=ch.text("sole_frame"),
+                gripper_frame=ch.text("gripper_frame"),
+                fingertip_frames=tips,
+                fingertip_length_m=ch.number("fingertip_length_m", minimum=0.0),
+                contact_frame=ch.text("contact_frame"),
+                spot_y_range_m=ch.interval("spot_y_range_m"),
+                recorded_as=ch.text("recorded_as", str(name)),
+            )
+        )
+
+    tb = top.sub("table")
+    size = tb.numbers("size_m", 3)
+    if min(size) <= 0:
+        raise ConfigError("table.size_m: every dimension must be positive")
+    top_center = tb.numbers("top_center_m", 3)
+    table = TableConfig(
+        top_center_m=(top_center[0], top_center[1], top_center[2]),
+        yaw_deg=tb.number("yaw_deg", 0.0),
+        size_m=(size[0], size[1], size[2]),
+        spots_x_m=tb.numbers("spots_x_m"),
+        spots_y_m=tb.numbers("spots_y_m"),
+        approach_standoff_m=tb.number("approach_standoff_m", minimum=0.0),
+    )
+    for value, half, axis in ((table.spots_x_m, size[0] / 2, "x"), (table.spots_y_m, size[1] / 2, "y")):
+        if any(abs(v) > half for v in value):
+            raise ConfigError(f"table.spots_{axis}_m: spots must lie on the table (|{axis}| <= {half} m)")
+    for spot_y in table.spots_y_m:
+        if not any(c.spot_y_range_m[0] <= spot_y <= c.spot_y_range_m[1] for c in chains):
+            raise ConfigError(f"table.spots_y_m: no chain's spot_y_range_m covers y = {spot_y} m")
+
+    mg = top.sub("margins")
+    margins = MarginConfig(
+        com_m=mg.number("com_m", minimum=0.0),
+        collision_m=mg.number("collision_m", minimum=0.0),
+        joint_limit_rad=mg.number("joint_limit_rad", minimum=0.0),
+    )
+    sp = top.sub("sampling")
+    sampling = SamplingConfig(
+        soft_iterations=sp.integer("soft_iterations"),
+        hard_iterations=sp.integer("hard_iterations"),
+        spot_tolerance_m=sp.number("spot_tolerance_m", minimum=0.0),
+        chunk_size=sp.integer("chunk_size"),
+    )
+    route = RouteConfig()
+    if "route" in top.data:
+        rt = top.sub("route")
+        defaults = dataclasses.asdict(route)
+        values: dict[str, Any] = {}
+        for key, default in defaults.items():
+            if isinstance(default, bool):
+                flag = rt.raw(key, default)
+                if not isinstance(flag, bool):
+                    raise ConfigError(f"route.{key}: expected true or false, got {flag!r}")
+                values[key] = flag
+            else:
+                values[key] = rt.number(key, default, minimum=0.0)
+        unknown = set(rt.data) - set(defaults)
+        if unknown:
+            raise ConfigError(f"route: unknown keys {sorted(unknown)}; valid keys: {', '.join(defaults)}")
+        route = RouteConfig(**values)
+    return Config(
+        robot=source,
+        locked_joints={str(k): float(v) for k, v in locked.items()},
+        stance=stance,
+        chains=tuple(chains),
+        table=table,
+        margins=margins,
+        sampling=sampling,
+        route=route,
+        source_path=source_path,
+    )
+
+
+def load_config(path: str | Path) -> Config:
+    """Load and validate a scene configuration file.
+
+    Raises:
+        ConfigError: The file is missing, not YAML, or not a valid configuration.
+
+    """
+    path = Path(path)
+    data = load_yaml_file(path, ConfigError)
+    try:
+        return parse_config(data, str(path))
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from exc

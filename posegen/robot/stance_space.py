@@ -1,0 +1,74 @@
+"""The configuration space of a robot standing on both feet, parametrised explicitly.
+
+Planning in the full joint space with both soles fixed is planning on a closed-chain
+manifold. Here the second leg is not a planning coordinate: a state is every other free
+joint (anchor leg, torso, arms), and the second leg is solved from it (Gauss-Newton
+from the previous state's leg, a few milliseconds) so that its sole meets its fixed
+pose. Both soles are therefore exact at every state, and an ordinary sampling planner
+(OMPL) works in the remaining coordinates.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from posegen.robot.collision import CollisionChecker
+from posegen.robot.geometry import FloatArray
+from posegen.robot.scene import Scene
+
+
+class StanceSpace:
+    """Explicit coordinates of the standing robot and the validity of its states.
+
+    Attributes:
+        coordinates: Indices (in Scene.joint_names) of the planning coordinates.
+        closing: Indices of the second leg's joints, solved from the others.
+        lower, upper: Bounds of the coordinates (joint limits shrunk by the margin), rad.
+
+    """
+
+    def __init__(self, scene: Scene, checker: CollisionChecker) -> None:
+        self.scene = scene
+        self.checker = checker
+        self.closing = scene.leg_joints(scene.second_sole)
+        self.coordinates = [
+            i for i in range(len(scene.joint_names)) if not scene.locked[i] and i not in set(self.closing)
+        ]
+        margin = scene.margins.joint_limit_rad
+        self.lower = scene.lower[self.coordinates] + margin
+        self.upper = scene.upper[self.coordinates] - margin
+        self._data = scene.model.createData()
+
+    def coordinates_of(self, joints: FloatArray) -> FloatArray:
+        """Planning coordinates of full joint angles. Shape (nc,)."""
+        return np.array(joints[self.coordinates], dtype=float)
+
+    def joints_of(self, x: FloatArray, warm: FloatArray) -> FloatArray | None:
+        """Full joint angles of coordinates ``x``, the second leg closed from ``warm``.
+
+        Returns:
+            (nj,) joint angles, or None if the second sole cannot be reached.
+
+        """
+        joints = np.array(warm, dtype=float)
+        joints[self.coordinates] = x
+        return self.scene.close_stance(joints)
+
+    def is_valid(self, joints: FloatArray, contact_chain: str | None, collision_margin_m: float | None = None) -> bool:
+        """Limits (with margin), CoM inside the polygon with margin, no collision with margin.
+
+        Args:
+            joints: (nj,) joint angles with both soles closed.
+            contact_chain: Chain whose fingertips may touch the table, or None.
+            collision_margin_m: Collision margin; None: the configured one.
+
+        """
+        scene = self.scene
+        margins = scene.margins
+        if scene.limit_margin(joints) < margins.joint_limit_rad - 1e-9:
+            return False
+        q = scene.configuration(joints)
+        if scene.com_margin(q, self._data) < margins.com_m:
+            return False
+        margin = margins.collision_m if collision_margin_m is None else collision_margin_m
+        return not self.checker.collides(q, contact_chain, margin)

@@ -1,0 +1,64 @@
+"""The verdict of an independent re-check: the worst case of each invariant.
+
+Shared by ``posegen check`` of pools (:mod:`posegen.pool`) and of routes
+(:mod:`posegen.route`).
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TypeVar
+
+import numpy as np
+
+from posegen.robot.geometry import FloatArray
+
+K = TypeVar("K", bound=enum.Enum)
+
+
+@dataclass(frozen=True)
+class Worst:
+    """The worst case of one invariant over a set of postures."""
+
+    invariant: enum.Enum  # an Invariant, or a route's invariant
+    excess: float  # how far past its bound (> 0: violated), in the invariant's unit
+    posture: int  # index of the posture where it occurs
+    violations: int  # number of postures violating it
+    detail: str
+
+
+@dataclass(frozen=True)
+class Verification:
+    """Result of re-checking postures."""
+
+    checked: int
+    worst: tuple[Worst, ...]  # one per invariant
+
+    @property
+    def ok(self) -> bool:
+        """True if no posture violates any invariant."""
+        return all(w.violations == 0 for w in self.worst)
+
+
+def summarize(
+    checked: int, excess: Mapping[K, Sequence[float] | FloatArray], details: Mapping[K, Sequence[str]]
+) -> Verification:
+    """The worst case of each invariant, in the mapping's order.
+
+    Args:
+        checked: Number of items checked.
+        excess: Per invariant, each item's excess over its bound (> 0: violated).
+        details: Per invariant, each item's description of what was measured.
+
+    """
+    worst = []
+    for key, values in excess.items():
+        array = np.asarray(values, dtype=float)
+        if array.size == 0:
+            worst.append(Worst(key, 0.0, -1, 0, "nothing checked"))
+            continue
+        i = int(np.argmax(array))
+        worst.append(Worst(key, float(array[i]), i, int(np.sum(array > 0)), details[key][i]))
+    return Verification(checked=checked, worst=tuple(worst))

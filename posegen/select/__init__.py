@@ -1,0 +1,36 @@
+"""Stage 2: the optimal choice of postures from a pool.
+
+The design problem (one information matrix per posture, in the base parameters of the
+calibration model), continuous D-optimal weights with their certificate (Frank-Wolfe),
+exact k-posture designs (greedy, Fedorov exchange, DETMAX), IROC, and the selection
+file with its plots.
+"""
+
+from posegen.select.design import Design, build_design
+from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
+from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
+from posegen.select.selection import Iroc, detmax_runs, iroc, select_k, weight_of
+from posegen.select.subset_selection import Subset, detmax, exchange, greedy, subset_of
+from posegen.select.workflow import SelectionSettings, select_pool_file
+
+__all__ = [
+    "Design",
+    "Iroc",
+    "OptimalWeights",
+    "SelectionSettings",
+    "Subset",
+    "build_design",
+    "d_optimal_weights",
+    "detmax",
+    "detmax_runs",
+    "exchange",
+    "greedy",
+    "iroc",
+    "plot_detmax",
+    "plot_o1",
+    "select_k",
+    "select_pool_file",
+    "selection_to_dict",
+    "subset_of",
+    "weight_of",
+]

@@ -1,0 +1,188 @@
+"""The command line: clean one-line errors, exit codes, no partial output files."""
+
+import yaml
+
+from posegen.cli import main
+from posegen.io import write_yaml
+from tests.conftest import CONFIG
+
+
+def run(argv, capsys):
+    code = main(argv)
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def assert_one_line_error(err):
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("posegen: error: "), err
+    assert "Traceback" not in err
+
+
+def assert_fails_cleanly(argv, out, capsys):
+    """The command exits 2 with a one-line error and writes no output file; returns the error."""
+    code, _, err = run(argv, capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    assert not out.exists()
+    return err
+
+
+def bad_config(tmp_path, edit):
+    data = yaml.safe_load(CONFIG.read_text())
+    edit(data)
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return str(path)
+
+
+def empty_pool_file(pool, tmp_path):
+    data = pool.to_dict()
+    data["postures"] = []
+    path = tmp_path / "empty.yaml"
+    write_yaml(path, data)
+    return path
+
+
+def test_pool_writes_file_and_summary(tmp_path, capsys):
+    out = tmp_path / "pool.yaml"
+    code, stdout, _ = run(["pool", "--n", "6", "--workers", "1", "-q", "-o", str(out)], capsys)
+    assert code == 0
+    assert "6 postures accepted" in stdout and "rejected:" in stdout
+    assert out.exists() and not (tmp_path / "pool.yaml.partial.jsonl").exists()
+    code, stdout, _ = run(["check", str(out), "-q"], capsys)
+    assert code == 0 and "FAIL" not in stdout
+
+
+def test_unknown_frame_in_config(tmp_path, capsys):
+    path = bad_config(tmp_path, lambda d: d["chains"]["left"].update(gripper_frame="left_hand"))
+    out = tmp_path / "pool.yaml"
+    err = assert_fails_cleanly(["pool", "--n", "3", "--config", path, "-o", str(out), "-q"], out, capsys)
+    assert "unknown frame 'left_hand'" in err and "gripper_left_base_link" in err
+
+
+def test_table_out_of_reach(tmp_path, capsys):
+    path = bad_config(tmp_path, lambda d: d["table"].update(top_center_m=[2.5, 0.0, 0.7]))
+    out = tmp_path / "pool.yaml"
+    argv = ["pool", "--n", "3", "--workers", "1", "--config", path, "-o", str(out), "-q"]
+    assert "within reach" in assert_fails_cleanly(argv, out, capsys)
+
+
+def test_nonpositive_n(tmp_path, capsys):
+    out = tmp_path / "pool.yaml"
+    assert_fails_cleanly(["pool", "--n", "0", "-o", str(out), "-q"], out, capsys)
+
+
+def test_malformed_config_yaml(tmp_path, capsys):
+    path = tmp_path / "broken.yaml"
+    path.write_text("robot: {source: [\n")
+    code, _, err = run(["pool", "--n", "3", "--config", str(path), "-q"], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+
+
+def test_check_flags_a_tampered_pool(small_pool, tmp_path, capsys):
+    data = small_pool.to_dict()
+    data["postures"][3]["joints"][0] += 0.05  # a left-leg joint: the right sole no longer fits
+    path = tmp_path / "tampered.yaml"
+    write_yaml(path, data)
+    code, stdout, _ = run(["check", str(path), "-q"], capsys)
+    assert code == 1
+    assert "FAIL sole" in stdout and "FAIL contact" in stdout and "posture 3" in stdout
+
+
+def test_check_rejects_files_that_are_not_pools(tmp_path, capsys):
+    path = tmp_path / "notapool.yaml"
+    path.write_text("format: something-else\n")
+    code, _, err = run(["check", str(path)], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+    code, _, err = run(["check", str(tmp_path / "missing.yaml")], capsys)
+    assert code == 2
+    assert_one_line_error(err)
+
+
+def test_simulate_then_calibrate(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    meas = tmp_path / "meas.yaml"
+    code, stdout, _ = run(["simulate", str(EXAMPLE_POOL), "--seed", "2", "-o", str(meas)], capsys)
+    assert code == 0 and meas.exists() and (tmp_path / "meas.truth.yaml").exists()
+    out = tmp_path / "cal"
+    code, stdout, _ = run(["calibrate", f"{meas}@day1", "--prior-scale", "5", "-q", "-o", str(out)], capsys)
+    assert code == 0, stdout
+    assert "training" in stdout and (out / "calibrated.urdf").exists()
+
+
+def test_calibrate_real_csv(tmp_path, capsys):
+    from tests.conftest import REAL_DATA
+
+    out = tmp_path / "real"
+    code, stdout, _ = run(
+        [
+            "calibrate",
+            str(REAL_DATA / "left_train.csv"),
+            str(REAL_DATA / "right_train.csv"),
+            "--validate",
+            str(REAL_DATA / "left_validation.csv"),
+            "-q",
+            "-o",
+            str(out),
+        ],
+        capsys,
+    )
+    assert code == 0
+    assert "held_out_training_plane" in stdout and "held_out_refitted_plane" in stdout
+
+
+def test_calibrate_bad_file(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("joint_names,arm_left_1_joint\ngripper,talos/left_gripper,handle,x,joint_states,abc\n")
+    out = tmp_path / "out"
+    assert_fails_cleanly(["calibrate", str(bad), "-q", "-o", str(out)], out, capsys)
+
+
+def test_select_then_simulate_the_selection(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    out = tmp_path / "selected.yaml"
+    argv = ["select", str(EXAMPLE_POOL), "--k", "70", "--runs", "1", "--fraction", "0.8", "-q", "-o", str(out)]
+    code, stdout, _ = run(argv, capsys)
+    assert code == 0, stdout
+    assert "70 of 200 postures" in stdout and "DETMAX best of 1" in stdout and "80% of O1* at k = " in stdout
+    data = yaml.safe_load(out.read_text())
+    assert data["format"] == "posegen-selection" and len(data["postures"]) == 70
+    assert data["provenance"]["robot_model_sha256"] and data["figures"]["certificate"]["kiefer_wolfowitz_gap"] <= 1e-4
+    assert (tmp_path / "selected_o1.png").exists() and (tmp_path / "selected_detmax.png").exists()
+    code, _, _ = run(["simulate", str(out), "-o", str(tmp_path / "m.yaml")], capsys)
+    assert code == 0
+
+
+def test_select_on_an_empty_pool(small_pool, tmp_path, capsys):
+    path = empty_pool_file(small_pool, tmp_path)
+    out = tmp_path / "sel.yaml"
+    err = assert_fails_cleanly(["select", str(path), "-q", "-o", str(out)], out, capsys)
+    assert "empty" in err
+
+
+def test_route_errors(small_pool, tmp_path, capsys):
+    garbage = tmp_path / "garbage.yaml"
+    garbage.write_text("format: posegen-selection\nformat_version: 1\njoint_names: 3\n")
+    out = tmp_path / "route.yaml"
+    assert_fails_cleanly(["route", str(garbage), "-q", "-o", str(out)], out, capsys)
+    empty = empty_pool_file(small_pool, tmp_path)
+    assert "no postures" in assert_fails_cleanly(["route", str(empty), "-q", "-o", str(out)], out, capsys)
+
+
+def test_route_then_check(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    data = yaml.safe_load(EXAMPLE_POOL.read_text())
+    data["postures"] = data["postures"][3:5]
+    two = tmp_path / "two.yaml"
+    write_yaml(two, data)
+    out = tmp_path / "route.json"
+    code, stdout, _ = run(["route", str(two), "-q", "-o", str(out)], capsys)
+    assert code == 0 and "2 of 2 postures" in stdout and out.exists() and (tmp_path / "route.csv").exists()
+    code, stdout, _ = run(["check", str(out), "-q"], capsys)
+    assert code == 0 and "FAIL" not in stdout and "points" in stdout
