@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+from posegen.calibrate import Calibration
+from posegen.model import Contacts
 from posegen.pool import generate_pool
 from posegen.robot import Config, Pool, Scene, load_config
 
@@ -38,3 +41,29 @@ def example_pool() -> Pool:
     from posegen.robot import load_pool
 
     return load_pool(EXAMPLE_POOL)
+
+
+@dataclass(frozen=True)
+class CalibrationFolder:
+    """A calibration of a simulated robot, written to a folder, with what made it."""
+
+    path: Path
+    calibration: Calibration
+    held_out: Contacts
+
+
+@pytest.fixture(scope="session")
+def calibration_folder(scene: Scene, example_pool: Pool, tmp_path_factory: pytest.TempPathFactory) -> CalibrationFolder:
+    """60 training and 20 held-out contacts of a perturbed TALOS, calibrated with a fixed prior."""
+    from posegen.calibrate import Perturbation, Settings, calibrate, simulate, write_calibration
+
+    rows = list(range(80))
+    chains = tuple(example_pool.postures[i].chain for i in rows)
+    labels = tuple(example_pool.postures[i].spot for i in rows)
+    plan = Contacts(example_pool.joints()[rows], chains, ("sim",) * len(rows), labels)
+    recorded, _, _ = simulate(scene, plan, Perturbation(), seed=3)
+    train, held_out = recorded.subset(range(60)), recorded.subset(range(60, 80))
+    calibration = calibrate(scene, train, ["sim"], Settings(kappa=5.0))
+    path = tmp_path_factory.mktemp("calibration")
+    write_calibration(calibration, held_out, path, seed=3)
+    return CalibrationFolder(path, calibration, held_out)

@@ -3,7 +3,7 @@
 Measurements (posegen YAML and recorded CSV), Levenberg-Marquardt identification of
 the base parameters, the whole calibration (prior and noise by cross-validation,
 outliers, before/after, held-out protocols), simulated contacts of a perturbed robot,
-the calibrated URDF and the report.
+the calibrated URDF, the report and the folder read back (:func:`read_calibration`).
 """
 
 from posegen.calibrate.calibration import (
@@ -24,23 +24,44 @@ from posegen.calibrate.measurements import (
     read_measurements,
     write_measurements,
 )
+from posegen.calibrate.record import (
+    CALIBRATION_FILE,
+    COMPONENTS,
+    DISPLAY,
+    CalibrationRecord,
+    ContactResidual,
+    ContactSet,
+    Posterior,
+    contact_residuals,
+    posterior_of,
+    read_calibration,
+    write_record,
+)
 from posegen.calibrate.report import format_table, residual_stats, write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
 
 __all__ = [
+    "CALIBRATION_FILE",
+    "COMPONENTS",
+    "DISPLAY",
     "Calibrated",
     "Calibration",
+    "CalibrationRecord",
+    "ContactResidual",
+    "ContactSet",
     "CvPoint",
     "Fit",
     "Perturbation",
+    "Posterior",
     "Recording",
     "Settings",
     "Simulated",
     "calibrate",
     "calibrate_files",
     "calibrated_urdf",
+    "contact_residuals",
     "cross_validate",
     "format_table",
     "held_out_residuals",
@@ -49,6 +70,8 @@ __all__ = [
     "levenberg_marquardt",
     "measurements_to_dict",
     "outlier_threshold",
+    "posterior_of",
+    "read_calibration",
     "read_contacts",
     "read_csv",
     "read_measurements",
@@ -59,4 +82,5 @@ __all__ = [
     "true_parameters",
     "write_calibration",
     "write_measurements",
+    "write_record",
 ]

@@ -3,6 +3,8 @@
 Output folder::
 
     calibration.yaml     parameters, base parameters, weights, CV, outliers, residual tables, provenance
+    residuals.csv        every contact's residuals before and after, and its joint angles
+    posterior.npz        posterior covariance of the base parameters, conditioning of their regressor
     calibrated.urdf      same links and joints, calibrated origins
     calibrated.yaml      a scene config that uses calibrated.urdf
     parameters.png       identified deviations per placement (mm, deg)
@@ -18,13 +20,11 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
+from posegen.calibrate.record import COMPONENTS, DISPLAY, write_record
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
 from posegen.model import OFFSET_FIELDS, Contacts, Group, Parameter, Unit
 from posegen.robot import FloatArray
-
-DISPLAY = np.array([1e3, 180.0 / np.pi, 180.0 / np.pi])  # m, rad, rad -> mm, deg, deg
-COMPONENTS = ("z_mm", "roll_deg", "pitch_deg")
 
 
 def residual_stats(residuals: FloatArray) -> dict[str, dict[str, float]]:
@@ -221,6 +221,7 @@ def write_calibration(
             "Training residuals",
             out_dir / "residuals.png",
         )
+    write_record(calibration, held_out, out_dir)
     write_atomic(out_dir / "calibration.yaml", dump_yaml(report))
     return report
 

@@ -1,0 +1,253 @@
+"""A calibration folder read back: the report, every contact's residuals and the posterior.
+
+Besides ``calibration.yaml`` (:mod:`posegen.calibrate.report`), a calibration writes::
+
+    residuals.csv    one row per contact: set (training | outlier | held_out), label,
+                     chain, session, height/roll/pitch residuals before and after
+                     (mm, deg), then the joint angles (rad, one column per joint)
+    posterior.npz    the base parameters' names, their posterior covariance (nb, nb),
+                     the singular values of the noise-whitened base regressor (nb,) and
+                     the condition numbers of the regressor alone and with the prior
+
+Held-out residuals are those of the plane fitted on the training contacts. Viewers and
+the HTML report read a folder through :func:`read_calibration` only.
+"""
+
+from __future__ import annotations
+
+import csv
+import enum
+import io
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posegen.calibrate.calibration import Calibration, held_out_residuals
+from posegen.errors import InputError
+from posegen.io import load_yaml_file, write_atomic
+from posegen.model import Contacts, prior_scale
+from posegen.robot import FloatArray
+
+CALIBRATION_FILE = "calibration.yaml"
+CALIBRATION_FORMAT = "posegen-calibration"
+RESIDUALS_FILE = "residuals.csv"
+POSTERIOR_FILE = "posterior.npz"
+CALIBRATED_CONFIG_FILE = "calibrated.yaml"
+DISPLAY = np.array([1e3, 180.0 / np.pi, 180.0 / np.pi])  # m, rad, rad -> mm, deg, deg
+COMPONENTS = ("z_mm", "roll_deg", "pitch_deg")  # residual components, as displayed
+
+
+class ContactSet(str, enum.Enum):
+    """Which part of the data a contact belongs to."""
+
+    TRAINING = "training"  # fitted
+    OUTLIER = "outlier"  # training row left out of the final fit
+    HELD_OUT = "held_out"  # judged, never fitted
+
+
+@dataclass(frozen=True)
+class ContactResidual:
+    """One contact and its residuals under the nominal and the calibrated model."""
+
+    set: ContactSet
+    label: str
+    chain: str
+    session: str
+    joints: FloatArray  # (nj,) rad, in ``joint_names`` order
+    before: FloatArray  # (3,) height (m), roll, pitch (rad): nominal model, fitted plane
+    after: FloatArray  # (3,) the same, calibrated model
+
+
+@dataclass(frozen=True)
+class Posterior:
+    """Uncertainty and conditioning of the identified base parameters."""
+
+    names: tuple[str, ...]  # (nb,) base parameter names, as in the report's parameter table
+    covariance: FloatArray  # (nb, nb) posterior covariance (prior included), m and rad
+    singular_values: FloatArray  # (nb,) of the noise-whitened base regressor (data only), descending
+    condition: float  # of that regressor: largest / smallest singular value
+    condition_with_prior: float  # of the regressor stacked on the prior's rows
+
+    @property
+    def correlation(self) -> FloatArray:
+        """Posterior correlation of the base parameters. Shape (nb, nb)."""
+        std = np.sqrt(np.clip(np.diag(self.covariance), 1e-300, None))
+        return self.covariance / np.outer(std, std)
+
+
+@dataclass(frozen=True)
+class CalibrationRecord:
+    """Everything a calibration folder holds, read back."""
+
+    directory: Path
+    report: dict[str, Any]  # the content of calibration.yaml
+    joint_names: tuple[str, ...]
+    contacts: tuple[ContactResidual, ...]
+    posterior: Posterior
+    calibrated_config: Path  # scene config of the calibrated robot
+
+    @property
+    def provenance(self) -> dict[str, Any]:
+        """The calibration's provenance (config, model hash, seed, version)."""
+        return dict(self.report.get("provenance") or {})
+
+
+def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> list[ContactResidual]:
+    """Every training contact (fitted or left out as an outlier) and every held-out one, with its residuals."""
+    model, train = calibration.model, calibration.train
+    before = model.residuals(calibration.before.theta, train)
+    after = model.residuals(calibration.after.theta, train)
+    outliers = set(calibration.outliers)
+    rows = [
+        ContactResidual(
+            set=ContactSet.OUTLIER if i in outliers else ContactSet.TRAINING,
+            label=train.labels[i],
+            chain=train.chains[i],
+            session=train.sessions[i],
+            joints=train.joints[i].copy(),
+            before=before[i],
+            after=after[i],
+        )
+        for i in range(len(train))
+    ]
+    if held_out is not None:
+        judged = held_out_residuals(calibration, held_out)["training_plane"]
+        rows.extend(
+            ContactResidual(
+                set=ContactSet.HELD_OUT,
+                label=held_out.labels[i],
+                chain=held_out.chains[i],
+                session=held_out.sessions[i],
+                joints=held_out.joints[i].copy(),
+                before=judged["before"][i],
+                after=judged["after"][i],
+            )
+            for i in range(len(held_out))
+        )
+    return rows
+
+
+def posterior_of(calibration: Calibration) -> Posterior:
+    """Posterior correlation of the base parameters and conditioning of their regressor."""
+    model, fit = calibration.model, calibration.after
+    free = np.array(fit.free, dtype=int)
+    kept = calibration.train.subset(list(calibration.kept))
+    _, jac = model.jacobian(fit.theta, kept)  # (n, 3, p)
+    regressor = (jac[:, :, free] / np.array(calibration.weights.noise)[None, :, None]).reshape(-1, len(free))
+    scale = prior_scale(model, calibration.weights)[free]
+    prior = np.diag(np.where(np.isfinite(scale), 1.0 / scale, 0.0))  # (nb, nb), zero rows where no prior
+    stacked = np.vstack([regressor, prior[np.isfinite(scale)]])
+    covariance = np.linalg.pinv(stacked.T @ stacked)
+    singular = np.linalg.svd(regressor, compute_uv=False)
+    with_prior = np.linalg.svd(stacked, compute_uv=False)
+    return Posterior(
+        names=tuple(model.parameters[i].name for i in free),
+        covariance=covariance,
+        singular_values=singular,
+        condition=float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf"),
+        condition_with_prior=float(with_prior[0] / with_prior[-1]) if with_prior[-1] > 0 else float("inf"),
+    )
+
+
+def write_record(calibration: Calibration, held_out: Contacts | None, out_dir: Path) -> None:
+    """Write ``residuals.csv`` and ``posterior.npz`` into a calibration folder."""
+    names = calibration.model.scene.joint_names
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(
+        ["set", "label", "chain", "session"]
+        + [f"{c}_before" for c in COMPONENTS]
+        + [f"{c}_after" for c in COMPONENTS]
+        + list(names)
+    )
+    for row in contact_residuals(calibration, held_out):
+        writer.writerow(
+            [row.set.value, row.label, row.chain, row.session]
+            + [repr(float(v)) for v in np.concatenate([row.before, row.after]) * np.tile(DISPLAY, 2)]
+            + [repr(float(v)) for v in row.joints]
+        )
+    write_atomic(out_dir / RESIDUALS_FILE, buffer.getvalue())
+    posterior = posterior_of(calibration)
+    packed = io.BytesIO()
+    np.savez(
+        packed,
+        names=np.array(posterior.names),
+        covariance=posterior.covariance,
+        singular_values=posterior.singular_values,
+        condition=np.array([posterior.condition, posterior.condition_with_prior]),
+    )
+    write_atomic(out_dir / POSTERIOR_FILE, packed.getvalue())
+
+
+def _read_residuals(path: Path) -> tuple[tuple[str, ...], tuple[ContactResidual, ...]]:
+    try:
+        with path.open(newline="") as handle:
+            rows = list(csv.reader(handle))
+        header, body = rows[0], rows[1:]
+        first = 4 + 2 * len(COMPONENTS)
+        joint_names = tuple(header[first:])
+        contacts = []
+        for line, row in enumerate(body, start=2):
+            if len(row) != len(header):
+                raise ValueError(f"line {line}: {len(row)} fields, expected {len(header)}")
+            values = np.array([float(v) for v in row[4:]])
+            shown = values[:first - 4] / np.tile(DISPLAY, 2)
+            contacts.append(
+                ContactResidual(
+                    set=ContactSet(row[0]),
+                    label=row[1],
+                    chain=row[2],
+                    session=row[3],
+                    joints=values[first - 4 :],
+                    before=shown[:3],
+                    after=shown[3:],
+                )
+            )
+    except (OSError, IndexError, ValueError) as exc:
+        raise InputError(f"{path}: not a posegen residual table ({exc})") from exc
+    return joint_names, tuple(contacts)
+
+
+def _read_posterior(path: Path) -> Posterior:
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            names = tuple(str(n) for n in data["names"])
+            condition = data["condition"]
+            return Posterior(
+                names=names,
+                covariance=np.array(data["covariance"], dtype=float),
+                singular_values=np.array(data["singular_values"], dtype=float),
+                condition=float(condition[0]),
+                condition_with_prior=float(condition[1]),
+            )
+    except (OSError, KeyError, ValueError) as exc:
+        raise InputError(f"{path}: not a posegen posterior file ({exc})") from exc
+
+
+def read_calibration(path: str | Path) -> CalibrationRecord:
+    """Read a calibration folder (or its ``calibration.yaml``).
+
+    Raises:
+        InputError: A file is missing or malformed (the folder predates this format, or
+            is not a calibration folder).
+
+    """
+    path = Path(path)
+    directory = path.parent if path.is_file() else path
+    report = load_yaml_file(directory / CALIBRATION_FILE, InputError)
+    if not isinstance(report, dict) or report.get("format") != CALIBRATION_FORMAT:
+        raise InputError(f"{directory / CALIBRATION_FILE}: not a {CALIBRATION_FORMAT} file")
+    for name in (RESIDUALS_FILE, POSTERIOR_FILE, CALIBRATED_CONFIG_FILE):
+        if not (directory / name).is_file():
+            raise InputError(f"{directory}: no {name} (calibrate again with this posegen version)")
+    joint_names, contacts = _read_residuals(directory / RESIDUALS_FILE)
+    return CalibrationRecord(
+        directory=directory,
+        report=report,
+        joint_names=joint_names,
+        contacts=contacts,
+        posterior=_read_posterior(directory / POSTERIOR_FILE),
+        calibrated_config=directory / CALIBRATED_CONFIG_FILE,
+    )
