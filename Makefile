@@ -8,7 +8,7 @@ export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 DEMO := plans/demo
 
-.PHONY: install demo test lint bench clean
+.PHONY: install demo test lint bench clean browser
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -32,10 +32,22 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check posegen tests benchmarks
 	$(VENV)/bin/mypy posegen
 
-test: lint
+# Headless Chromium for the viewer's browser tests and benchmark: Debian's package, installed
+# with apt-get when missing and we are root; otherwise those tests are skipped (and say why).
+browser:
+	@command -v chromium-headless-shell >/dev/null 2>&1 || command -v chromium >/dev/null 2>&1 || \
+	if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "installing chromium-headless-shell (apt-get) for the browser tests"; \
+		{ apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium-headless-shell >/dev/null; } \
+		|| echo "posegen: could not install chromium-headless-shell: the browser tests will be skipped"; \
+	else \
+		echo "posegen: no headless Chromium and no root apt-get: the browser tests will be skipped"; \
+	fi
+
+test: lint browser
 	$(PY) -m pytest -q tests
 
-bench: $(STAMP)
+bench: $(STAMP) browser
 	$(PY) benchmarks/run.py
 
 clean:

@@ -11,9 +11,12 @@ import pytest
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from posegen.calibrate import Calibration
+from posegen.io import write_yaml
 from posegen.model import Contacts
 from posegen.pool import generate_pool
 from posegen.robot import Config, Pool, Scene, load_config
+from posegen.route import route_plan_file
+from posegen.select import select_pool_file
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "talos_table.yaml"
@@ -67,3 +70,26 @@ def calibration_folder(scene: Scene, example_pool: Pool, tmp_path_factory: pytes
     path = tmp_path_factory.mktemp("calibration")
     write_calibration(calibration, held_out, path, seed=3)
     return CalibrationFolder(path, calibration, held_out)
+
+
+ROUTE_ROWS = [0, 1]
+
+
+@pytest.fixture(scope="session")
+def selection_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """IROC's selection from the example pool (where O1 peaks)."""
+    path = tmp_path_factory.mktemp("selection") / "selected.yaml"
+    select_pool_file(str(EXAMPLE_POOL), str(path))
+    return path
+
+
+@pytest.fixture(scope="session")
+def route_file(example_pool: Pool, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The route through two postures of the example pool."""
+    folder = tmp_path_factory.mktemp("route")
+    data = example_pool.to_dict()
+    data["postures"] = [data["postures"][i] for i in ROUTE_ROWS]
+    plan = folder / "two.yaml"
+    write_yaml(plan, data)
+    route_plan_file(str(plan), str(folder / "route.yaml"), 0, None)
+    return folder / "route.yaml"

@@ -7,6 +7,7 @@ Layers, bottom first (README, "Architecture")::
     robot
     model
     pool | select | route | calibrate      (stages: never each other)
+    view                                   (reads every stage's artefacts)
     cli
 
 A module may import its own package freely (its siblings by module path), and from
@@ -37,7 +38,8 @@ LAYERS = {
     "posegen.select": 4,
     "posegen.route": 4,
     "posegen.calibrate": 4,
-    "posegen.cli": 5,
+    "posegen.view": 5,  # reads every stage's artefacts
+    "posegen.cli": 6,
 }
 
 

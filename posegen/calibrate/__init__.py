@@ -26,6 +26,7 @@ from posegen.calibrate.measurements import (
 )
 from posegen.calibrate.record import (
     CALIBRATION_FILE,
+    CALIBRATION_FORMAT,
     COMPONENTS,
     DISPLAY,
     CalibrationRecord,
@@ -44,6 +45,7 @@ from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, r
 
 __all__ = [
     "CALIBRATION_FILE",
+    "CALIBRATION_FORMAT",
     "COMPONENTS",
     "DISPLAY",
     "Calibrated",

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
-from posegen.calibrate.record import COMPONENTS, DISPLAY, write_record
+from posegen.calibrate.record import CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
 from posegen.model import OFFSET_FIELDS, Contacts, Group, Parameter, Unit
@@ -165,7 +165,7 @@ def write_calibration(
     tables = residual_tables(calibration, held_out)
     model = calibration.model
     report = {
-        "format": "posegen-calibration",
+        "format": CALIBRATION_FORMAT,
         "format_version": 1,
         "provenance": scene.provenance(seed),
         "chains": sorted(model.chains),

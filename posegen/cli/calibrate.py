@@ -29,8 +29,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Calibrate, write the calibration folder and print the before/after table."""
+    """Calibrate, write the calibration folder and its HTML report, and print the before/after table."""
     from posegen.calibrate import Settings, calibrate_files, format_table
+    from posegen.view import write_report
 
     settings = Settings(kappa=args.prior_scale, drop_outliers=not args.keep_outliers, seed=args.seed)
     with ProgressBar(args.quiet) as bar:
@@ -46,5 +47,9 @@ def run(args: argparse.Namespace) -> int:
     for outlier in report["outliers"]:
         print(f"  outlier left out: {outlier['contact']} (normalised CV residual {outlier['normalised_cv_residual']})")
     print(format_table(report))
-    print(f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, parameters.png, residuals.png)")
+    report_path = write_report(args.output, args.config)
+    print(
+        f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, residuals.csv, posterior.npz, "
+        f"parameters.png, residuals.png, {report_path.name})"
+    )
     return 0

@@ -15,10 +15,10 @@ import os
 import sys
 
 from posegen import __version__
-from posegen.cli import calibrate, check, pool, route, select, simulate
+from posegen.cli import calibrate, check, pool, route, select, simulate, view
 from posegen.errors import PosegenError
 
-COMMANDS = (pool, check, select, route, simulate, calibrate)  # in pipeline order, as --help lists them
+COMMANDS = (pool, check, select, route, simulate, calibrate, view)  # in pipeline order, as --help lists them
 EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130
 
@@ -29,8 +29,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="posegen",
         description="Plan and run the whole-body geometric calibration of a humanoid touching a table.",
         epilog="pipeline: pool -> select -> route -> (record on the robot) -> calibrate; "
-        "simulate rehearses it on a perturbed robot. Exit codes: 0 ok, 1 check found violations, "
-        "2 bad input or infeasible problem, 130 interrupted.",
+        "simulate rehearses it on a perturbed robot; view shows any of their files in 3D. "
+        "Exit codes: 0 ok, 1 check found violations, 2 bad input or infeasible problem, 130 interrupted.",
     )
     parser.add_argument("--version", action="version", version=f"posegen {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")

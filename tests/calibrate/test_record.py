@@ -51,7 +51,7 @@ def test_conditioning_figures(record):
 def test_a_folder_without_the_residual_table_is_refused(calibration_folder, tmp_path):
     for name in ("calibration.yaml", "posterior.npz", "calibrated.yaml"):
         (tmp_path / name).write_bytes((calibration_folder.path / name).read_bytes())
-    with pytest.raises(InputError, match="no residuals.csv"):
+    with pytest.raises(InputError, match=r"no residuals\.csv"):
         read_calibration(tmp_path)
 
 

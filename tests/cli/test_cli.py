@@ -112,6 +112,7 @@ def test_simulate_then_calibrate(tmp_path, capsys):
     code, stdout, _ = run(["calibrate", f"{meas}@day1", "--prior-scale", "5", "-q", "-o", str(out)], capsys)
     assert code == 0, stdout
     assert "training" in stdout and (out / "calibrated.urdf").exists()
+    assert (out / "report.html").exists() and "report.html" in stdout
 
 
 def test_calibrate_real_csv(tmp_path, capsys):

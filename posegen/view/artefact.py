@@ -1,0 +1,207 @@
+"""What ``posegen view`` opens: a pool, a selection, a route or a calibration folder.
+
+Each is read through the public reader of the layer that owns its format (postures and
+routes from :mod:`posegen.robot`, calibrations from :mod:`posegen.calibrate`), so a
+format change lands in one place. The scene is the one saved in the artefact (or
+``--config``), checked against the artefact's robot model hash.
+"""
+
+from __future__ import annotations
+
+import enum
+import hashlib
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posegen.calibrate import CALIBRATION_FORMAT, CalibrationRecord, read_calibration
+from posegen.errors import InputError
+from posegen.io import load_yaml_file, read_yaml
+from posegen.robot import (
+    POOL_FORMAT,
+    SELECTION_FORMAT,
+    FloatArray,
+    Pool,
+    Scene,
+    SegmentType,
+    is_route_file,
+    load_config,
+    pool_from_dict,
+    read_route,
+    route_arrays,
+    scene_for,
+)
+
+LOG = logging.getLogger(__name__)
+
+
+class ArtefactKind(str, enum.Enum):
+    """The kinds of artefact ``posegen view`` shows."""
+
+    POOL = "pool"
+    SELECTION = "selection"
+    ROUTE = "route"
+    CALIBRATION = "calibration"
+
+
+@dataclass(frozen=True)
+class PlanArtefact:
+    """A pool or a selection: postures to step through."""
+
+    kind: ArtefactKind
+    path: Path
+    scene: Scene
+    plan: Pool
+    entries: tuple[dict[str, Any], ...]  # the postures' plain data (a selection's rank, weight, pool_id)
+    pool: Pool | None  # a selection's pool, when its file is still there unchanged
+
+
+@dataclass(frozen=True)
+class RouteSegment:
+    """One segment of a route, as the viewer shows it."""
+
+    type: SegmentType
+    chain: str | None
+    posture: int | None  # index in the route's selection
+    pool_id: int | None
+    start_s: float
+    end_s: float
+
+
+@dataclass(frozen=True)
+class RouteArtefact:
+    """A timed route."""
+
+    path: Path
+    scene: Scene
+    times: FloatArray  # (m,) s
+    positions: FloatArray  # (m, nj) rad, in the scene's joint order
+    segments: tuple[RouteSegment, ...]
+    plan: Pool | None  # the selection it routes, when its file is still there unchanged
+    skipped: tuple[dict[str, Any], ...]  # {posture, pool_id, reason}
+
+
+@dataclass(frozen=True)
+class CalibrationArtefact:
+    """A calibration folder: the nominal and the calibrated robot, and the contacts."""
+
+    path: Path
+    nominal: Scene
+    calibrated: Scene
+    record: CalibrationRecord
+
+
+Artefact = PlanArtefact | RouteArtefact | CalibrationArtefact
+
+
+def _linked_file(recorded: Any, sha256: Any, beside: Path) -> Path | None:
+    """A file an artefact names (as written, or relative to the artefact), if its hash still matches."""
+    if not isinstance(recorded, str):
+        return None
+    for candidate in (Path(recorded), beside.parent / Path(recorded).name):
+        if candidate.is_file():
+            if sha256 and hashlib.sha256(candidate.read_bytes()).hexdigest() != sha256:
+                LOG.info("%s changed since %s was made: not shown", candidate, beside)
+                return None
+            return candidate
+    return None
+
+
+def _plan(path: Path, data: dict[str, Any], config_path: str | None) -> PlanArtefact:
+    plan = pool_from_dict(data, str(path))
+    if not plan.postures:
+        raise InputError(f"{path}: no postures")
+    scene = scene_for(plan.provenance, config_path)
+    scene.check_made_for(plan.provenance, str(path))
+    plan.check_joints(scene.joint_names, str(path))
+    selection = data["format"] == SELECTION_FORMAT
+    pool = None
+    if selection:
+        pool_path = _linked_file(plan.provenance.get("pool"), plan.provenance.get("pool_sha256"), path)
+        pool = pool_from_dict(read_yaml(pool_path, POOL_FORMAT), str(pool_path)) if pool_path else None
+    return PlanArtefact(
+        kind=ArtefactKind.SELECTION if selection else ArtefactKind.POOL,
+        path=path,
+        scene=scene,
+        plan=plan,
+        entries=tuple(data["postures"]),
+        pool=pool,
+    )
+
+
+def _route(path: Path, config_path: str | None) -> RouteArtefact:
+    data = read_route(path)
+    recorded = data.get("provenance") or {}
+    scene = scene_for(recorded, config_path)
+    scene.check_made_for(recorded, str(path))
+    times, positions, _, _ = route_arrays(data)
+    names = list(data["trajectory"]["joint_names"])
+    unknown = sorted(set(scene.joint_names) - set(names))
+    if unknown:
+        raise InputError(f"{path}: the route lacks the joints {', '.join(unknown)}")
+    order = [names.index(n) for n in scene.joint_names]
+    segments = tuple(
+        RouteSegment(
+            type=SegmentType(s["type"]),
+            chain=s.get("chain"),
+            posture=s.get("posture"),
+            pool_id=s.get("pool_id"),
+            start_s=float(s["start_s"]),
+            end_s=float(s["end_s"]),
+        )
+        for s in data["segments"]
+    )
+    plan_path = _linked_file(recorded.get("selection"), recorded.get("selection_sha256"), path)
+    plan = None
+    if plan_path is not None:
+        plan = pool_from_dict(read_yaml(plan_path, (POOL_FORMAT, SELECTION_FORMAT)), str(plan_path))
+    return RouteArtefact(
+        path=path,
+        scene=scene,
+        times=times,
+        positions=np.ascontiguousarray(positions[:, order]),
+        segments=segments,
+        plan=plan,
+        skipped=tuple(data.get("skipped") or ()),
+    )
+
+
+def _calibration(path: Path, config_path: str | None) -> CalibrationArtefact:
+    record = read_calibration(path)
+    nominal = scene_for(record.provenance, config_path)
+    nominal.check_made_for(record.provenance, str(path))
+    calibrated = Scene(load_config(str(record.calibrated_config)))
+    if calibrated.joint_names != nominal.joint_names:
+        raise InputError(f"{record.calibrated_config}: not the same joints as the nominal robot")
+    return CalibrationArtefact(path=path, nominal=nominal, calibrated=calibrated, record=record)
+
+
+def open_artefact(path: str | Path, config_path: str | None = None) -> Artefact:
+    """Read an artefact to view: a pool, selection or route file, or a calibration folder.
+
+    Args:
+        path: The artefact.
+        config_path: Scene config to use instead of the one saved in the artefact.
+
+    Raises:
+        PosegenError: Missing, malformed, or not an artefact posegen shows; made for
+            another robot model.
+
+    """
+    path = Path(path)
+    if path.is_dir():
+        return _calibration(path, config_path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file or folder (a pool, selection, route or calibration folder)")
+    if is_route_file(path):
+        return _route(path, config_path)
+    data = load_yaml_file(path, InputError)
+    found = data.get("format") if isinstance(data, dict) else None
+    if found == CALIBRATION_FORMAT:
+        return _calibration(path.parent, config_path)
+    if found not in (POOL_FORMAT, SELECTION_FORMAT):
+        raise InputError(f"{path}: not a pool, selection or route file, nor a calibration folder (format: {found!r})")
+    return _plan(path, data, config_path)

@@ -1,0 +1,197 @@
+"""The calibration report: one self-contained HTML page beside ``calibration.yaml``.
+
+It is rendered from the calibration folder alone (read through
+:func:`posegen.calibrate.read_calibration`), so it can be rebuilt at any time and the
+calibrate stage never depends on the viewer: ``posegen calibrate`` writes the folder,
+then calls :func:`write_report`. Sections: summary, held-out and training figures,
+residual plots, cross-validation, identified parameters with their posterior std,
+conditioning and correlation of the base regressor, outliers and rejected rows, and the
+3D overlay of the nominal and calibrated robot (the viewer's page, inlined).
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posegen.calibrate import COMPONENTS, ContactSet
+from posegen.errors import InputError
+from posegen.io import write_atomic
+from posegen.view.artefact import CalibrationArtefact, open_artefact
+from posegen.view.report_figures import (
+    correlation_figure,
+    distribution_figure,
+    residual_figure,
+    singular_value_figure,
+    strongest_correlations,
+)
+from posegen.view.viewer import html_page
+
+REPORT_FILE = "report.html"
+STYLE = """
+body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
+h1{margin-bottom:0.2em} h2{margin-top:1.6em;border-bottom:1px solid #ddd}
+table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0}
+td,th{border:1px solid #ddd;padding:0.2em 0.5em;text-align:right} th{background:#f4f4f4}
+td.name,th.name{text-align:left} .muted{color:#777} img{max-width:100%}
+iframe{width:100%;height:560px;border:1px solid #ccc}
+.scroll{max-height:28em;overflow-y:auto;display:inline-block}
+"""
+
+
+def _e(value: object) -> str:
+    return html.escape(str(value))
+
+
+def table(header: Sequence[str], rows: Iterable[Sequence[object]], names: int = 1) -> str:
+    """An HTML table; the first ``names`` columns are left-aligned text."""
+    head = "".join(f'<th class="name">{_e(h)}</th>' if i < names else f"<th>{_e(h)}</th>" for i, h in enumerate(header))
+    body = "".join(
+        "<tr>"
+        + "".join(f'<td class="name">{_e(v)}</td>' if i < names else f"<td>{_e(v)}</td>" for i, v in enumerate(row))
+        + "</tr>"
+        for row in rows
+    )
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _summary(report: dict[str, Any], artefact: CalibrationArtefact) -> str:
+    counts = {s: sum(c.set == s for c in artefact.record.contacts) for s in ContactSet}
+    prov = report.get("provenance") or {}
+    weights = report.get("weights") or {}
+    noise = weights.get("noise") or {}
+    base = report.get("base_parameters") or {}
+    rows = [
+        ("chains", ", ".join(report.get("chains") or [])),
+        ("table sessions", ", ".join(report.get("sessions") or [])),
+        ("contacts: training / outliers left out / held-out", " / ".join(str(counts[s]) for s in ContactSet)),
+        ("base parameters identified (of all)", f"{base.get('total')} (of {base.get('parameters')})"),
+        (
+            "contact noise (estimated)",
+            f"{noise.get('z_mm')} mm, {noise.get('roll_deg')} deg, {noise.get('pitch_deg')} deg",
+        ),
+        ("prior", f"{weights.get('prior_length_mm')} mm, {weights.get('prior_angle_deg')} deg per parameter"),
+        ("robot model sha256", str(prov.get("robot_model_sha256", ""))[:16] + "..."),
+        ("posegen", prov.get("posegen_version", "")),
+    ]
+    return table(("", "value"), rows, names=2)
+
+
+def _residual_tables(report: dict[str, Any]) -> str:
+    rows = []
+    for key, result in (report.get("residuals") or {}).items():
+        for model in ("before", "after"):
+            mean, rms = result[model]["mean_abs"], result[model]["rms"]
+            shown = (f"{mean[c]:.3f} / {rms[c]:.3f}" for c in COMPONENTS)
+            rows.append((key.replace("_", " "), model, result.get("contacts", ""), *shown))
+    header = ("set", "model", "contacts", "height (mm)", "roll (deg)", "pitch (deg)")
+    return table(header, rows, names=2) + '<p class="muted">mean absolute / RMS</p>'
+
+
+def _cross_validation(report: dict[str, Any]) -> str:
+    rows = [
+        (p.get("prior_scale"), p.get("score"), *((p.get("mean_abs") or {}).get(c, "") for c in COMPONENTS))
+        for p in report.get("cross_validation") or []
+    ]
+    if not rows:
+        return "<p>No cross-validation was run (the prior size was fixed).</p>"
+    header = ("prior scale", "score", "height (mm)", "roll (deg)", "pitch (deg)")
+    return table(header, rows, names=0)
+
+
+def _parameters(report: dict[str, Any]) -> str:
+    rows = []
+    for p in report.get("parameters") or []:
+        angle = p.get("unit") == "rad"
+        scale, unit = (180.0 / np.pi, "deg") if angle else (1e3, "mm")
+        deviation, std = float(p["deviation"]) * scale, float(p["std"]) * scale
+        ratio = abs(deviation) / std if std > 0 else float("inf")
+        rows.append((p["name"], p.get("group", ""), unit, f"{deviation:+.4f}", f"{std:.4f}", f"{ratio:.1f}"))
+    header = ("parameter", "group", "unit", "deviation from URDF", "posterior std", "|deviation| / std")
+    return f'<div class="scroll">{table(header, rows, names=2)}</div>'
+
+
+def _conditioning(artefact: CalibrationArtefact) -> str:
+    posterior = artefact.record.posterior
+    pairs = table(
+        ("parameter", "parameter", "correlation"),
+        ((a, b, f"{rho:+.3f}") for a, b, rho in strongest_correlations(posterior)),
+        names=2,
+    )
+    return (
+        f"<p>Condition number of the noise-whitened base regressor: <b>{posterior.condition:.4g}</b> "
+        f"(with the prior: {posterior.condition_with_prior:.4g}).</p>"
+        f'<img src="{singular_value_figure(posterior)}" alt="singular values">'
+        f"<h3>Most correlated pairs</h3>{pairs}"
+        f'<img src="{correlation_figure(posterior)}" alt="correlation matrix">'
+    )
+
+
+def _outliers(report: dict[str, Any]) -> str:
+    outliers = report.get("outliers") or []
+    rejected = report.get("rejected_rows") or []
+    parts = []
+    if outliers:
+        rows = ((o.get("contact"), o.get("normalised_cv_residual")) for o in outliers)
+        parts.append(table(("contact", "normalised CV residual"), rows))
+    else:
+        parts.append("<p>No training contact was flagged as an outlier.</p>")
+    if rejected:
+        parts.append("<h3>Input rows left out as unusable</h3><ul>")
+        parts.extend(f"<li>{_e(r)}</li>" for r in rejected)
+        parts.append("</ul>")
+    return "".join(parts)
+
+
+def report_html(artefact: CalibrationArtefact) -> str:
+    """The report page of a calibration folder."""
+    report = artefact.record.report
+    contacts = artefact.record.contacts
+    view = html_page(artefact).html
+    sections = [
+        ("Summary", _summary(report, artefact)),
+        ("Residuals before and after calibration", _residual_tables(report)),
+        (
+            "Every contact",
+            f'<img src="{residual_figure(contacts)}" alt="residuals per contact">'
+            f'<img src="{distribution_figure(contacts)}" alt="residual distributions">',
+        ),
+        ("Cross-validation of the prior size", _cross_validation(report)),
+        ("Identified parameters", _parameters(report)),
+        ("Conditioning and correlation of the base regressor", _conditioning(artefact)),
+        ("Outliers", _outliers(report)),
+        (
+            "3D: nominal (grey) and calibrated (blue) robot at each contact",
+            "<p>Arrows: height residual at each contact, 20x magnified; grey before, after coloured by "
+            "noise sigmas (green within 1, amber within 3, red beyond). The playback time is the contact "
+            "number.</p>"
+            f'<iframe title="3D view" srcdoc="{html.escape(view, quote=True)}"></iframe>',
+        ),
+    ]
+    body = "".join(f"<h2>{_e(title)}</h2>{content}" for title, content in sections)
+    title = f"posegen calibration report: {artefact.path}"
+    return (
+        f'<!doctype html><html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
+        f"<style>{STYLE}</style></head><body><h1>Calibration report</h1>"
+        f'<p class="muted">{_e(artefact.path.resolve())}</p>{body}</body></html>'
+    )
+
+
+def write_report(directory: str | Path, config_path: str | None = None) -> Path:
+    """Write ``report.html`` into a calibration folder (atomically) and return its path.
+
+    Raises:
+        PosegenError: The folder is not a complete calibration folder.
+
+    """
+    if not Path(directory).is_dir():
+        raise InputError(f"{directory}: not a calibration folder")
+    artefact = open_artefact(directory, config_path)
+    assert isinstance(artefact, CalibrationArtefact), "a folder is a calibration"
+    path = artefact.record.directory / REPORT_FILE
+    write_atomic(path, report_html(artefact))
+    return path

@@ -1,0 +1,119 @@
+"""The calibration report's figures, as PNG images inlined in the page (base64).
+
+Residuals before and after per contact (training and held-out), their distribution,
+the singular values of the base regressor, and the posterior correlation matrix.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+from collections.abc import Sequence
+
+import numpy as np
+
+from posegen.calibrate import DISPLAY, ContactResidual, ContactSet, Posterior
+from posegen.robot import FloatArray
+
+COMPONENTS = ("height (mm)", "roll (deg)", "pitch (deg)")
+SET_COLOURS = {ContactSet.TRAINING: "tab:green", ContactSet.OUTLIER: "tab:red", ContactSet.HELD_OUT: "tab:purple"}
+
+
+def _pyplot():  # type: ignore[no-untyped-def]
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def png_data_uri(figure: object) -> str:
+    """A matplotlib figure as a ``data:image/png`` URI (the figure is closed)."""
+    plt = _pyplot()
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=90)  # type: ignore[attr-defined]
+    plt.close(figure)
+    return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def residual_figure(contacts: Sequence[ContactResidual]) -> str:
+    """Per-contact residuals before (grey) and after (by set), for height, roll and pitch."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(3, 1, figsize=(11, 7.5), sharex=True)
+    x = np.arange(len(contacts))
+    before = np.array([c.before for c in contacts]).reshape(-1, 3) * DISPLAY
+    after = np.array([c.after for c in contacts]).reshape(-1, 3) * DISPLAY
+    colours = [SET_COLOURS[c.set] for c in contacts]
+    for k, ax in enumerate(axes):
+        ax.scatter(x, before[:, k], s=10, color="0.6", label="before (nominal model)")
+        ax.scatter(x, after[:, k], s=12, color=colours, label="after")
+        ax.axhline(0.0, color="black", lw=0.5)
+        ax.set_ylabel(COMPONENTS[k])
+        ax.grid(alpha=0.3)
+    for contact_set in ContactSet:
+        rows = [i for i, c in enumerate(contacts) if c.set == contact_set]
+        if rows:
+            axes[0].axvspan(rows[0] - 0.5, rows[-1] + 0.5, color=SET_COLOURS[contact_set], alpha=0.06)
+            axes[0].text(rows[0], axes[0].get_ylim()[1], contact_set.value.replace("_", "-"), va="top", fontsize=8)
+    axes[0].legend(loc="lower right", fontsize=8)
+    axes[-1].set_xlabel("contact (training, outliers, held-out)")
+    fig.tight_layout()
+    return png_data_uri(fig)
+
+
+def distribution_figure(contacts: Sequence[ContactResidual]) -> str:
+    """Histograms of |residual| after calibration, training against held-out."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(11, 3))
+    for k, ax in enumerate(axes):
+        for contact_set in (ContactSet.TRAINING, ContactSet.HELD_OUT):
+            values = [abs(c.after[k]) * DISPLAY[k] for c in contacts if c.set == contact_set]
+            if values:
+                ax.hist(values, bins=20, alpha=0.6, color=SET_COLOURS[contact_set], label=contact_set.value)
+        ax.set_xlabel("|" + COMPONENTS[k].replace(" (", "| (", 1))
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("contacts")
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    return png_data_uri(fig)
+
+
+def singular_value_figure(posterior: Posterior) -> str:
+    """Singular values of the noise-whitened base regressor (log scale)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(11, 3))
+    values = posterior.singular_values
+    ax.semilogy(np.arange(1, len(values) + 1), values, "o-", ms=3)
+    ax.set_xlabel("singular value index")
+    ax.set_ylabel("singular value (whitened)")
+    ax.set_title(f"base regressor: condition number {posterior.condition:.3g}")
+    ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    return png_data_uri(fig)
+
+
+def correlation_figure(posterior: Posterior) -> str:
+    """The posterior correlation matrix of the base parameters."""
+    plt = _pyplot()
+    n = len(posterior.names)
+    size = min(11.0, 4.0 + 0.06 * n)
+    fig, ax = plt.subplots(figsize=(size, size * 0.85))
+    image = ax.imshow(posterior.correlation, cmap="RdBu_r", vmin=-1.0, vmax=1.0)
+    fig.colorbar(image, ax=ax, shrink=0.8, label="correlation")
+    if n <= 60:
+        ax.set_xticks(range(n), posterior.names, rotation=90, fontsize=5)
+        ax.set_yticks(range(n), posterior.names, fontsize=5)
+    ax.set_title("posterior correlation of the base parameters")
+    fig.tight_layout()
+    return png_data_uri(fig)
+
+
+def strongest_correlations(posterior: Posterior, count: int = 12) -> list[tuple[str, str, float]]:
+    """The ``count`` most correlated pairs of base parameters, strongest first."""
+    rho: FloatArray = posterior.correlation
+    upper = np.triu_indices(len(rho), k=1)
+    order = np.argsort(-np.abs(rho[upper]))[:count]
+    return [
+        (posterior.names[int(upper[0][i])], posterior.names[int(upper[1][i])], float(rho[upper][i])) for i in order
+    ]

@@ -1,0 +1,19 @@
+"""``posegen view``: a page written on request, bad artefacts refused in one line with no file left."""
+
+from tests.cli.test_cli import assert_fails_cleanly, run
+
+
+def test_view_writes_one_page(selection_file, tmp_path, capsys):
+    out = tmp_path / "selection.html"
+    code, stdout, _ = run(["view", str(selection_file), "--html", str(out)], capsys)
+    assert code == 0 and out.exists()
+    assert "opens offline" in stdout and f"{out.stat().st_size / 1e6:.2f} MB" in stdout
+
+
+def test_view_of_a_bad_artefact_fails_cleanly(tmp_path, capsys):
+    out = tmp_path / "view.html"
+    assert_fails_cleanly(["view", str(tmp_path / "missing.yaml"), "--html", str(out)], out, capsys)
+    config = tmp_path / "config.yaml"
+    config.write_text("robot: {}\n")
+    err = assert_fails_cleanly(["view", str(config), "--html", str(out)], out, capsys)
+    assert "pool, selection or route file, nor a calibration folder" in err

@@ -1,0 +1,62 @@
+"""Opening what ``posegen view`` shows: each kind recognised, bad input refused in one line."""
+
+import numpy as np
+import pytest
+import yaml
+
+from posegen.errors import InputError
+from posegen.io import write_yaml
+from posegen.robot import read_route
+from posegen.view import ArtefactKind, CalibrationArtefact, PlanArtefact, RouteArtefact, open_artefact
+from tests.conftest import EXAMPLE_POOL
+
+
+def test_each_kind_is_recognised(selection_file, route_file, calibration_folder):
+    pool = open_artefact(EXAMPLE_POOL)
+    assert isinstance(pool, PlanArtefact) and pool.kind == ArtefactKind.POOL and pool.pool is None
+    selection = open_artefact(selection_file)
+    assert isinstance(selection, PlanArtefact) and selection.kind == ArtefactKind.SELECTION
+    assert selection.pool is not None and len(selection.pool.postures) == len(pool.plan.postures)  # its pool, linked
+    route = open_artefact(route_file)
+    assert isinstance(route, RouteArtefact) and route.plan is not None and len(route.plan.postures) == 2
+    calibration = open_artefact(calibration_folder.path)
+    assert isinstance(calibration, CalibrationArtefact)
+    assert open_artefact(calibration_folder.path / "calibration.yaml").path == calibration.path
+
+
+def test_route_joints_are_put_in_the_scene_order(route_file, tmp_path):
+    data = read_route(route_file)
+    names = data["trajectory"]["joint_names"]
+    order = np.arange(len(names))[::-1]
+    data["trajectory"]["joint_names"] = [names[i] for i in order]
+    for point in data["trajectory"]["points"]:
+        for key in ("positions", "velocities", "accelerations"):
+            point[key] = [point[key][i] for i in order]
+    shuffled = tmp_path / "route.yaml"
+    write_yaml(shuffled, data)
+    assert np.array_equal(open_artefact(shuffled).positions, open_artefact(route_file).positions)
+
+
+def one_line_error(path, match):
+    with pytest.raises(InputError, match=match) as info:
+        open_artefact(path)
+    assert "\n" not in str(info.value)
+
+
+def test_bad_input_is_refused_with_one_line(tmp_path, calibration_folder):
+    one_line_error(tmp_path / "missing.yaml", "no such file or folder")
+    config = tmp_path / "config.yaml"
+    config.write_text("robot: {}\n")
+    one_line_error(config, "not a pool, selection or route file, nor a calibration folder")
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("format: [unclosed\n")
+    one_line_error(broken, "not valid YAML")
+    one_line_error(tmp_path, "calibration.yaml")  # a folder that holds no calibration
+
+
+def test_an_artefact_of_another_robot_model_is_refused(tmp_path):
+    data = yaml.safe_load(EXAMPLE_POOL.read_text())
+    data["provenance"]["robot_model_sha256"] = "0" * 64
+    other = tmp_path / "other.yaml"
+    other.write_text(yaml.safe_dump(data))
+    one_line_error(other, "another robot model")

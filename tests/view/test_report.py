@@ -1,0 +1,70 @@
+"""The calibration report: one self-contained page with every section, rebuilt from the folder alone."""
+
+import html
+import re
+
+import numpy as np
+import pytest
+
+from posegen.calibrate import read_calibration
+from posegen.errors import InputError
+from posegen.view import REPORT_FILE, write_report
+from posegen.view.report_figures import strongest_correlations
+
+
+@pytest.fixture(scope="module")
+def report(calibration_folder):
+    path = write_report(calibration_folder.path)
+    return path, path.read_text()
+
+
+def test_the_report_is_written_beside_calibration_yaml_with_every_section(calibration_folder, report):
+    path, text = report
+    assert path == calibration_folder.path / REPORT_FILE
+    for title in (
+        "Residuals before and after calibration",
+        "Every contact",
+        "Cross-validation of the prior size",
+        "Identified parameters",
+        "Conditioning and correlation of the base regressor",
+        "Outliers",
+        "3D: nominal (grey) and calibrated (blue) robot at each contact",
+    ):
+        assert f"<h2>{title}</h2>" in text
+    images = re.findall(r"<img src=\"data:image/png;base64,", text)
+    assert len(images) == 4  # residuals, their spread, singular values, correlation
+
+
+def test_every_identified_parameter_is_listed_with_its_std(calibration_folder, report):
+    _, text = report
+    section = text.split("<h2>Identified parameters</h2>")[1].split("<h2>")[0]
+    rows = re.findall(r"<tr>(.*?)</tr>", section)
+    parameters = read_calibration(calibration_folder.path).report["parameters"]
+    assert len(rows) == len(parameters) + 1
+    first = re.findall(r"<td[^>]*>(.*?)</td>", rows[1])
+    expected = parameters[0]
+    scale = 180 / np.pi if expected["unit"] == "rad" else 1e3
+    assert first[0] == expected["name"] and float(first[4]) == pytest.approx(expected["std"] * scale, abs=1e-4)
+
+
+def test_conditioning_figures_are_the_posterior_ones(calibration_folder, report):
+    _, text = report
+    posterior = read_calibration(calibration_folder.path).posterior
+    assert f"<b>{posterior.condition:.4g}</b>" in text
+    pairs = strongest_correlations(posterior)
+    rho = posterior.correlation
+    off = np.abs(rho[np.triu_indices(len(rho), k=1)])
+    assert abs(pairs[0][2]) == pytest.approx(off.max())
+    assert [abs(p[2]) for p in pairs] == sorted((abs(p[2]) for p in pairs), reverse=True)
+
+
+def test_the_3d_overlay_is_inlined_and_the_page_fetches_nothing(report):
+    _, text = report
+    frame = re.search(r'<iframe title="3D view" srcdoc="([^"]*)"', text)
+    assert frame and "window.__VISER_EMBED_DATA__=" in html.unescape(frame.group(1))
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", text)
+
+
+def test_a_report_needs_a_calibration_folder(tmp_path):
+    with pytest.raises(InputError, match="not a calibration folder"):
+        write_report(tmp_path / "nothing")
