@@ -27,6 +27,8 @@ demo: $(STAMP)
 	$(VENV)/bin/posegen simulate $(DEMO)/selected.yaml --seed 7 -o $(DEMO)/sim_train.yaml
 	$(VENV)/bin/posegen simulate plans/talos/pool.yaml --seed 7 -o $(DEMO)/sim_heldout.yaml
 	$(VENV)/bin/posegen calibrate $(DEMO)/sim_train.yaml --validate $(DEMO)/sim_heldout.yaml -o $(DEMO)/calibration
+	$(VENV)/bin/posegen view $(DEMO)/selected.yaml --html $(DEMO)/selected.html
+	$(VENV)/bin/posegen view $(DEMO)/route.yaml --html $(DEMO)/route.html
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check posegen tests benchmarks

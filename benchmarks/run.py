@@ -13,6 +13,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
@@ -212,9 +213,67 @@ def bench_calibration() -> None:
         )
 
 
+def first_frame_s(browser: Any, page: Path, runs: int = 3) -> float:
+    """Median time (s) from opening a page to the first screenshot showing the robot."""
+    times = []
+    for _ in range(runs):
+        browser.open("about:blank")
+        start = time.perf_counter()
+        browser.open(page.as_uri())
+        browser.wait_for_robot()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def bench_view(pool_path: Path, workdir: Path) -> None:
+    """Viewer pages of a 60-posture selection, a 41-posture route and a calibration report."""
+    sys.path.insert(0, str(ROOT))
+    from posegen.view import open_artefact, write_html, write_report
+    from tests.view.chromium import Browser, find_browser
+
+    def posegen(*args: str) -> None:
+        subprocess.run([POSEGEN, *args], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+
+    selection = workdir / "selected_k60.yaml"
+    route = workdir / "route.yaml"  # from the route benchmark, when it ran
+    if not selection.exists():
+        posegen("select", str(pool_path), "--k", "60", "-q", "-o", str(selection))
+    if not route.exists():
+        posegen("select", str(pool_path), "--k", "41", "-q", "-o", str(workdir / "selected_k41.yaml"))
+        posegen("route", str(workdir / "selected_k41.yaml"), "-q", "-o", str(route))
+    executable = find_browser()
+    print(f"\n### viewer pages ({machine()})\n")
+    print("| page | size | scene + steps | serialize | wall (`posegen view --html`) | first frame |")
+    print("|---|---|---|---|---|---|")
+    for label, path in (("selection, 60 postures (1 s each)", selection), ("route, 41 postures (15 fps)", route)):
+        html = workdir / f"{path.stem}.html"
+        page = write_html(open_artefact(path), html)
+        start = time.perf_counter()
+        posegen("view", str(path), "--html", str(workdir / "cli.html"))
+        wall = time.perf_counter() - start
+        first = "no browser"
+        if executable:
+            with Browser(executable) as browser:
+                first = f"{first_frame_s(browser, html):.1f} s"
+        print(
+            f"| {label}: {page.steps} steps, {page.duration_s:.0f} s | {page.size_bytes / 1e6:.2f} MB | "
+            f"{page.build_s:.1f} s | {page.serialize_s:.1f} s | {wall:.1f} s | {first} |"
+        )
+    measurements, calibration = workdir / "sim60.yaml", workdir / "calibration"
+    posegen("simulate", str(selection), "--seed", "7", "-o", str(measurements))
+    posegen("calibrate", str(measurements), "--prior-scale", "5", "-q", "-o", str(calibration))
+    start = time.perf_counter()
+    report = write_report(calibration)
+    took = time.perf_counter() - start
+    size = report.stat().st_size / 1e6
+    print(f"| calibration `report.html`, 60 contacts (in-process) | {size:.2f} MB | | | {took:.1f} s | |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--only", nargs="*", default=["pool", "select", "route", "calibration"], help="stages to run")
+    parser.add_argument(
+        "--only", nargs="*", default=["pool", "select", "route", "calibration", "view"], help="stages to run"
+    )
     parser.add_argument("--n", type=int, default=1500, help="pool size")
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
@@ -229,6 +288,8 @@ def main() -> None:
         bench_route(pool_path, workdir)
     if "calibration" in args.only:
         bench_calibration()
+    if "view" in args.only:
+        bench_view(pool_path, workdir)
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Write the page, or serve the live viewer until interrupted."""
+    """Write the page, or serve the live viewer until Ctrl-C (which ends it normally)."""
     from posegen.view import open_artefact, serve, write_html
 
     artefact = open_artefact(args.artefact, args.config)
@@ -34,5 +34,11 @@ def run(args: argparse.Namespace) -> int:
             f"({page.size_bytes / 1e6:.2f} MB, built in {page.build_s + page.serialize_s:.1f} s; opens offline)"
         )
         return 0
-    serve(artefact, args.host, args.port, ready=lambda url: print(f"view: {args.artefact} at {url} (Ctrl-C to stop)"))
+    def ready(url: str) -> None:
+        print(f"view: {args.artefact} at {url} (Ctrl-C to stop)", flush=True)
+
+    try:
+        serve(artefact, args.host, args.port, ready=ready)
+    except KeyboardInterrupt:
+        print("view: stopped")
     return 0

@@ -10,8 +10,6 @@ slider, toggles for the arrows and the parameter table.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import numpy as np
 import pinocchio as pin
 import viser
@@ -21,9 +19,9 @@ from posegen.errors import InputError
 from posegen.robot import FloatArray
 from posegen.view.artefact import CalibrationArtefact
 from posegen.view.robot_figure import RobotFigure, robot_meshes
-from posegen.view.scenery import GHOST_RGB, ROBOT_RGB, set_scenery
+from posegen.view.scenery import GHOST_RGB, ROBOT_RGB, info_label, set_scenery
+from posegen.view.stepped_view import SteppedView
 
-STEP_S = 1.0  # playback time per contact in the HTML page
 ARROW_GAIN = 20.0  # 1 mm of height residual is drawn 20 mm long
 BEFORE_RGB = (140, 140, 140)
 GOOD_RGB, FAIR_RGB, BAD_RGB = (40, 160, 70), (240, 170, 40), (215, 40, 40)
@@ -44,17 +42,19 @@ def describe(contact: ContactResidual, k: int, n: int) -> str:
         return f"{r[0] * 1e3:+.2f} mm, {np.rad2deg(r[1]):+.3f} / {np.rad2deg(r[2]):+.3f} deg"
 
     return (
-        f"contact {k + 1}/{n}: {contact.label} ({contact.set.value}, {contact.chain}, {contact.session}) | "
+        f"contact {k + 1}/{n}: {contact.label} ({contact.set.value}, {contact.chain}, {contact.session})\n"
         f"before {shown(contact.before)} | after {shown(contact.after)}"
     )
 
 
-class CalibrationView:
+class CalibrationView(SteppedView):
     """A calibration drawn in a viser scene, one contact at a time."""
 
+    STEP_NAME = "contact"
+
     def __init__(self, server: viser.ViserServer, artefact: CalibrationArtefact) -> None:
+        super().__init__(server)
         self._artefact = artefact
-        self._server = server
         nominal, calibrated = artefact.nominal, artefact.calibrated
         record = artefact.record
         if record.joint_names != nominal.joint_names:
@@ -68,8 +68,7 @@ class CalibrationView:
         self._ghost = RobotFigure(server, nominal.model, meshes, "nominal", GHOST_RGB, opacity=GHOST_OPACITY)
         self._robot = RobotFigure(server, calibrated.model, meshes, "calibrated", ROBOT_RGB)
         self.arrows = self._residual_arrows(server)
-        top = nominal.table_pose @ np.array([nominal.table.size_m[0] / 2, 0.0, 0.45, 1.0])
-        self._label = server.scene.add_label("/info", "", position=top[:3], anchor="bottom-center")
+        self._label = info_label(server, nominal)
 
     def _residual_arrows(self, server: viser.ViserServer) -> tuple[viser.ArrowsHandle, viser.ArrowsHandle]:
         scene = self._artefact.calibrated
@@ -110,30 +109,19 @@ class CalibrationView:
         contact = self._contacts[k]
         self._ghost.pose(self._artefact.nominal.configuration(contact.joints))
         self._robot.pose(self._artefact.calibrated.configuration(contact.joints))
-        self._label.text = describe(contact, k, self.steps)
+        self._label.text = self.describe(k)
 
-    def frames(self) -> Iterator[float]:
-        """Show each contact in turn; yield the playback time (s) it stays on screen."""
-        for k in range(self.steps):
-            self.show(k)
-            yield STEP_S
+    def describe(self, k: int) -> str:
+        """Contact ``k`` and its residuals in words."""
+        return describe(self._contacts[k], k, self.steps)
 
     def add_controls(self) -> None:
-        """Contact slider, arrow toggles and the parameter table, for the live viewer."""
+        """The contact slider, toggles for the arrows and the parameter table, for the live viewer."""
+        super().add_controls()
         gui = self._server.gui
-        slider = gui.add_slider("contact", min=0, max=max(self.steps - 1, 1), step=1, initial_value=0)
-        text = gui.add_markdown("")
         before, after = (gui.add_checkbox(f"residuals {w}", initial_value=True) for w in ("before", "after"))
         before.on_update(lambda _: setattr(self.arrows[0], "visible", before.value))
         after.on_update(lambda _: setattr(self.arrows[1], "visible", after.value))
-
-        def update(_: object = None) -> None:
-            k = min(int(slider.value), self.steps - 1)
-            self.show(k)
-            text.content = describe(self._contacts[k], k, self.steps).replace(" | ", "  \n")
-
-        slider.on_update(update)
-        update()
         with gui.add_folder("identified parameters", expand_by_default=False):
             gui.add_markdown(parameter_markdown(self._artefact.record.report.get("parameters") or []))
 

@@ -8,7 +8,6 @@ a selection's pool postures small, the selected ones large, the current one in r
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -17,9 +16,9 @@ import viser
 from posegen.robot import FloatArray, Pool, Scene
 from posegen.view.artefact import ArtefactKind, PlanArtefact
 from posegen.view.robot_figure import RobotFigure, robot_meshes
-from posegen.view.scenery import ROBOT_RGB, chain_colours, set_scenery
+from posegen.view.scenery import ROBOT_RGB, chain_colours, info_label, set_scenery
+from posegen.view.stepped_view import SteppedView
 
-STEP_S = 1.0  # playback time per posture in the HTML page
 CURRENT_RGB = (225, 30, 30)
 POOL_POINT_M, PLAN_POINT_M = 0.008, 0.02  # contact marker sizes: a selection's pool, the postures shown
 
@@ -53,10 +52,13 @@ def describe(artefact: PlanArtefact, k: int) -> str:
     return " | ".join(parts[:4]) + "\n" + " | ".join(parts[4:])
 
 
-class PlanView:
+class PlanView(SteppedView):
     """A pool or a selection drawn in a viser scene, one posture at a time."""
 
+    STEP_NAME = "posture"
+
     def __init__(self, server: viser.ViserServer, artefact: PlanArtefact) -> None:
+        super().__init__(server)
         self._artefact = artefact
         scene = artefact.scene
         set_scenery(server, scene)
@@ -82,9 +84,7 @@ class PlanView:
         )
         self._points = points
         self._current = server.scene.add_icosphere("/contacts/current", radius=0.018, color=CURRENT_RGB)
-        top = scene.table_pose @ np.array([scene.table.size_m[0] / 2, 0.0, 0.45, 1.0])
-        self._label = server.scene.add_label("/info", "", position=top[:3], anchor="bottom-center")
-        self._server = server
+        self._label = info_label(server, scene)
 
     @property
     def steps(self) -> int:
@@ -96,24 +96,8 @@ class PlanView:
         posture = self._artefact.plan.postures[k]
         self._robot.pose(self._artefact.scene.configuration(np.array(posture.joints)))
         self._current.position = self._points[k] + np.array([0.0, 0.0, 0.01])
-        self._label.text = describe(self._artefact, k)
+        self._label.text = self.describe(k)
 
-    def frames(self) -> Iterator[float]:
-        """Show each posture in turn; yield the playback time (s) it stays on screen."""
-        for k in range(self.steps):
-            self.show(k)
-            yield STEP_S
-
-    def add_controls(self) -> None:
-        """A posture slider and the posture's fields, for the live viewer."""
-        gui = self._server.gui
-        slider = gui.add_slider("posture", min=0, max=max(self.steps - 1, 1), step=1, initial_value=0)
-        text = gui.add_markdown("")
-
-        def update(_: object = None) -> None:
-            k = min(int(slider.value), self.steps - 1)
-            self.show(k)
-            text.content = describe(self._artefact, k).replace("\n", " | ").replace(" | ", "  \n")
-
-        slider.on_update(update)
-        update()
+    def describe(self, k: int) -> str:
+        """Posture ``k`` in words."""
+        return describe(self._artefact, k)

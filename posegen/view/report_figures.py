@@ -38,26 +38,32 @@ def png_data_uri(figure: object) -> str:
 
 
 def residual_figure(contacts: Sequence[ContactResidual]) -> str:
-    """Per-contact residuals before (grey) and after (by set), for height, roll and pitch."""
+    """Per-contact residuals: before (grey) and after (by set) on one scale, and after alone on its own."""
     plt = _pyplot()
-    fig, axes = plt.subplots(3, 1, figsize=(11, 7.5), sharex=True)
+    fig, axes = plt.subplots(3, 2, figsize=(11, 7.5), sharex=True, gridspec_kw={"width_ratios": (3, 2)})
     x = np.arange(len(contacts))
     before = np.array([c.before for c in contacts]).reshape(-1, 3) * DISPLAY
     after = np.array([c.after for c in contacts]).reshape(-1, 3) * DISPLAY
     colours = [SET_COLOURS[c.set] for c in contacts]
-    for k, ax in enumerate(axes):
-        ax.scatter(x, before[:, k], s=10, color="0.6", label="before (nominal model)")
-        ax.scatter(x, after[:, k], s=12, color=colours, label="after")
-        ax.axhline(0.0, color="black", lw=0.5)
-        ax.set_ylabel(COMPONENTS[k])
-        ax.grid(alpha=0.3)
-    for contact_set in ContactSet:
-        rows = [i for i, c in enumerate(contacts) if c.set == contact_set]
-        if rows:
-            axes[0].axvspan(rows[0] - 0.5, rows[-1] + 0.5, color=SET_COLOURS[contact_set], alpha=0.06)
-            axes[0].text(rows[0], axes[0].get_ylim()[1], contact_set.value.replace("_", "-"), va="top", fontsize=8)
-    axes[0].legend(loc="lower right", fontsize=8)
-    axes[-1].set_xlabel("contact (training, outliers, held-out)")
+    for k in range(3):
+        both, alone = axes[k]
+        both.scatter(x, before[:, k], s=9, color="0.6", label="before (nominal model)")
+        both.scatter(x, after[:, k], s=9, color=colours, label="after")
+        alone.scatter(x, after[:, k], s=9, color=colours)
+        both.set_ylabel(COMPONENTS[k])
+        for ax in (both, alone):
+            ax.axhline(0.0, color="black", lw=0.5)
+            ax.grid(alpha=0.3)
+            for contact_set in ContactSet:
+                rows = [i for i, c in enumerate(contacts) if c.set == contact_set]
+                if rows:
+                    ax.axvspan(rows[0] - 0.5, rows[-1] + 0.5, color=SET_COLOURS[contact_set], alpha=0.06)
+    axes[0][0].legend(loc="lower right", fontsize=8)
+    axes[0][0].set_title("before and after calibration")
+    axes[0][1].set_title("after calibration (its own scale)")
+    labels = ", ".join(f"{s.value.replace('_', '-')} ({SET_COLOURS[s].removeprefix('tab:')})" for s in ContactSet)
+    for ax in axes[-1]:
+        ax.set_xlabel("contact: " + labels if ax is axes[-1][0] else "contact")
     fig.tight_layout()
     return png_data_uri(fig)
 

@@ -23,7 +23,7 @@ from posegen.robot import FloatArray, SegmentType
 from posegen.view.artefact import RouteArtefact, RouteSegment
 from posegen.view.plan_view import contact_points
 from posegen.view.robot_figure import RobotFigure, robot_meshes
-from posegen.view.scenery import ROBOT_RGB, chain_colours, set_scenery
+from posegen.view.scenery import ROBOT_RGB, chain_colours, info_label, set_scenery
 
 FPS = 15.0  # frames per second of robot time in the HTML page
 SEGMENT_RGB = {
@@ -86,8 +86,7 @@ class RouteView:
         self._starts = np.array([s.start_s for s in artefact.segments])
         self._swept_path(server)
         self._skipped(server)
-        top = scene.table_pose @ np.array([scene.table.size_m[0] / 2, 0.0, 0.45, 1.0])
-        self._label = server.scene.add_label("/info", "", position=top[:3], anchor="bottom-center")
+        self._label = info_label(server, scene)
         self._shown_segment = -1
         self.times = sample_times(artefact.times, fps)
 
