@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import itertools
 import threading
-import time
 from collections.abc import Iterator
 
 import numpy as np
@@ -88,6 +87,8 @@ class RouteView:
         self._skipped(server)
         self._label = info_label(server, scene)
         self._shown_segment = -1
+        self._closed = threading.Event()
+        self._player: threading.Thread | None = None
         self.times = sample_times(artefact.times, fps)
 
     def _swept_path(self, server: viser.ViserServer) -> None:
@@ -164,10 +165,16 @@ class RouteView:
         period = 1.0 / FPS
 
         def advance() -> None:
-            while True:
-                time.sleep(period)
+            while not self._closed.wait(period):
                 if playing.value:
                     # viser's setter is not declared next to its getter, so mypy sees a read-only property
                     slider.value = (float(slider.value) + period * float(speed.value)) % end  # type: ignore[misc]
 
-        threading.Thread(target=advance, daemon=True).start()
+        self._player = threading.Thread(target=advance, daemon=True)
+        self._player.start()
+
+    def close(self) -> None:
+        """Stop playing (the live viewer is closing)."""
+        self._closed.set()
+        if self._player is not None:
+            self._player.join(timeout=5.0)

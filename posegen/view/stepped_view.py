@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import abc
+import logging
 from collections.abc import Iterator
 
 import viser
 
+LOG = logging.getLogger(__name__)
 STEP_S = 1.0  # playback time per step in the HTML page: second k of the playback bar is step k
 
 
@@ -50,3 +52,7 @@ class SteppedView(abc.ABC):
 
         slider.on_update(update)
         update()
+
+    def close(self) -> None:
+        """Nothing runs by itself in a stepped view: nothing to stop."""
+        LOG.debug("%s closed", type(self).__name__)

@@ -40,6 +40,10 @@ class View(Protocol):
         """Add the live viewer's controls."""
         ...
 
+    def close(self) -> None:
+        """Stop whatever the controls started."""
+        ...
+
 
 @dataclass(frozen=True)
 class Page:
@@ -130,7 +134,11 @@ def serve(
 
     """
     with local_server(host, port) as server:
-        _view(server, artefact).add_controls()
-        if ready is not None:
-            ready(f"http://{host}:{server.get_port()}/")
-        (stop or threading.Event()).wait()
+        view = _view(server, artefact)
+        view.add_controls()
+        try:
+            if ready is not None:
+                ready(f"http://{host}:{server.get_port()}/")
+            (stop or threading.Event()).wait()
+        finally:
+            view.close()
