@@ -10,12 +10,15 @@ slider, toggles for the arrows and the parameter table.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pinocchio as pin
 import viser
 
-from posegen.calibrate import ContactResidual
+from posegen.calibrate import ContactResidual, ContactSet
 from posegen.errors import InputError
+from posegen.model import Unit
 from posegen.robot import FloatArray
 from posegen.view.artefact import CalibrationArtefact
 from posegen.view.robot_figure import RobotFigure, robot_meshes
@@ -61,8 +64,8 @@ class CalibrationView(SteppedView):
             raise InputError(f"{record.directory}: the residual table's joints are not the robot's")
         if not record.contacts:
             raise InputError(f"{record.directory}: no contacts")
-        order = {"training": 0, "outlier": 1, "held_out": 2}
-        self._contacts = sorted(record.contacts, key=lambda c: order[c.set.value])
+        order = list(ContactSet)  # training, outliers, held-out
+        self._contacts = sorted(record.contacts, key=lambda c: order.index(c.set))
         set_scenery(server, nominal)
         meshes = robot_meshes(nominal)
         self._ghost = RobotFigure(server, nominal.model, meshes, "nominal", GHOST_RGB, opacity=GHOST_OPACITY)
@@ -126,13 +129,16 @@ class CalibrationView(SteppedView):
             gui.add_markdown(parameter_markdown(self._artefact.record.report.get("parameters") or []))
 
 
-def parameter_markdown(rows: list[dict[str, object]]) -> str:
+def displayed(row: dict[str, Any]) -> tuple[float, float, str]:
+    """A parameter-table row's deviation from the URDF and posterior std, in mm or deg, and that unit."""
+    scale, unit = (180.0 / np.pi, "deg") if row.get("unit") == Unit.ANGLE.value else (1e3, "mm")
+    return float(row.get("deviation", 0.0)) * scale, float(row.get("std", 0.0)) * scale, unit
+
+
+def parameter_markdown(rows: list[dict[str, Any]]) -> str:
     """The report's parameter table as Markdown: deviation and posterior std in mm or deg."""
     lines = ["| parameter | deviation | std |", "|---|---|---|"]
     for row in rows:
-        angle = row.get("unit") == "rad"
-        scale, unit = (180.0 / np.pi, "deg") if angle else (1e3, "mm")
-        deviation = float(row.get("deviation", 0.0)) * scale  # type: ignore[arg-type]
-        std = float(row.get("std", 0.0)) * scale  # type: ignore[arg-type]
+        deviation, std, unit = displayed(row)
         lines.append(f"| {row.get('name')} | {deviation:+.3f} {unit} | {std:.3f} {unit} |")
     return "\n".join(lines)

@@ -16,12 +16,11 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from posegen.calibrate import COMPONENTS, ContactSet
 from posegen.errors import InputError
 from posegen.io import write_atomic
 from posegen.view.artefact import CalibrationArtefact, open_artefact
+from posegen.view.calibration_view import displayed
 from posegen.view.report_figures import (
     correlation_figure,
     distribution_figure,
@@ -106,9 +105,7 @@ def _cross_validation(report: dict[str, Any]) -> str:
 def _parameters(report: dict[str, Any]) -> str:
     rows = []
     for p in report.get("parameters") or []:
-        angle = p.get("unit") == "rad"
-        scale, unit = (180.0 / np.pi, "deg") if angle else (1e3, "mm")
-        deviation, std = float(p["deviation"]) * scale, float(p["std"]) * scale
+        deviation, std, unit = displayed(p)
         ratio = abs(deviation) / std if std > 0 else float("inf")
         rows.append((p["name"], p.get("group", ""), unit, f"{deviation:+.4f}", f"{std:.4f}", f"{ratio:.1f}"))
     header = ("parameter", "group", "unit", "deviation from URDF", "posterior std", "|deviation| / std")
