@@ -20,6 +20,10 @@ class InputError(PosegenError):
     """An input file (pool, selection, measurements) is malformed."""
 
 
+class BackendError(PosegenError):
+    """Work cannot run where it was sent (Dask scheduler unreachable, no worker, other version)."""
+
+
 class InfeasibleError(PosegenError):
     """The problem has no solution (table out of reach, empty pool, rank-deficient design)."""
 

@@ -3,7 +3,7 @@
 Layers, bottom first (README, "Architecture")::
 
     posegen (version), errors, progress
-    io
+    io | parallel
     robot
     model
     pool | select | route | calibrate      (stages: never each other)
@@ -32,6 +32,7 @@ LAYERS = {
     "posegen.errors": 0,
     "posegen.progress": 0,
     "posegen.io": 1,
+    "posegen.parallel": 1,
     "posegen.robot": 2,
     "posegen.model": 3,
     "posegen.pool": 4,

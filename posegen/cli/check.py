@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import EXIT_VIOLATIONS
+from posegen.cli.options import EXIT_VIOLATIONS, add_backend_arguments
 from posegen.cli.progress import ProgressBar
 
 NAME = "check"
@@ -16,18 +16,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("file", help="pool or route file")
     parser.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
+    add_backend_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     """Check the file and print the worst case of each invariant."""
+    from posegen.parallel import open_backend
     from posegen.pool import check_pool_file
     from posegen.robot import is_route_file
     from posegen.route import check_route_file
 
     is_route = is_route_file(args.file)
-    check = check_route_file if is_route else check_pool_file
     with ProgressBar(args.quiet) as bar:
-        result = check(args.file, args.config, bar)
+        if is_route:
+            result = check_route_file(args.file, args.config, bar)
+        else:
+            with open_backend(args.workers, args.scheduler) as backend:
+                result = check_pool_file(args.file, args.config, bar, backend)
     unit = "point" if is_route else "posture"
     print(f"checked {result.checked} {unit}s of {args.file} (meshes, pinocchio; not the planner's word)")
     for worst in result.worst:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 DEFAULT_CONFIG = "configs/talos_table.yaml"
 EXIT_VIOLATIONS = 1  # a check found violations
@@ -22,3 +23,16 @@ def fraction(text: str) -> float:
     if not 0.0 < value <= 1.0:
         raise argparse.ArgumentTypeError(f"must be in (0, 1], got {value}")
     return value
+
+
+def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--workers`` and ``--scheduler``: where a command's independent jobs run."""
+    parser.add_argument(
+        "--workers", type=positive, default=os.cpu_count() or 1, help="local worker processes (default: cores)"
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        default=None,
+        help="run on the Dask cluster of this scheduler (tcp://host:8786) instead of local processes",
+    )

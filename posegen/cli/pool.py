@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 
-from posegen.cli.options import DEFAULT_CONFIG, positive
+from posegen.cli.options import DEFAULT_CONFIG, add_backend_arguments
 from posegen.cli.progress import ProgressBar
 
 NAME = "pool"
@@ -19,16 +18,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--n", type=int, default=1500, help="number of postures (default 1500)")
     parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    parser.add_argument("--workers", type=positive, default=os.cpu_count() or 1, help="processes (default: cores)")
+    add_backend_arguments(parser)
     parser.add_argument("-o", "--output", default="plans/pool.yaml", help="pool file (default plans/pool.yaml)")
 
 
 def run(args: argparse.Namespace) -> int:
     """Generate the pool and print its summary."""
+    from posegen.parallel import open_backend
     from posegen.pool import generate_pool_file
 
-    with ProgressBar(args.quiet) as bar:
-        pool = generate_pool_file(args.config, args.output, args.n, args.seed, args.workers, bar)
+    with open_backend(args.workers, args.scheduler) as backend, ProgressBar(args.quiet) as bar:
+        pool = generate_pool_file(args.config, args.output, args.n, args.seed, backend, bar)
     rate = 100.0 * len(pool.postures) / max(pool.attempted, 1)
     print(
         f"pool: {len(pool.postures)} postures accepted of {pool.attempted} samples ({rate:.1f}%) -> {Path(args.output)}"

@@ -1,8 +1,9 @@
-"""Generating a pool: samples in chunks, over processes, resumable after a kill.
+"""Generating a pool: samples in chunks, over processes or a cluster, resumable after a kill.
 
-Chunks of consecutive sample indices are evaluated by worker processes and consumed in
-index order; each finished chunk is appended to a checkpoint file beside the output
-(``<output>.partial.jsonl``) and flushed to disk. The pool is the first ``n`` accepted
+Chunks of consecutive sample indices are evaluated by workers (local processes or Dask
+workers, :mod:`posegen.parallel`) and consumed in index order; each finished chunk is
+appended to a checkpoint file beside the output (``<output>.partial.jsonl``) and flushed
+to disk. The pool is the first ``n`` accepted
 samples in index order, so it depends on (config, seed, n) only. Rerunning the same
 command after a kill reads the checkpoint and continues; the pool file itself is
 written once, atomically, at the end.
@@ -10,16 +11,14 @@ written once, atomically, at the end.
 
 from __future__ import annotations
 
-import concurrent.futures
+import functools
 import itertools
 import logging
-import multiprocessing
-import os
-from collections.abc import Generator
 from pathlib import Path
 
-from posegen.errors import InfeasibleError
+from posegen.errors import BackendError, InfeasibleError
 from posegen.io import provenance
+from posegen.parallel import Backend, Job, ProcessBackend
 from posegen.pool.checkpoint import Checkpoint, Outcome, run_key
 from posegen.pool.sampler import PostureSampler, rejection_counts
 from posegen.progress import Progress, ProgressCallback, ignore_progress
@@ -30,47 +29,36 @@ LOG = logging.getLogger(__name__)
 PROBE_SAMPLES = 256  # no feasible posture among the first this many: the scene is infeasible
 MAX_SAMPLES_PER_POSTURE = 200  # give up when the acceptance rate falls below 1/this
 
-_WORKER: dict[str, PostureSampler] = {}
+
+def _sampler(config: Config, seed: int, model_sha256: str) -> PostureSampler:
+    scene = Scene(config)
+    found = scene.files.sha256()
+    if found != model_sha256:  # a worker on another machine with another robot description
+        raise BackendError(
+            f"a worker's robot model differs from this one (sha256 {found[:12]} vs {model_sha256[:12]}); "
+            "install the same robot description on every worker"
+        )
+    return PostureSampler(scene, seed)
 
 
-def _init_worker(config: Config, seed: int) -> None:
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    _WORKER["sampler"] = PostureSampler(Scene(config), seed)
-
-
-def _run_chunk(indices: range) -> list[Outcome]:
-    sampler = _WORKER["sampler"]
+def _evaluate(sampler: PostureSampler, indices: range) -> list[Outcome]:
     return [sampler.evaluate(i) for i in indices]
 
 
-def _chunks(config: Config, seed: int, workers: int, first_chunk: int) -> Generator[list[Outcome], None, None]:
-    size = config.sampling.chunk_size
-    ranges = (range(c * size, (c + 1) * size) for c in itertools.count(first_chunk))
-    if workers <= 1:
-        _init_worker(config, seed)
-        for indices in ranges:
-            yield _run_chunk(indices)
-        return
-    context = multiprocessing.get_context("forkserver")
-    with concurrent.futures.ProcessPoolExecutor(
-        max_workers=workers, mp_context=context, initializer=_init_worker, initargs=(config, seed)
-    ) as executor:
-        window: list[concurrent.futures.Future[list[Outcome]]] = []
-        try:
-            for indices in ranges:
-                window.append(executor.submit(_run_chunk, indices))
-                if len(window) >= 2 * workers:
-                    yield window.pop(0).result()
-        finally:
-            for future in window:
-                future.cancel()
+def sampling_job(config: Config, seed: int, model_sha256: str) -> Job[PostureSampler, range, list[Outcome]]:
+    """The pool's work: chunks of sample indices, each turned into outcomes by a worker's sampler."""
+    return Job(
+        name=f"pool-{run_key(config, seed, model_sha256)[:16]}",
+        setup=functools.partial(_sampler, config, seed, model_sha256),
+        run=_evaluate,
+    )
 
 
 def generate_pool(
     config: Config,
     n: int,
     seed: int,
-    workers: int = 1,
+    workers: int | Backend = 1,
     checkpoint_path: Path | None = None,
     progress: ProgressCallback = ignore_progress,
 ) -> Pool:
@@ -80,7 +68,7 @@ def generate_pool(
         config: Scene configuration.
         n: Number of postures wanted (> 0).
         seed: Random seed; the pool depends on (config, seed, n) only.
-        workers: Worker processes (1: in this process).
+        workers: Local worker processes (1: in this process), or the backend to run on.
         checkpoint_path: Where finished chunks are recorded for resuming; None: nowhere.
         progress: Told after each chunk how many postures are accepted (of ``n``) and
             how many samples were attempted.
@@ -88,6 +76,7 @@ def generate_pool(
     Raises:
         InfeasibleError: No feasible posture in the first samples, or acceptance too low.
         InputError: A checkpoint of a different run is in the way.
+        BackendError: A worker cannot run the job (another version or robot model).
 
     """
     if n <= 0:
@@ -104,7 +93,10 @@ def generate_pool(
         LOG.info("resuming: %d samples already done, %d postures accepted", len(outcomes), accepted)
     progress(Progress(min(accepted, n), n, "posture", attempts=len(outcomes)))
     max_samples = max(PROBE_SAMPLES, MAX_SAMPLES_PER_POSTURE * n)
-    chunks = _chunks(config, seed, workers, len(done))
+    backend = workers if isinstance(workers, Backend) else ProcessBackend(workers)
+    size = config.sampling.chunk_size
+    ranges = (range(c * size, (c + 1) * size) for c in itertools.count(len(done)))
+    chunks = backend.map(sampling_job(config, seed, model_sha), ranges)
     try:
         while accepted < n:
             if accepted == 0 and len(outcomes) >= PROBE_SAMPLES:

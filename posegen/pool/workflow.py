@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from posegen.io import read_yaml, write_yaml
+from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
 from posegen.progress import Progress, ProgressCallback, ignore_progress
@@ -16,7 +17,7 @@ def generate_pool_file(
     output: str,
     n: int,
     seed: int,
-    workers: int = 1,
+    workers: int | Backend = 1,
     progress: ProgressCallback = ignore_progress,
 ) -> Pool:
     """Generate (or resume) a pool and write it to ``output``.
@@ -38,13 +39,19 @@ def generate_pool_file(
     return pool
 
 
-def check_pool_file(path: str, config_path: str | None, progress: ProgressCallback = ignore_progress) -> Verification:
+def check_pool_file(
+    path: str,
+    config_path: str | None,
+    progress: ProgressCallback = ignore_progress,
+    workers: int | Backend = 1,
+) -> Verification:
     """Re-verify every posture of a pool file from scratch, on the robot's meshes.
 
     Args:
         path: Pool file.
         config_path: Scene config; None: the one saved in the pool.
-        progress: Told after each posture.
+        progress: Told after each chunk of postures.
+        workers: Local worker processes (1: in this process), or the backend to run on.
 
     Raises:
         PosegenError: Not a pool, or a pool made for another robot model.
@@ -55,4 +62,4 @@ def check_pool_file(path: str, config_path: str | None, progress: ProgressCallba
     scene.check_made_for(pool.provenance, path)
     pool.check_joints(scene.joint_names, path)
     progress(Progress(0, len(pool.postures), "posture"))
-    return verify_postures(scene, pool.postures, progress)
+    return verify_postures(scene, pool.postures, progress, workers)

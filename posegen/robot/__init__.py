@@ -53,7 +53,7 @@ from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for
 from posegen.robot.stance_space import StanceSpace
 from posegen.robot.trajectory import ROUTE_FORMAT, ROUTE_VERSION, SegmentType, is_route_file, read_route, route_arrays
-from posegen.robot.verification import Verification, Worst, summarize
+from posegen.robot.verification import Verification, Worst, WorstSoFar, summarize
 
 __all__ = [
     "POOL_FORMAT",
@@ -89,6 +89,7 @@ __all__ = [
     "TableConfig",
     "Verification",
     "Worst",
+    "WorstSoFar",
     "assess",
     "contact_in_table",
     "contact_placement",

@@ -9,7 +9,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Generic, TypeVar
 
 import numpy as np
 
@@ -62,3 +62,39 @@ def summarize(
         i = int(np.argmax(array))
         worst.append(Worst(key, float(array[i]), i, int(np.sum(array > 0)), details[key][i]))
     return Verification(checked=checked, worst=tuple(worst))
+
+
+class WorstSoFar(Generic[K]):
+    """The worst case of each invariant over items told one at a time.
+
+    Keeps one detail per invariant, not one per item, so a check can stream any number
+    of items; :meth:`result` equals :func:`summarize` of the same items.
+    """
+
+    def __init__(self, keys: Sequence[K]) -> None:
+        self._keys = tuple(keys)
+        self._excess = dict.fromkeys(self._keys, 0.0)
+        self._index = dict.fromkeys(self._keys, -1)
+        self._violations = dict.fromkeys(self._keys, 0)
+        self._detail = dict.fromkeys(self._keys, "nothing checked")
+        self.checked = 0
+
+    def add(self, excess: Mapping[K, float], details: Mapping[K, str]) -> None:
+        """Take the next item's excess per invariant (> 0: violated) and what was measured."""
+        for key in self._keys:
+            value = float(excess[key])
+            best = self._excess[key]
+            # np.argmax semantics: the first maximum, and a NaN beats any number
+            if self._index[key] < 0 or value > best or (np.isnan(value) and not np.isnan(best)):
+                self._excess[key], self._index[key], self._detail[key] = value, self.checked, details[key]
+            self._violations[key] += value > 0
+        self.checked += 1
+
+    def result(self) -> Verification:
+        """The verdict over every item told so far."""
+        return Verification(
+            checked=self.checked,
+            worst=tuple(
+                Worst(k, self._excess[k], self._index[k], self._violations[k], self._detail[k]) for k in self._keys
+            ),
+        )

@@ -1,0 +1,136 @@
+"""Jobs, and the two local backends: this process and a pool of worker processes."""
+
+from __future__ import annotations
+
+import abc
+import collections
+import concurrent.futures
+import hashlib
+import json
+import multiprocessing
+import os
+from collections.abc import Callable, Generator, Iterable
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Any, Generic, TypeVar
+
+StateT = TypeVar("StateT")
+ItemT = TypeVar("ItemT")
+ResultT = TypeVar("ResultT")
+
+WINDOW_PER_SLOT = 2  # items in flight per worker slot: keeps every worker busy, memory bounded
+
+
+@dataclass(frozen=True)
+class Job(Generic[StateT, ItemT, ResultT]):
+    """Independent items that share one expensive state per worker.
+
+    ``setup`` and ``run`` must be picklable (module-level functions, or
+    ``functools.partial`` of them) and deterministic: the result of an item may depend on
+    nothing but the item and ``name``'s state, never on what the worker ran before.
+    """
+
+    name: str  # identity of the state: a hash of everything ``setup`` depends on
+    setup: Callable[[], StateT]  # builds the per-worker state, once per worker
+    run: Callable[[StateT, ItemT], ResultT]  # one item's result
+
+
+def job_name(kind: str, *parts: Any) -> str:
+    """A job's name: its kind and a hash of what its state depends on (JSON-able parts)."""
+    from posegen import __version__
+
+    text = json.dumps([kind, __version__, *parts], sort_keys=True)
+    return f"{kind}-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
+
+
+class Backend(abc.ABC):
+    """Runs jobs; results come back in item order."""
+
+    @property
+    @abc.abstractmethod
+    def slots(self) -> int:
+        """How many items run at once."""
+
+    @abc.abstractmethod
+    def map(self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT]) -> Generator[ResultT, None, None]:
+        """Run ``job`` on ``items`` lazily, a bounded window ahead; results in item order.
+
+        ``items`` may be endless: closing the iterator cancels what is still pending.
+        """
+
+    def close(self) -> None:  # noqa: B027  (most backends hold nothing to release)
+        """Release the backend's resources (default: none)."""
+
+    def __enter__(self) -> Backend:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, value: BaseException | None, traceback: TracebackType | None
+    ) -> None:
+        self.close()
+
+
+_STATES: dict[str, Any] = {}  # per worker process: each job's state, built by the pool's initializer
+
+
+def _init_process(job: Job[Any, Any, Any]) -> None:
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    _STATES[job.name] = job.setup()
+
+
+def _run_in_process(name: str, run: Callable[[Any, Any], Any], item: Any) -> Any:
+    return run(_STATES[name], item)
+
+
+class ProcessBackend(Backend):
+    """``workers`` local processes (forkserver); one worker runs in this process."""
+
+    def __init__(self, workers: int) -> None:
+        self.workers = max(1, workers)
+
+    @property
+    def slots(self) -> int:
+        """Number of worker processes."""
+        return self.workers
+
+    def map(self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT]) -> Generator[ResultT, None, None]:
+        """Run ``job`` on ``items``; see :meth:`Backend.map`."""
+        if self.workers == 1:
+            state = job.setup()
+            for item in items:
+                yield job.run(state, item)
+            return
+        context = multiprocessing.get_context("forkserver")
+        with concurrent.futures.ProcessPoolExecutor(
+            max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job,)
+        ) as executor:
+            window: collections.deque[concurrent.futures.Future[ResultT]] = collections.deque()
+            try:
+                for item in items:
+                    window.append(executor.submit(_run_in_process, job.name, job.run, item))
+                    if len(window) >= WINDOW_PER_SLOT * self.workers:
+                        yield window.popleft().result()
+                while window:
+                    yield window.popleft().result()
+            finally:
+                for future in window:
+                    future.cancel()
+
+
+def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:
+    """The backend a command asked for.
+
+    Args:
+        workers: Local worker processes (ignored with ``scheduler``).
+        scheduler: Address of a Dask scheduler (``tcp://host:8786``); None: local processes.
+
+    Raises:
+        BackendError: The scheduler cannot be reached, has no worker, or a worker runs
+            another posegen version.
+
+    """
+    if scheduler is None:
+        return ProcessBackend(workers)
+    from posegen.parallel.cluster import DaskBackend
+
+    return DaskBackend(scheduler)
