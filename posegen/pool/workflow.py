@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from posegen.io import read_yaml, write_yaml
+from posegen.io import read_yaml
 from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import POOL_FORMAT, Pool, Verification, load_config, pool_from_dict, scene_for
+from posegen.robot import POOL_FORMAT, Pool, Verification, load_config, pool_from_dict, scene_for, write_pool
 
 
 def generate_pool_file(
@@ -34,7 +34,7 @@ def generate_pool_file(
     path = Path(output)
     checkpoint = path.with_name(path.name + ".partial.jsonl")
     pool = generate_pool(config, n, seed, workers, checkpoint, progress)
-    write_yaml(path, pool.to_dict())
+    write_pool(path, pool)
     checkpoint.unlink(missing_ok=True)
     return pool
 

@@ -48,6 +48,7 @@ from posegen.robot.postures import (
     load_pool,
     pool_from_dict,
     posture_from_dict,
+    write_pool,
 )
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for
@@ -109,5 +110,6 @@ __all__ = [
     "scene_for",
     "summarize",
     "tilt_angles",
+    "write_pool",
     "yaw_rotation",
 ]

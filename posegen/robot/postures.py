@@ -4,13 +4,23 @@ A pool file is what ``posegen pool`` makes and ``select``, ``route`` and ``simul
 read; a selection file reads like a pool plus the selection's fields (written by
 :mod:`posegen.select`), so every reader of postures takes either.
 
-Pool file format (YAML, ``format: posegen-pool``)::
+Pool file format (YAML, ``format: posegen-pool``), version 2 as ``posegen pool`` writes
+it: a header, and the postures as arrays in a ``.npz`` sidecar beside it (same stem)::
 
     format: posegen-pool
-    format_version: 1
+    format_version: 2
     provenance: {posegen_version, robot_model_sha256, seed, config}
-    joint_names: [...]          # order of every ``joints`` list
+    joint_names: [...]          # order of the columns of ``joints``
     summary: {attempted, accepted, rejected: {reason: count}, per_spot: {spot: {chain: count}}}
+    chains: [...]               # values of the ``chain`` array
+    spots: [...]                # values of the ``spot`` array
+    arrays: {file: pool.npz, sha256}
+    # pool.npz: sample (n,) int64, chain (n,) and spot (n,) indices into the lists above,
+    #   joints (n, nj) rad, contact_xy_m (n, 2) table frame, contact_yaw_rad (n,),
+    #   min_distance_m (n,), com_margin_m (n,)
+
+Version 1 (read, and written for small artefacts and selections) has the postures inline::
+
     postures:
       - {id, sample, chain, spot, joints: [rad...], contact_xy_m: [x, y] (table frame),
          contact_yaw_rad, min_distance_m, com_margin_m}
@@ -24,14 +34,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from posegen.errors import InputError
-from posegen.io import read_yaml
+from posegen.io import read_arrays, read_yaml, write_with_arrays
 from posegen.robot.geometry import FloatArray
 
 POOL_FORMAT = "posegen-pool"
 SELECTION_FORMAT = "posegen-selection"  # a pool's fields plus the selection's (posegen.select.report)
-POOL_VERSION = 1
+POOL_VERSION = 1  # postures inline
+POOL_ARRAYS_VERSION = 2  # postures in a .npz sidecar
+_SCALARS = ("contact_yaw_rad", "min_distance_m", "com_margin_m")  # float fields, one value per posture
+ARRAY_NAMES = ("sample", "chain", "spot", "joints", "contact_xy_m", *_SCALARS)
 
 
 @dataclass(frozen=True)
@@ -79,8 +93,23 @@ class Pool:
             counts[p.spot][p.chain] = counts[p.spot].get(p.chain, 0) + 1
         return {spot: dict(sorted(c.items())) for spot, c in sorted(counts.items())}
 
-    def to_dict(self) -> dict[str, Any]:
-        """Plain data in the pool file format."""
+    def entry(self, index: int) -> dict[str, Any]:
+        """One posture as plain data (an entry of ``postures`` in the inline format)."""
+        p = self.postures[index]
+        return {
+            "id": index,
+            "sample": p.sample,
+            "chain": p.chain,
+            "spot": p.spot,
+            "joints": list(p.joints),
+            "contact_xy_m": list(p.contact_xy_m),
+            "contact_yaw_rad": p.contact_yaw_rad,
+            "min_distance_m": p.min_distance_m,
+            "com_margin_m": p.com_margin_m,
+        }
+
+    def header(self) -> dict[str, Any]:
+        """Plain data of everything but the postures."""
         return {
             "format": POOL_FORMAT,
             "format_version": POOL_VERSION,
@@ -92,21 +121,29 @@ class Pool:
                 "rejected": dict(self.rejected),
                 "per_spot": self.per_spot(),
             },
-            "postures": [
-                {
-                    "id": i,
-                    "sample": p.sample,
-                    "chain": p.chain,
-                    "spot": p.spot,
-                    "joints": list(p.joints),
-                    "contact_xy_m": list(p.contact_xy_m),
-                    "contact_yaw_rad": p.contact_yaw_rad,
-                    "min_distance_m": p.min_distance_m,
-                    "com_margin_m": p.com_margin_m,
-                }
-                for i, p in enumerate(self.postures)
-            ],
         }
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data in the inline pool file format (version 1)."""
+        return {**self.header(), "postures": [self.entry(i) for i in range(len(self.postures))]}
+
+    def to_arrays(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]]]:
+        """The version-2 header (without its sidecar reference) and the postures as arrays."""
+        chains = sorted({p.chain for p in self.postures})
+        spots = sorted({p.spot for p in self.postures})
+        chain_of = {c: i for i, c in enumerate(chains)}
+        spot_of = {s: i for i, s in enumerate(spots)}
+        n, nj = len(self.postures), len(self.joint_names)
+        arrays: dict[str, NDArray[Any]] = {
+            "sample": np.array([p.sample for p in self.postures], dtype=np.int64),
+            "chain": np.array([chain_of[p.chain] for p in self.postures], dtype=np.int32),
+            "spot": np.array([spot_of[p.spot] for p in self.postures], dtype=np.int32),
+            "joints": np.array([p.joints for p in self.postures], dtype=float).reshape(n, nj),
+            "contact_xy_m": np.array([p.contact_xy_m for p in self.postures], dtype=float).reshape(n, 2),
+            **{f: np.array([getattr(p, f) for p in self.postures], dtype=float) for f in _SCALARS},
+        }
+        header = {**self.header(), "format_version": POOL_ARRAYS_VERSION, "chains": chains, "spots": spots}
+        return header, arrays
 
 
 def posture_from_dict(raw: Any, n_joints: int, where: str) -> Posture:
@@ -136,20 +173,68 @@ def posture_from_dict(raw: Any, n_joints: int, where: str) -> Posture:
     return posture
 
 
+def _postures_from_arrays(data: dict[str, Any], n_joints: int, where: str) -> tuple[Posture, ...]:
+    """Postures of a version-2 pool, read from the sidecar beside the header file ``where``."""
+    chains, spots = data.get("chains"), data.get("spots")
+    if not isinstance(chains, list) or not isinstance(spots, list):
+        raise InputError(f"{where}: 'chains' and 'spots' must be lists")
+    arrays = read_arrays(where, data.get("arrays"), ARRAY_NAMES)
+    n = len(arrays["sample"])
+    shapes = {name: a.shape for name, a in arrays.items()}
+    expected = {name: (n,) for name in ARRAY_NAMES} | {"joints": (n, n_joints), "contact_xy_m": (n, 2)}
+    if shapes != expected:
+        raise InputError(f"{where}: arrays of inconsistent shapes {shapes}; expected {expected}")
+    for name, vocabulary in (("chain", chains), ("spot", spots)):
+        codes = arrays[name]
+        if n and (codes.min() < 0 or codes.max() >= len(vocabulary)):
+            raise InputError(f"{where}: array '{name}' indexes outside its {len(vocabulary)} names")
+    floats = np.column_stack([arrays["joints"], arrays["contact_xy_m"], *(arrays[f] for f in _SCALARS)])
+    if not np.all(np.isfinite(floats)):
+        raise InputError(f"{where}: the arrays hold NaN or infinite values")
+    columns = {name: arrays[name].tolist() for name in ("sample", "chain", "spot", *_SCALARS)}
+    joints, xy = arrays["joints"].tolist(), arrays["contact_xy_m"].tolist()
+    return tuple(
+        Posture(
+            sample=int(columns["sample"][i]),
+            chain=str(chains[columns["chain"][i]]),
+            spot=str(spots[columns["spot"][i]]),
+            joints=tuple(joints[i]),
+            contact_xy_m=(xy[i][0], xy[i][1]),
+            contact_yaw_rad=columns["contact_yaw_rad"][i],
+            min_distance_m=columns["min_distance_m"][i],
+            com_margin_m=columns["com_margin_m"][i],
+        )
+        for i in range(n)
+    )
+
+
 def pool_from_dict(data: dict[str, Any], where: str = "pool") -> Pool:
     """Parse and validate plain data in the pool file format.
+
+    Args:
+        data: The file's content.
+        where: The file's path (a version-2 pool's arrays are read beside it), or a
+            name for messages.
 
     Raises:
         InputError: The data is not a valid pool.
 
     """
-    if data.get("format_version") != POOL_VERSION:
-        raise InputError(f"{where}: unsupported format_version {data.get('format_version')!r}")
+    version = data.get("format_version")
+    if version not in (POOL_VERSION, POOL_ARRAYS_VERSION):
+        raise InputError(f"{where}: unsupported format_version {version!r}")
     names = data.get("joint_names")
-    raw_postures = data.get("postures")
-    if not isinstance(names, list) or not isinstance(raw_postures, list):
-        raise InputError(f"{where}: 'joint_names' and 'postures' must be lists")
-    postures = tuple(posture_from_dict(raw, len(names), f"{where}: posture {i}") for i, raw in enumerate(raw_postures))
+    if not isinstance(names, list):
+        raise InputError(f"{where}: 'joint_names' must be a list")
+    if version == POOL_ARRAYS_VERSION:
+        postures = _postures_from_arrays(data, len(names), where)
+    else:
+        raw_postures = data.get("postures")
+        if not isinstance(raw_postures, list):
+            raise InputError(f"{where}: 'postures' must be a list")
+        postures = tuple(
+            posture_from_dict(raw, len(names), f"{where}: posture {i}") for i, raw in enumerate(raw_postures)
+        )
     summary = data.get("summary") or {}
     return Pool(
         joint_names=tuple(str(n) for n in names),
@@ -170,6 +255,12 @@ def load_pool(path: str | Path) -> Pool:
     return pool_from_dict(read_yaml(path, POOL_FORMAT), str(path))
 
 
+def write_pool(path: str | Path, pool: Pool) -> None:
+    """Write a pool file in the current format: YAML header and ``.npz`` sidecar, atomically each."""
+    header, arrays = pool.to_arrays()
+    write_with_arrays(path, header, arrays)
+
+
 def load_plan(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
     """Read a pool or a selection that has postures: the postures, and their entries as plain data.
 
@@ -181,4 +272,5 @@ def load_plan(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
     plan = pool_from_dict(data, str(path))
     if not plan.postures:
         raise InputError(f"{path}: no postures")
-    return plan, list(data["postures"])
+    entries = data["postures"] if "postures" in data else [plan.entry(i) for i in range(len(plan.postures))]
+    return plan, list(entries)

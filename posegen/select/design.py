@@ -31,6 +31,7 @@ from posegen.robot import FloatArray, Scene
 
 SESSION = "plan"
 SINGULAR = 1e-12  # |R_ii| below this times the largest: the set does not identify every parameter
+DESIGN_CHUNK = 3 * 4096  # rows (3 per posture) built and factored at once: bounds memory on large pools
 RIDGE = 1e-9  # added to the whitened information in searches (the whole pool's is the identity)
 
 
@@ -107,6 +108,21 @@ class Design:
         return float(np.exp((value + self.log_det_pool) / (2 * self.n_params)))
 
 
+def _chunks(count: int, size: int) -> list[slice]:
+    """Consecutive ranges of at most ``size`` of ``count`` rows (one range for small pools)."""
+    return [slice(start, min(start + size, count)) for start in range(0, count, size)]
+
+
+def _r_factor(flat: FloatArray) -> FloatArray:
+    """R of the QR decomposition of ``flat`` (m, nb), a chunk of rows at a time (TSQR). Shape (nb, nb)."""
+    r: FloatArray | None = None
+    for rows in _chunks(len(flat), DESIGN_CHUNK):
+        block = flat[rows] if r is None else np.vstack([r, flat[rows]])
+        r = np.linalg.qr(block, mode="r")  # type: ignore[assignment]
+    assert r is not None
+    return r
+
+
 def build_design(
     scene: Scene,
     joints: FloatArray,
@@ -135,11 +151,15 @@ def build_design(
     if base is None:
         base = structural_base(model, contacts)
     theta = initial_planes(model, contacts, model.nominal())
-    _, jac = model.jacobian(theta, contacts)
     sigma = np.maximum(np.asarray(noise, dtype=float), NOISE_FLOOR)
-    regressors = jac[:, :, list(base.columns)] / sigma[None, :, None]  # (n, 3, nb)
-    nb = regressors.shape[2]
-    r: FloatArray = np.linalg.qr(regressors.reshape(-1, nb), mode="r")  # type: ignore[assignment]
+    columns = list(base.columns)
+    nb = len(columns)
+    regressors = np.empty((n, 3, nb))  # (n, 3, nb); the Jacobians are built a chunk at a time
+    for rows in _chunks(n, DESIGN_CHUNK // 3):
+        _, jac = model.jacobian(theta, contacts.subset(range(rows.start, rows.stop)))  # (chunk, 3, p)
+        regressors[rows] = jac[:, :, columns] / sigma[None, :, None]
+    flat = regressors.reshape(-1, nb)  # a view: whitened in place below
+    r = _r_factor(flat)
     diag = np.abs(np.diag(r))
     if 3 * n < nb or np.any(diag <= RANK_TOLERANCE * diag.max()):
         rank = int(np.sum(diag > RANK_TOLERANCE * diag.max()))
@@ -147,7 +167,9 @@ def build_design(
             f"the pool is rank deficient: its {n} postures identify {rank} of the {nb} base parameters; "
             "sample a larger or more diverse pool"
         )
-    whitened = np.linalg.solve(r.T, regressors.reshape(-1, nb).T).T.reshape(n, 3, nb)  # A_i R^-1
+    for rows in _chunks(3 * n, DESIGN_CHUNK):
+        flat[rows] = np.linalg.solve(r.T, flat[rows].T).T  # A_i R^-1
+    whitened = regressors
     return (
         Design(
             regressors=whitened,

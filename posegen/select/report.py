@@ -44,11 +44,10 @@ def selection_to_dict(
     provenance["pool"] = pool_path
     provenance["pool_sha256"] = hashlib.sha256(Path(pool_path).read_bytes()).hexdigest()
     rank_of = {row: r + 1 for r, row in enumerate(result.ranking)}
-    pool_data = pool.to_dict()
     postures = []
     for row in chosen.rows:
         entry = {"pool_id": int(row), "rank": rank_of[row], "weight": float(result.weights.weights[row])}
-        entry.update(pool_data["postures"][row])
+        entry.update(pool.entry(row))
         postures.append(entry)
     weights = result.weights
     return {

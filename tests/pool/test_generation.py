@@ -115,6 +115,23 @@ def test_pool_file_round_trip(small_pool, tmp_path):
     assert prov["config"]["table"]["top_center_m"] == [0.65, 0.0, 0.68]
 
 
+def test_pool_file_with_sidecar_round_trip(small_pool, tmp_path):
+    """What ``posegen pool`` writes: a YAML header and a .npz of the postures, read back exactly."""
+    import yaml
+
+    from posegen.robot import write_pool
+
+    path = tmp_path / "pool.yaml"
+    write_pool(path, small_pool)
+    header = yaml.safe_load(path.read_text())
+    assert header["format_version"] == 2 and "postures" not in header
+    assert header["summary"]["accepted"] == len(small_pool.postures)
+    assert load_pool(path) == small_pool
+    first = (path.read_bytes(), (tmp_path / "pool.npz").read_bytes())
+    write_pool(tmp_path / "again" / "pool.yaml", small_pool)
+    assert first == ((tmp_path / "again" / "pool.yaml").read_bytes(), (tmp_path / "again" / "pool.npz").read_bytes())
+
+
 def test_table_out_of_reach_is_infeasible(config):
     import dataclasses
 

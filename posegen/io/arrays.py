@@ -1,0 +1,94 @@
+"""Bulk numbers beside a YAML artefact: a ``.npz`` sidecar that the header names by hash.
+
+The YAML file stays the human-readable header (provenance, summary); the arrays go to
+``<stem>.npz`` next to it, and the header records its file name and sha256, so a stale or
+swapped sidecar is refused rather than read. The bytes depend on the arrays only (zip
+entries carry a fixed date, no compression), so same seed, same bytes holds for
+sidecars too; any ``numpy.load`` reads them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import zipfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from posegen.errors import InputError
+from posegen.io.artefact import dump_yaml
+from posegen.io.atomic import write_atomic
+
+SIDECAR_SUFFIX = ".npz"
+_EPOCH = (1980, 1, 1, 0, 0, 0)  # the zip format's earliest date: no clock in the bytes
+
+
+def encode_arrays(arrays: Mapping[str, NDArray[Any]]) -> bytes:
+    """The ``.npz`` bytes of some named arrays, deterministic."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as archive:
+        for name, array in arrays.items():
+            entry = zipfile.ZipInfo(f"{name}.npy", date_time=_EPOCH)
+            entry.external_attr = 0o644 << 16
+            with archive.open(entry, "w", force_zip64=True) as handle:
+                np.lib.format.write_array(handle, np.ascontiguousarray(array), allow_pickle=False)
+    return buffer.getvalue()
+
+
+def sidecar_path(path: str | Path) -> Path:
+    """Where the arrays of the artefact at ``path`` live: same folder and stem, ``.npz``."""
+    path = Path(path)
+    return path.with_suffix(SIDECAR_SUFFIX)
+
+
+def sidecar_reference(path: str | Path, data: bytes) -> dict[str, Any]:
+    """What a header records of its sidecar: the file name (relative) and the sha256."""
+    return {"file": sidecar_path(path).name, "sha256": hashlib.sha256(data).hexdigest()}
+
+
+def read_arrays(path: str | Path, reference: Any, names: tuple[str, ...]) -> dict[str, NDArray[Any]]:
+    """Read the sidecar a header refers to, after checking its hash and its arrays.
+
+    Args:
+        path: The header (YAML) file; the sidecar is looked up beside it.
+        reference: The header's record of the sidecar (``{file, sha256}``).
+        names: Arrays that must be there.
+
+    Raises:
+        InputError: The reference is malformed, the sidecar is missing, changed, not an
+            ``.npz``, or lacks an array.
+
+    """
+    path = Path(path)
+    if not isinstance(reference, dict) or not isinstance(reference.get("file"), str):
+        raise InputError(f"{path}: 'arrays' must name its sidecar file and sha256")
+    file = path.parent / Path(reference["file"]).name  # never outside the header's folder
+    try:
+        data = file.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read its arrays file {file}: {exc.strerror}") from exc
+    if hashlib.sha256(data).hexdigest() != reference.get("sha256"):
+        raise InputError(f"{path}: {file.name} is not the arrays file this header was written with (sha256 differs)")
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as archive:
+            missing = [n for n in names if n not in archive.files]
+            if missing:
+                raise InputError(f"{file}: missing arrays {', '.join(missing)}")
+            return {name: archive[name] for name in names}
+    except (ValueError, OSError, zipfile.BadZipFile) as exc:
+        raise InputError(f"{file}: not a readable .npz file ({exc})") from exc
+
+
+def write_with_arrays(path: str | Path, header: dict[str, Any], arrays: Mapping[str, NDArray[Any]]) -> None:
+    """Write an artefact as a YAML header and its ``.npz`` sidecar, each atomically.
+
+    The sidecar goes first and the header, which names it by hash, last: a header on disk
+    never points at arrays that are not fully written.
+    """
+    data = encode_arrays(arrays)
+    write_atomic(sidecar_path(path), data)
+    write_atomic(path, dump_yaml({**header, "arrays": sidecar_reference(path, data)}))

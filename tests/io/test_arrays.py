@@ -1,0 +1,47 @@
+"""Array sidecars: same arrays, same bytes; a header refuses a sidecar it was not written with."""
+
+import numpy as np
+import pytest
+import yaml
+
+from posegen.errors import InputError
+from posegen.io import encode_arrays, read_arrays, write_with_arrays
+
+ARRAYS = {"a": np.arange(6, dtype=np.int64), "b": np.linspace(0.0, 1.0, 12).reshape(4, 3)}
+
+
+def test_same_arrays_same_bytes():
+    assert encode_arrays(ARRAYS) == encode_arrays({k: v.copy() for k, v in ARRAYS.items()})
+    assert encode_arrays(ARRAYS) != encode_arrays({**ARRAYS, "a": ARRAYS["a"] + 1})
+
+
+def test_round_trip_is_exact(tmp_path):
+    path = tmp_path / "thing.yaml"
+    values = {"x": np.random.default_rng(0).normal(size=(5, 7))}
+    write_with_arrays(path, {"format": "test"}, values)
+    header = yaml.safe_load(path.read_text())
+    assert header["arrays"]["file"] == "thing.npz"
+    again = read_arrays(path, header["arrays"], ("x",))
+    assert again["x"].tobytes() == values["x"].tobytes()
+    assert np.load(tmp_path / "thing.npz")["x"].shape == (5, 7)  # any numpy reads it
+
+
+def test_changed_missing_or_incomplete_sidecar_is_refused(tmp_path):
+    path = tmp_path / "thing.yaml"
+    write_with_arrays(path, {"format": "test"}, ARRAYS)
+    reference = yaml.safe_load(path.read_text())["arrays"]
+    with pytest.raises(InputError, match="missing arrays c"):
+        read_arrays(path, reference, ("a", "c"))
+    with pytest.raises(InputError, match="must name its sidecar"):
+        read_arrays(path, "thing.npz", ("a",))
+    (tmp_path / "thing.npz").write_bytes(encode_arrays({**ARRAYS, "a": ARRAYS["a"] * 2}))
+    with pytest.raises(InputError, match="sha256 differs"):
+        read_arrays(path, reference, ("a",))
+    (tmp_path / "thing.npz").unlink()
+    with pytest.raises(InputError, match="cannot read"):
+        read_arrays(path, reference, ("a",))
+    (tmp_path / "thing.npz").write_bytes(b"not a zip")
+    with pytest.raises(InputError):
+        read_arrays(
+            path, {"file": "thing.npz", "sha256": __import__("hashlib").sha256(b"not a zip").hexdigest()}, ("a",)
+        )

@@ -1,0 +1,103 @@
+"""Backends: results in item order, one state per worker; a Dask cluster gives the same pool and check."""
+
+import dataclasses
+import os
+import signal
+
+import pytest
+
+from posegen.errors import BackendError
+from posegen.parallel import Job, ProcessBackend
+from posegen.pool import generate_pool, verify_postures
+
+
+def _setup():
+    return {"pid": os.getpid(), "built": id(object())}
+
+
+def _run(state, item):
+    return item * item, state["pid"], state["built"]
+
+
+def test_process_backend_keeps_item_order_and_one_state_per_worker():
+    job = Job(name="squares", setup=_setup, run=_run)
+    for workers in (1, 2):
+        results = list(ProcessBackend(workers).map(job, range(40)))
+        assert [r[0] for r in results] == [i * i for i in range(40)]
+        states = {}
+        for _, pid, built in results:
+            states.setdefault(pid, set()).add(built)
+        assert all(len(built) == 1 for built in states.values())  # set up once per process, not per item
+        assert len(states) <= workers
+
+
+def test_closing_the_results_early_stops_the_work():
+    job = Job(name="squares", setup=_setup, run=_run)
+    results = ProcessBackend(2).map(job, iter(range(10**9)))  # endless items
+    assert [next(results)[0] for _ in range(3)] == [0, 1, 4]
+    results.close()
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=":0"
+    ) as local:
+        yield local
+
+
+@pytest.fixture(scope="module")
+def small_chunks(config):
+    """Chunks of 4 samples: the few postures of a test still spread over both workers."""
+    return dataclasses.replace(config, sampling=dataclasses.replace(config.sampling, chunk_size=4))
+
+
+@pytest.fixture(scope="module")
+def reference(small_chunks):
+    return generate_pool(small_chunks, n=6, seed=7, workers=2)
+
+
+def test_dask_cluster_gives_the_same_pool_and_check(cluster, small_chunks, reference, scene):
+    from posegen.parallel.cluster import DaskBackend
+
+    with DaskBackend(cluster.scheduler_address) as backend:
+        assert backend.slots == 2
+        pool = generate_pool(small_chunks, n=6, seed=7, workers=backend)
+        assert pool.to_dict() == reference.to_dict()
+        assert verify_postures(scene, pool.postures, workers=backend) == verify_postures(scene, reference.postures)
+
+
+def test_a_worker_killed_mid_run_changes_nothing(cluster, small_chunks, reference):
+    from posegen.parallel.cluster import DaskBackend
+
+    killed = []
+
+    def kill_one_worker(progress):
+        if progress.attempts and not killed:  # after the first chunk came back
+            pids = backend.client.run(os.getpid)
+            victim = sorted(pids.values())[0]
+            os.kill(victim, signal.SIGKILL)
+            killed.append(victim)
+
+    with DaskBackend(cluster.scheduler_address) as backend:
+        pool = generate_pool(small_chunks, n=6, seed=7, workers=backend, progress=kill_one_worker)
+    assert killed
+    assert pool.to_dict() == reference.to_dict()
+
+
+def test_workers_of_another_version_are_refused(cluster, monkeypatch):
+    from posegen.parallel import cluster as module
+
+    monkeypatch.setattr(module, "__version__", "0.0.0-other")
+    with pytest.raises(BackendError, match="another posegen version"):
+        module.DaskBackend(cluster.scheduler_address)
+
+
+def test_an_unreachable_scheduler_is_a_clear_error(monkeypatch):
+    pytest.importorskip("distributed")
+    from posegen.parallel import cluster as module
+
+    monkeypatch.setattr(module, "CONNECT_TIMEOUT_S", 1.0)
+    with pytest.raises(BackendError, match="cannot reach the Dask scheduler at tcp://127"):
+        module.DaskBackend("tcp://127.0.0.1:9")
