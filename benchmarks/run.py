@@ -18,6 +18,7 @@ from typing import Any
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np
+import scale  # benchmarks/scale.py, beside this file
 
 ROOT = Path(__file__).resolve().parents[1]
 POSEGEN = str(Path(sys.executable).with_name("posegen"))
@@ -39,9 +40,13 @@ def bench_pool(workdir: Path, n: int) -> Path:
     from posegen.robot import load_pool
 
     out = workdir / "pool.yaml"
+    before = os.getloadavg()[0]
     start = time.perf_counter()
     subprocess.run(
-        [POSEGEN, "pool", "--n", str(n), "-q", "-o", str(out)], check=True, cwd=ROOT, stdout=subprocess.DEVNULL
+        [POSEGEN, "pool", "--n", str(n), "--workers", "2", "-q", "-o", str(out)],
+        check=True,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
     )
     wall = time.perf_counter() - start
     pool = load_pool(out)
@@ -51,7 +56,7 @@ def bench_pool(workdir: Path, n: int) -> Path:
     free = [i for i, name in enumerate(names) if name not in config["robot"]["locked_joints"]]
     spread = joints[:, free].std(axis=0)
     counts = [c for per in pool.per_spot().values() for c in per.values()]
-    print(f"\n### pool: {n} postures ({machine()})\n")
+    print(f"\n### pool: {n} postures ({machine()}; load {before:.1f} -> {os.getloadavg()[0]:.1f})\n")
     print("| figure | value |\n|---|---|")
     print(f"| wall time, `posegen pool --n {n}` (2 workers, incl. start-up) | {wall:.1f} s |")
     print(
@@ -272,9 +277,16 @@ def bench_view(pool_path: Path, workdir: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument(
-        "--only", nargs="*", default=["pool", "select", "route", "calibration", "view"], help="stages to run"
+        "--only",
+        nargs="*",
+        default=["pool", "dask", "select", "route", "calibration", "view", "scale"],
+        help="stages to run",
     )
     parser.add_argument("--n", type=int, default=1500, help="pool size")
+    parser.add_argument("--large-n", type=int, default=20000, help="size of the large pool (stage scale)")
+    parser.add_argument(
+        "--measure-n", type=int, default=None, help="make a pool of this size and project to --large-n (stage scale)"
+    )
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
     workdir = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="posegen-bench-"))
@@ -282,6 +294,8 @@ def main() -> None:
     pool_path = workdir / "pool.yaml"
     if "pool" in args.only:
         pool_path = bench_pool(workdir, args.n)
+    if "dask" in args.only:
+        scale.bench_dask(pool_path, workdir, machine())
     if "select" in args.only:
         bench_select(pool_path, workdir)
     if "route" in args.only:
@@ -290,6 +304,8 @@ def main() -> None:
         bench_calibration()
     if "view" in args.only:
         bench_view(pool_path, workdir)
+    if "scale" in args.only:
+        scale.bench_scale(workdir, args.large_n, args.measure_n or args.large_n, machine())
 
 
 if __name__ == "__main__":

@@ -12,11 +12,12 @@ import os
 from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass
 from types import TracebackType
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, Protocol, TypeVar
 
 StateT = TypeVar("StateT")
 ItemT = TypeVar("ItemT")
 ResultT = TypeVar("ResultT")
+ResultT_co = TypeVar("ResultT_co", covariant=True)
 
 WINDOW_PER_SLOT = 2  # items in flight per worker slot: keeps every worker busy, memory bounded
 
@@ -41,6 +42,36 @@ def job_name(kind: str, *parts: Any) -> str:
 
     text = json.dumps([kind, __version__, *parts], sort_keys=True)
     return f"{kind}-{hashlib.sha256(text.encode()).hexdigest()[:16]}"
+
+
+class Pending(Protocol[ResultT_co]):
+    """A submitted task (a ``concurrent.futures`` or a Dask future)."""
+
+    def result(self) -> ResultT_co:
+        """Wait for the task; its result, or its exception raised here."""
+
+    def cancel(self) -> Any:
+        """Cancel the task if it has not run."""
+
+
+def in_order(
+    submit: Callable[[ItemT], Pending[ResultT]], items: Iterable[ItemT], window: int
+) -> Generator[ResultT, None, None]:
+    """Submit items up to ``window`` ahead of the one consumed; yield results in item order.
+
+    Closing the generator cancels what is still pending.
+    """
+    pending: collections.deque[Pending[ResultT]] = collections.deque()
+    try:
+        for item in items:
+            pending.append(submit(item))
+            if len(pending) >= window:
+                yield pending.popleft().result()
+        while pending:
+            yield pending.popleft().result()
+    finally:
+        for task in pending:
+            task.cancel()
 
 
 class Backend(abc.ABC):
@@ -104,17 +135,11 @@ class ProcessBackend(Backend):
         with concurrent.futures.ProcessPoolExecutor(
             max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job,)
         ) as executor:
-            window: collections.deque[concurrent.futures.Future[ResultT]] = collections.deque()
-            try:
-                for item in items:
-                    window.append(executor.submit(_run_in_process, job.name, job.run, item))
-                    if len(window) >= WINDOW_PER_SLOT * self.workers:
-                        yield window.popleft().result()
-                while window:
-                    yield window.popleft().result()
-            finally:
-                for future in window:
-                    future.cancel()
+            yield from in_order(
+                lambda item: executor.submit(_run_in_process, job.name, job.run, item),
+                items,
+                WINDOW_PER_SLOT * self.workers,
+            )
 
 
 def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:

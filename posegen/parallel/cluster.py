@@ -17,7 +17,6 @@ worker killed mid-run loses nothing: its tasks run again elsewhere, with the sam
 
 from __future__ import annotations
 
-import collections
 import threading
 from collections.abc import Callable, Generator, Iterable
 from typing import Any
@@ -28,7 +27,7 @@ from distributed.diagnostics.plugin import WorkerPlugin
 
 from posegen import __version__
 from posegen.errors import BackendError
-from posegen.parallel.backend import WINDOW_PER_SLOT, Backend, ItemT, Job, ResultT, StateT
+from posegen.parallel.backend import WINDOW_PER_SLOT, Backend, ItemT, Job, ResultT, StateT, in_order
 
 CONNECT_TIMEOUT_S = 10.0
 WORKER_TIMEOUT_S = 30.0  # wait this long for a first worker to join
@@ -106,19 +105,14 @@ class DaskBackend(Backend):
         """Run ``job`` on ``items``; see :meth:`Backend.map`."""
         plugin = f"posegen-{job.name}"
         self.client.register_plugin(JobState(job), name=plugin)
-        window: collections.deque[Future] = collections.deque()
+
+        def submit(item: ItemT) -> Future:
+            key = f"{plugin}-{tokenize(job.run, item)}"
+            return self.client.submit(_run_task, plugin, __version__, job.run, item, key=key, retries=RETRIES)
+
         try:
-            for item in items:
-                key = f"{plugin}-{tokenize(job.run, item)}"
-                future = self.client.submit(_run_task, plugin, __version__, job.run, item, key=key, retries=RETRIES)
-                window.append(future)
-                if len(window) >= WINDOW_PER_SLOT * self.slots:
-                    yield window.popleft().result()
-            while window:
-                yield window.popleft().result()
+            yield from in_order(submit, items, WINDOW_PER_SLOT * self.slots)
         finally:
-            for future in window:
-                future.cancel()
             self.client.unregister_worker_plugin(plugin)
 
     def close(self) -> None:

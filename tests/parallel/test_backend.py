@@ -55,7 +55,7 @@ def small_chunks(config):
 
 @pytest.fixture(scope="module")
 def reference(small_chunks):
-    return generate_pool(small_chunks, n=6, seed=7, workers=2)
+    return generate_pool(small_chunks, n=6, seed=7, workers=1)
 
 
 def test_dask_cluster_gives_the_same_pool_and_check(cluster, small_chunks, reference, scene):
