@@ -21,12 +21,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Check the file and print the worst case of each invariant."""
+    from posegen.errors import InputError
     from posegen.parallel import open_backend
     from posegen.pool import check_pool_file
     from posegen.robot import is_route_file
     from posegen.route import check_route_file
 
     is_route = is_route_file(args.file)
+    if is_route and args.scheduler:
+        raise InputError("--scheduler applies to pool files; a route file is checked on this machine")
     with ProgressBar(args.quiet) as bar:
         if is_route:
             result = check_route_file(args.file, args.config, bar)

@@ -6,6 +6,7 @@ import abc
 import collections
 import concurrent.futures
 import hashlib
+import itertools
 import json
 import multiprocessing
 import os
@@ -114,7 +115,7 @@ def _run_in_process(name: str, run: Callable[[Any, Any], Any], item: Any) -> Any
 
 
 class ProcessBackend(Backend):
-    """``workers`` local processes (forkserver); one worker runs in this process."""
+    """``workers`` local processes (forkserver); with one worker, or one item, all runs in this process."""
 
     def __init__(self, workers: int) -> None:
         self.workers = max(1, workers)
@@ -126,11 +127,14 @@ class ProcessBackend(Backend):
 
     def map(self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT]) -> Generator[ResultT, None, None]:
         """Run ``job`` on ``items``; see :meth:`Backend.map`."""
-        if self.workers == 1:
+        iterator = iter(items)
+        head = list(itertools.islice(iterator, 2))
+        if self.workers == 1 or len(head) < 2:  # one item: not worth starting processes
             state = job.setup()
-            for item in items:
+            for item in itertools.chain(head, iterator):
                 yield job.run(state, item)
             return
+        items = itertools.chain(head, iterator)
         context = multiprocessing.get_context("forkserver")
         with concurrent.futures.ProcessPoolExecutor(
             max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job,)

@@ -187,3 +187,15 @@ def test_route_then_check(tmp_path, capsys):
     assert code == 0 and "2 of 2 postures" in stdout and out.exists() and (tmp_path / "route.csv").exists()
     code, stdout, _ = run(["check", str(out), "-q"], capsys)
     assert code == 0 and "FAIL" not in stdout and "points" in stdout
+
+
+def test_unreachable_scheduler_fails_before_any_work(tmp_path, capsys, monkeypatch):
+    from posegen.parallel import cluster
+
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT_S", 1.0)
+    out = tmp_path / "pool.yaml"
+    err = assert_fails_cleanly(
+        ["pool", "--n", "2", "--scheduler", "tcp://127.0.0.1:9", "-q", "-o", str(out)], out, capsys
+    )
+    assert "cannot reach the Dask scheduler" in err
+    assert not out.with_suffix(".npz").exists()
