@@ -293,6 +293,7 @@ def main() -> None:
     workdir.mkdir(parents=True, exist_ok=True)
     pool_path = workdir / "pool.yaml"
     if "pool" in args.only:
+        scale.bench_sample_cost(machine())
         pool_path = bench_pool(workdir, args.n)
     if "dask" in args.only:
         scale.bench_dask(pool_path, workdir, machine())

@@ -57,7 +57,7 @@ def bench_dask(pool_path: Path, workdir: Path, machine: str) -> None:
         n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=":0"
     ) as cluster:
         t_cluster = time.perf_counter() - start
-        out = workdir / "pool_dask.yaml"
+        out = workdir / "dask" / pool_path.name  # same file name: the header names its sidecar
         wall, _ = measured("pool", "--n", str(n), "-q", "--scheduler", cluster.scheduler_address, "-o", str(out))
         same = all(
             a.read_bytes() == b.read_bytes()
@@ -117,3 +117,19 @@ def bench_scale(workdir: Path, n: int, measured_n: int, machine: str) -> Path:
     wall, peak = measured("select", str(out), "-q", "-o", str(workdir / f"selected_{measured_n}.yaml"))
     print(f"| `posegen select` (IROC, certificate, plot) | {wall:.1f} s, peak {peak:.0f} MB |")
     return out
+
+
+def bench_sample_cost(machine: str, samples: int = 1000) -> None:
+    """CPU time per sample in one process: what a loaded machine cannot hide."""
+    from posegen.pool import PostureSampler
+    from posegen.robot import Scene, load_config
+
+    sampler = PostureSampler(Scene(load_config(ROOT / "configs" / "talos_table.yaml")), 0)
+    start = time.process_time()
+    outcomes = [sampler.evaluate(i) for i in range(samples)]
+    cpu = (time.process_time() - start) / samples
+    accepted = sum(not isinstance(o, str) for o in outcomes)
+    print(f"\n### cost of a sample, samples 0-{samples - 1} of seed 0, one process ({machine}; load {load()})\n")
+    print("| figure | value |\n|---|---|")
+    print(f"| CPU time per sample | {1000 * cpu:.2f} ms ({accepted / samples:.1%} accepted) |")
+    print(f"| CPU time per accepted posture | {1000 * cpu * samples / accepted:.1f} ms |")
