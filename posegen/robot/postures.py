@@ -272,5 +272,11 @@ def load_plan(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
     plan = pool_from_dict(data, str(path))
     if not plan.postures:
         raise InputError(f"{path}: no postures")
-    entries = data["postures"] if "postures" in data else [plan.entry(i) for i in range(len(plan.postures))]
-    return plan, list(entries)
+    return plan, plan_entries(data, plan)
+
+
+def plan_entries(data: dict[str, Any], plan: Pool) -> list[dict[str, Any]]:
+    """The posture entries of a pool or selection file as plain data (a version-2 pool has none inline)."""
+    if "postures" in data:
+        return list(data["postures"])
+    return [plan.entry(i) for i in range(len(plan.postures))]

@@ -29,6 +29,7 @@ from posegen.robot import (
     SegmentType,
     is_route_file,
     load_config,
+    plan_entries,
     pool_from_dict,
     read_route,
     route_arrays,
@@ -127,7 +128,7 @@ def _plan(path: Path, data: dict[str, Any], config_path: str | None) -> PlanArte
         path=path,
         scene=scene,
         plan=plan,
-        entries=tuple(data["postures"]),
+        entries=tuple(plan_entries(data, plan)),
         pool=pool,
     )
 
