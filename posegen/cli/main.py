@@ -15,10 +15,10 @@ import os
 import sys
 
 from posegen import __version__
-from posegen.cli import calibrate, check, pool, route, select, simulate, view
+from posegen.cli import calibrate, check, export, pool, route, select, simulate, view
 from posegen.errors import PosegenError
 
-COMMANDS = (pool, check, select, route, simulate, calibrate, view)  # in pipeline order, as --help lists them
+COMMANDS = (pool, check, select, route, export, simulate, calibrate, view)  # in pipeline order, as --help lists them
 EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130
 

@@ -1,13 +1,28 @@
-"""Files: atomic writes, YAML artefacts with their provenance, kind-checked reads, array sidecars.
+"""Files: atomic writes, YAML artefacts with their provenance, kind-checked reads, array sidecars, rosbag2.
 
-Below every other layer but :mod:`posegen.errors`: nothing here knows the robot.
+Below every other layer but :mod:`posegen.errors`: nothing here knows the robot. The
+rosbag2 modules hold the format concerns of talking to ROS 2: fixed-layout CDR
+(:mod:`~posegen.io.cdr`), indexed MCAP reading (:mod:`~posegen.io.mcap_index`), atomic bag
+writing (:mod:`~posegen.io.bag_writer`), recorded sessions (:mod:`~posegen.io.recorded_bag`)
+and routes as bags (:mod:`~posegen.io.trajectory_bag`).
 """
 
 from posegen.io.arrays import encode_arrays, read_arrays, sidecar_path, sidecar_reference, write_with_arrays
 from posegen.io.artefact import dump_yaml, load_yaml_file, provenance, read_yaml, write_yaml
 from posegen.io.atomic import write_atomic
+from posegen.io.recorded_bag import JOINT_STATE, WRENCH_STAMPED, JointStates, RecordedBag, Wrenches, write_recording
+from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, SegmentRow, write_trajectory_bag
 
 __all__ = [
+    "JOINT_STATE",
+    "SEGMENT_FIELDS",
+    "SEGMENT_TABLE",
+    "TRAJECTORY",
+    "WRENCH_STAMPED",
+    "JointStates",
+    "RecordedBag",
+    "SegmentRow",
+    "Wrenches",
     "dump_yaml",
     "encode_arrays",
     "load_yaml_file",
@@ -17,6 +32,8 @@ __all__ = [
     "sidecar_path",
     "sidecar_reference",
     "write_atomic",
+    "write_recording",
+    "write_trajectory_bag",
     "write_with_arrays",
     "write_yaml",
 ]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from posegen.errors import ConfigError
 from posegen.io import load_yaml_file
@@ -39,6 +39,7 @@ class ChainConfig:
     contact_frame: str  # name given to the contact frame that posegen adds to the model
     spot_y_range_m: tuple[float, float]  # table-frame y range of the spots this arm serves
     recorded_as: str = ""  # the name recordings give this gripper (e.g. "talos/left_gripper")
+    wrench_topic: str = ""  # rosbag2 topic of this wrist's force/torque sensor (geometry_msgs/WrenchStamped)
 
 
 @dataclass(frozen=True)
@@ -100,6 +101,20 @@ class RouteConfig:
 
 
 @dataclass(frozen=True)
+class RecordingConfig:
+    """How contacts are found in a recorded session (``posegen measure``)."""
+
+    force_threshold_n: float = 15.0  # wrist force (sensor offset removed) above this: in contact
+    speed_threshold_rad_s: float = 0.02  # every joint slower than this: still
+    speed_span_s: float = 0.04  # joint speed from position differences over this span
+    min_duration_s: float = 0.5  # shorter contact windows are rejected
+    trim_s: float = 0.1  # dropped at both ends of a window before averaging (the controller settles)
+    max_std_rad: float = 0.001  # a joint varying more than this (std) within a window: too noisy
+    max_gap_s: float = 0.02  # shorter interruptions of a window are bridged
+    match_tolerance_rad: float = 0.1  # largest joint deviation of a window from the route's planned posture
+
+
+@dataclass(frozen=True)
 class Config:
     """A whole scene: robot, stance, chains, table, margins, sampling."""
 
@@ -111,6 +126,7 @@ class Config:
     margins: MarginConfig
     sampling: SamplingConfig
     route: RouteConfig = RouteConfig()
+    recording: RecordingConfig = RecordingConfig()
     source_path: str = ""
 
     def chain(self, name: str) -> ChainConfig:
@@ -146,6 +162,7 @@ class Config:
             "margins": dataclasses.asdict(self.margins),
             "sampling": dataclasses.asdict(self.sampling),
             "route": dataclasses.asdict(self.route),
+            "recording": dataclasses.asdict(self.recording),
         }
         return dict(_plain(data))
 
@@ -283,6 +300,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
                 contact_frame=ch.text("contact_frame"),
                 spot_y_range_m=ch.interval("spot_y_range_m"),
                 recorded_as=ch.text("recorded_as", str(name)),
+                wrench_topic=ch.text("wrench_topic") if ch.raw("wrench_topic", "") else "",
             )
         )
 
@@ -319,23 +337,8 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         spot_tolerance_m=sp.number("spot_tolerance_m", minimum=0.0),
         chunk_size=sp.integer("chunk_size"),
     )
-    route = RouteConfig()
-    if "route" in top.data:
-        rt = top.sub("route")
-        defaults = dataclasses.asdict(route)
-        values: dict[str, Any] = {}
-        for key, default in defaults.items():
-            if isinstance(default, bool):
-                flag = rt.raw(key, default)
-                if not isinstance(flag, bool):
-                    raise ConfigError(f"route.{key}: expected true or false, got {flag!r}")
-                values[key] = flag
-            else:
-                values[key] = rt.number(key, default, minimum=0.0)
-        unknown = set(rt.data) - set(defaults)
-        if unknown:
-            raise ConfigError(f"route: unknown keys {sorted(unknown)}; valid keys: {', '.join(defaults)}")
-        route = RouteConfig(**values)
+    route = _section(top, "route", RouteConfig())
+    recording = _section(top, "recording", RecordingConfig())
     return Config(
         robot=source,
         locked_joints={str(k): float(v) for k, v in locked.items()},
@@ -345,8 +348,33 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         margins=margins,
         sampling=sampling,
         route=route,
+        recording=recording,
         source_path=source_path,
     )
+
+
+_Section = TypeVar("_Section", RouteConfig, RecordingConfig)
+
+
+def _section(top: _Reader, key: str, defaults: _Section) -> _Section:
+    """An optional section of numbers and flags; absent keys keep their defaults."""
+    if key not in top.data:
+        return defaults
+    reader = top.sub(key)
+    fields = dataclasses.asdict(defaults)
+    values: dict[str, Any] = {}
+    for name, default in fields.items():
+        if isinstance(default, bool):
+            flag = reader.raw(name, default)
+            if not isinstance(flag, bool):
+                raise ConfigError(f"{key}.{name}: expected true or false, got {flag!r}")
+            values[name] = flag
+        else:
+            values[name] = reader.number(name, default, minimum=0.0)
+    unknown = set(reader.data) - set(fields)
+    if unknown:
+        raise ConfigError(f"{key}: unknown keys {sorted(unknown)}; valid keys: {', '.join(fields)}")
+    return dataclasses.replace(defaults, **values)
 
 
 def load_config(path: str | Path) -> Config:

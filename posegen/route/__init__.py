@@ -11,10 +11,11 @@ from posegen.route.motion import Vertical, plan_free, seed_planner, straight, ve
 from posegen.route.ordering import Order, order_postures, time_distances
 from posegen.route.route import Route, Segment, plan_route, start_posture
 from posegen.route.timing import SAFETY, Timed, hold, parameterize
-from posegen.route.workflow import Routed, check_route_file, route_plan_file
+from posegen.route.workflow import Exported, Routed, check_route_file, export_route_bag, route_plan_file
 
 __all__ = [
     "SAFETY",
+    "Exported",
     "Order",
     "Route",
     "RouteInvariant",
@@ -23,6 +24,7 @@ __all__ = [
     "Timed",
     "Vertical",
     "check_route_file",
+    "export_route_bag",
     "hold",
     "order_postures",
     "parameterize",

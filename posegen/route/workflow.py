@@ -1,4 +1,4 @@
-"""The route stage's commands, from files to files: ``posegen route`` and ``posegen check ROUTE``."""
+"""The route stage's commands, from files to files: ``posegen route``, ``posegen check ROUTE``, ``posegen export``."""
 
 from __future__ import annotations
 
@@ -8,8 +8,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from posegen.io import SegmentRow, write_trajectory_bag
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import Verification, load_plan, read_route, scene_for
+from posegen.robot import Verification, load_plan, read_route, route_arrays, scene_for
 from posegen.route.check import verify_route
 from posegen.route.export import route_to_dict, write_route
 from posegen.route.motion import seed_planner
@@ -92,3 +93,50 @@ def check_route_file(path: str, config_path: str | None, progress: ProgressCallb
     scene.check_made_for(recorded, path)
     progress(Progress(0, len(data["trajectory"]["points"]), "point"))
     return verify_route(scene, data, progress)
+
+
+@dataclass(frozen=True)
+class Exported:
+    """What ``posegen export --bag`` wrote."""
+
+    bag: Path
+    messages: int
+    segments: int
+    points: int
+
+
+def export_route_bag(route_path: str, bag: str, topic: str, segments_topic: str) -> Exported:
+    """Write a route file as a rosbag2 (MCAP): its trajectory per segment and whole, and its segment table.
+
+    Args:
+        route_path: Route file.
+        bag: Bag directory to write (a bag already there is replaced; anything else is kept).
+        topic: ``trajectory_msgs/JointTrajectory`` topic (a trajectory controller's command topic).
+        segments_topic: ``diagnostic_msgs/DiagnosticArray`` topic of the segment table.
+
+    Raises:
+        PosegenError: Not a route, or the destination is not a bag.
+
+    """
+    data = read_route(route_path)
+    times, positions, velocities, accelerations = route_arrays(data)
+    rows = [
+        SegmentRow(
+            type=str(s["type"]),
+            chain=s.get("chain"),
+            posture=s.get("posture"),
+            pool_id=s.get("pool_id"),
+            first_point=int(s["first_point"]),
+            last_point=int(s["last_point"]),
+            start_s=float(times[int(s["first_point"])]),
+            end_s=float(times[int(s["last_point"])]),
+        )
+        for s in data["segments"]
+    ]
+    provenance = dict(data.get("provenance") or {})
+    provenance.update({"route": route_path, "route_sha256": hashlib.sha256(Path(route_path).read_bytes()).hexdigest()})
+    names = data["trajectory"]["joint_names"]
+    count = write_trajectory_bag(
+        bag, names, times, (positions, velocities, accelerations), rows, topic, segments_topic, provenance
+    )
+    return Exported(bag=Path(bag), messages=count, segments=len(rows), points=len(times))

@@ -1,0 +1,304 @@
+"""Recorded sessions as rosbag2: joint states and wrist wrenches, read and written.
+
+A rosbag2 is a directory with a ``metadata.yaml`` and storage files (MCAP or sqlite3).
+Bags are opened with ``rosbags`` (metadata, storage plugins, compression). The messages of
+an indexed MCAP file are located with :mod:`posegen.io.mcap_index` and decoded as columns
+with :mod:`posegen.io.cdr` (a 10-minute 500 Hz session in about a second); other storage
+goes through ``rosbags``' message iterator. A message whose layout differs from the first
+of its topic is deserialised on its own, never guessed.
+
+Times are seconds from the bag's start, taken from the header stamps (or from the
+recording times when a topic leaves its stamps at zero); every series is sorted by time.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from posegen.errors import InputError
+from posegen.io import cdr, mcap_index
+from posegen.io.bag_writer import writing_bag
+from posegen.io.cdr import FloatArray
+
+JOINT_STATE = "sensor_msgs/msg/JointState"
+WRENCH_STAMPED = "geometry_msgs/msg/WrenchStamped"
+STORAGES = ("mcap", "sqlite3")
+_BATCH = 4096  # messages per batch on the message-by-message path
+
+
+@dataclass(frozen=True)
+class JointStates:
+    """A ``sensor_msgs/JointState`` topic."""
+
+    names: tuple[str, ...]  # joint names, in the topic's order
+    times_s: FloatArray  # (n,) s from the bag's start, increasing
+    positions: FloatArray  # (n, nj) rad, columns in ``names`` order
+
+
+@dataclass(frozen=True)
+class Wrenches:
+    """A ``geometry_msgs/WrenchStamped`` topic."""
+
+    times_s: FloatArray  # (m,) s from the bag's start, increasing
+    forces: FloatArray  # (m, 3) N, sensor frame
+    torques: FloatArray  # (m, 3) N m, sensor frame
+
+
+def _typestore() -> Any:
+    from rosbags.typesys import Stores, get_typestore
+
+    return get_typestore(Stores.ROS2_HUMBLE)
+
+
+class _Topic:
+    """Decodes one topic's batches into stamped values: columns where it can, one by one where not."""
+
+    def __init__(self, topic: str, msgtype: str) -> None:
+        self.topic, self.msgtype = topic, msgtype
+        self.layout: cdr.Layout | None = None
+        self.names: tuple[str, ...] = ()
+        self.parts: list[tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]] = []  # stamps, log times, values
+
+    def _first(self, message: Any) -> None:
+        frame_id = message.header.frame_id
+        if self.msgtype == WRENCH_STAMPED:
+            self.layout = cdr.wrench_stamped_layout(frame_id)
+            return
+        self.names = tuple(message.name)
+        if len(message.position) != len(self.names) or len(set(self.names)) != len(self.names):
+            raise InputError(
+                f"topic '{self.topic}': {len(message.position)} positions for {len(self.names)} joint names"
+                + ("" if len(set(self.names)) == len(self.names) else " (a name repeats)")
+            )
+        counts = (len(message.position), len(message.velocity), len(message.effort))
+        self.layout = cdr.joint_state_layout(self.names, frame_id, counts)
+
+    def _values(self, message: Any, log_time: int) -> FloatArray:
+        """Values of one message deserialised on its own."""
+        if self.msgtype == WRENCH_STAMPED:
+            w = message.wrench
+            return np.array([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z])
+        names = tuple(message.name)
+        if sorted(names) != sorted(self.names) or len(message.position) != len(names):
+            raise InputError(
+                f"topic '{self.topic}': the message recorded at {log_time * 1e-9:.3f} s names other joints "
+                f"({len(names)} names, {len(message.position)} positions) than the first one"
+            )
+        column = {name: k for k, name in enumerate(names)}
+        return np.asarray(message.position, dtype=float)[[column[n] for n in self.names]]
+
+    def add(self, batch: mcap_index.Batch) -> None:
+        store = _typestore()
+        if self.layout is None and len(batch):
+            start = int(batch.offsets[0])
+            self._first(
+                store.deserialize_cdr(batch.buffer[start : start + int(batch.lengths[0])].tobytes(), self.msgtype)
+            )
+        layout = self.layout
+        if layout is None:
+            return
+        decoded = batch.lengths == layout.size
+        if np.any(decoded):
+            rows = np.lib.stride_tricks.sliding_window_view(batch.buffer, layout.size)[batch.offsets[decoded]]
+            ok = cdr.matches(layout, rows)
+            if not np.all(ok):
+                decoded[np.flatnonzero(decoded)[~ok]] = False
+                rows = rows[ok]
+            stamps, blocks = cdr.decode(layout, rows, [0] if self.msgtype == JOINT_STATE else None)
+            self.parts.append((stamps, batch.log_times[decoded], np.hstack(blocks)))
+        for k in np.flatnonzero(~decoded).tolist():
+            start = int(batch.offsets[k])
+            message = store.deserialize_cdr(batch.buffer[start : start + int(batch.lengths[k])].tobytes(), self.msgtype)
+            stamp = np.array([message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec])
+            self.parts.append((stamp, batch.log_times[[k]], self._values(message, int(batch.log_times[k]))[None, :]))
+
+    def series(self, origin_ns: int, where: Path) -> tuple[FloatArray, FloatArray]:
+        """Times (n,) in s from ``origin_ns`` and values (n, k), sorted by time."""
+        if not self.parts:
+            raise InputError(f"{where}: topic '{self.topic}' has no message")
+        stamps = np.concatenate([p[0] for p in self.parts])
+        if not np.any(stamps):
+            stamps = np.concatenate([p[1] for p in self.parts])  # never stamped: the recording times
+        values = np.concatenate([p[2] for p in self.parts])
+        if np.any(np.diff(stamps) < 0):
+            order = np.argsort(stamps, kind="stable")
+            stamps, values = stamps[order], values[order]
+        return (stamps - origin_ns) * 1e-9, values
+
+
+class RecordedBag:
+    """A rosbag2 directory, checked when opened.
+
+    Raises:
+        InputError: Not a rosbag2 directory, an unknown storage plugin, or a storage file
+            that is missing, truncated or unreadable.
+
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        meta = self.path / "metadata.yaml"
+        if not self.path.is_dir() or not meta.is_file():
+            raise InputError(f"{self.path}: not a rosbag2 directory (no metadata.yaml)")
+        try:
+            info = yaml.safe_load(meta.read_text())["rosbag2_bagfile_information"]
+            self.storage = str(info["storage_identifier"])
+            self.files = tuple(self.path / Path(str(f)).name for f in info["relative_file_paths"])
+            self.start_ns = int(info["starting_time"]["nanoseconds_since_epoch"])
+            compression = str(info.get("compression_mode") or "").lower()
+        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
+            raise InputError(f"{self.path}: not a rosbag2 bag (metadata.yaml: {type(exc).__name__}: {exc})") from exc
+        if self.storage not in STORAGES:
+            raise InputError(f"{self.path}: unknown storage plugin '{self.storage}'; valid: {', '.join(STORAGES)}")
+        missing = [f.name for f in self.files if not f.is_file()]
+        if missing or not self.files:
+            raise InputError(f"{self.path}: storage file missing: {', '.join(missing) or 'none listed'}")
+        indexed = self.storage == "mcap" and compression in ("", "none")
+        self.summaries = [mcap_index.read_summary(f) for f in self.files] if indexed else []
+        try:
+            from rosbags.rosbag2 import Reader
+
+            with Reader(self.path) as reader:
+                self.topics = {c.topic: c.msgtype for c in reader.connections}
+        except Exception as exc:  # rosbags raises several types for unreadable storage
+            raise InputError(f"{self.path}: cannot read the bag ({type(exc).__name__}: {exc})") from exc
+
+    def require(self, topic: str, msgtype: str) -> None:
+        """Check that the bag has ``topic`` with messages of ``msgtype``.
+
+        Raises:
+            InputError: The topic is missing (the bag's topics are listed) or of another type.
+
+        """
+        if topic not in self.topics:
+            listed = ", ".join(f"{t} ({m})" for t, m in sorted(self.topics.items())) or "none"
+            raise InputError(f"{self.path}: no topic '{topic}'; its topics: {listed}")
+        if self.topics[topic] != msgtype:
+            raise InputError(f"{self.path}: topic '{topic}' holds {self.topics[topic]}, expected {msgtype}")
+
+    def _batches(self, topics: Sequence[str]) -> Iterator[tuple[str, mcap_index.Batch]]:
+        if self.summaries and all(s is not None for s in self.summaries):
+            for file, summary in zip(self.files, self.summaries, strict=True):
+                assert summary is not None
+                by_id = {summary.topics[t]: t for t in topics if t in summary.topics}
+                for channel, batch in mcap_index.batches(file, summary, list(by_id)):
+                    yield by_id[channel], batch
+            return
+        from rosbags.rosbag2 import Reader
+
+        pending: dict[str, list[tuple[int, bytes]]] = {t: [] for t in topics}
+        with Reader(self.path) as reader:
+            connections = [c for c in reader.connections if c.topic in pending]
+            for connection, log_time, raw in reader.messages(connections=connections):
+                pending[connection.topic].append((log_time, bytes(raw)))
+                if len(pending[connection.topic]) == _BATCH:
+                    yield connection.topic, _batch(pending[connection.topic])
+                    pending[connection.topic] = []
+        for topic, messages in pending.items():
+            if messages:
+                yield topic, _batch(messages)
+
+    def read(self, joint_topic: str, wrench_topics: Sequence[str] = ()) -> tuple[JointStates, list[Wrenches]]:
+        """Read the joint states and the wrenches in one pass over the bag.
+
+        Raises:
+            InputError: A topic is missing, of another type or empty, or its messages are
+                inconsistent (joint names that change, positions missing).
+
+        """
+        self.require(joint_topic, JOINT_STATE)
+        for topic in wrench_topics:
+            self.require(topic, WRENCH_STAMPED)
+        decoders = {joint_topic: _Topic(joint_topic, JOINT_STATE)}
+        decoders.update({t: _Topic(t, WRENCH_STAMPED) for t in wrench_topics})
+        try:
+            for topic, batch in self._batches(list(decoders)):
+                decoders[topic].add(batch)
+        except InputError:
+            raise
+        except Exception as exc:  # a corrupt message or storage file
+            raise InputError(f"{self.path}: cannot read the bag ({type(exc).__name__}: {exc})") from exc
+        times, positions = decoders[joint_topic].series(self.start_ns, self.path)
+        joints = JointStates(decoders[joint_topic].names, times, positions)
+        wrenches = []
+        for topic in wrench_topics:
+            at, values = decoders[topic].series(self.start_ns, self.path)
+            wrenches.append(Wrenches(at, values[:, :3], values[:, 3:]))
+        return joints, wrenches
+
+    def sha256(self) -> str:
+        """sha256 of the metadata and the storage files, in that order."""
+        digest = hashlib.sha256()
+        for file in (self.path / "metadata.yaml", *self.files):
+            with file.open("rb") as handle:
+                while block := handle.read(1 << 22):
+                    digest.update(block)
+        return digest.hexdigest()
+
+    def read_and_hash(
+        self, joint_topic: str, wrench_topics: Sequence[str] = ()
+    ) -> tuple[JointStates, list[Wrenches], str]:
+        """:meth:`read`, and :meth:`sha256` computed in a thread meanwhile (hashing releases the GIL)."""
+        digest: list[str] = []
+        worker = threading.Thread(target=lambda: digest.append(self.sha256()), daemon=True)
+        worker.start()
+        try:
+            joints, wrenches = self.read(joint_topic, wrench_topics)
+        finally:
+            worker.join()
+        if not digest:
+            raise InputError(f"{self.path}: cannot read the bag's files to hash them")
+        return joints, wrenches, digest[0]
+
+
+def _batch(messages: list[tuple[int, bytes]]) -> mcap_index.Batch:
+    lengths = np.array([len(raw) for _, raw in messages], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    buffer = np.frombuffer(b"".join(raw for _, raw in messages), dtype=np.uint8)
+    return mcap_index.Batch(buffer, offsets, lengths, np.array([t for t, _ in messages], dtype=np.int64))
+
+
+def write_recording(
+    path: str | Path,
+    joints: JointStates,
+    joint_topic: str,
+    wrenches: dict[str, Wrenches],
+    provenance: dict[str, Any],
+    start_ns: int = 0,
+) -> None:
+    """Write joint states and wrenches as a rosbag2 (MCAP), messages interleaved in time order.
+
+    Args:
+        path: Bag directory (replaced if it is a bag).
+        joints: Joint states; their velocities are the positions' time derivative.
+        joint_topic: Topic of the joint states.
+        wrenches: Wrench series by topic.
+        provenance: Recorded in the bag's metadata.
+        start_ns: Clock time of ``times_s == 0``.
+
+    """
+    names = list(joints.names)
+    stamps = start_ns + np.round(joints.times_s * 1e9).astype(np.int64)
+    velocities = np.gradient(joints.positions, joints.times_s, axis=0)
+    layout = cdr.joint_state_layout(names)
+    streams = [
+        (joint_topic, stamps, cdr.encode(layout, stamps, [joints.positions, velocities, np.zeros((len(stamps), 0))]))
+    ]
+    wrench = cdr.wrench_stamped_layout()
+    for topic, series in wrenches.items():
+        at = start_ns + np.round(series.times_s * 1e9).astype(np.int64)
+        streams.append((topic, at, cdr.encode(wrench, at, [series.forces, series.torques])))
+    with writing_bag(path, provenance) as writer:
+        writer.topic(joint_topic, JOINT_STATE)
+        for topic in wrenches:
+            writer.topic(topic, WRENCH_STAMPED)
+        writer.interleaved(streams)
