@@ -38,6 +38,7 @@ from posegen.calibrate.record import (
     read_calibration,
     write_record,
 )
+from posegen.calibrate.recording import Measured, SimulatedSession, measure_bag, simulate_route_bag
 from posegen.calibrate.report import format_table, residual_stats, write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
 from posegen.calibrate.urdf_export import calibrated_urdf
@@ -55,11 +56,13 @@ __all__ = [
     "ContactSet",
     "CvPoint",
     "Fit",
+    "Measured",
     "Perturbation",
     "Posterior",
     "Recording",
     "Settings",
     "Simulated",
+    "SimulatedSession",
     "calibrate",
     "calibrate_files",
     "calibrated_urdf",
@@ -70,6 +73,7 @@ __all__ = [
     "held_out_theta",
     "identify",
     "levenberg_marquardt",
+    "measure_bag",
     "measurements_to_dict",
     "outlier_threshold",
     "posterior_of",
@@ -81,6 +85,7 @@ __all__ = [
     "residual_stats",
     "simulate",
     "simulate_plan_file",
+    "simulate_route_bag",
     "true_parameters",
     "write_calibration",
     "write_measurements",

@@ -14,9 +14,9 @@ from posegen.calibrate.measurements import read_measurements, write_measurements
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.io import write_yaml
-from posegen.model import Contacts
+from posegen.model import ContactModel, Contacts
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import Scene, load_config, load_plan
+from posegen.robot import FloatArray, Scene, load_config, load_plan
 
 TRUTH_FORMAT = "posegen-truth"
 
@@ -70,12 +70,7 @@ def simulate_plan_file(
     plan.check_joints(scene.joint_names, plan_path)
     chains = tuple(p.chain for p in plan.postures)
     planned = Contacts(plan.joints(), chains, (session,) * len(chains), tuple(p.spot for p in plan.postures))
-    perturbation = Perturbation(
-        length_m=error_mm * 1e-3,
-        angle_rad=float(np.deg2rad(error_deg)),
-        encoder_noise_rad=float(np.deg2rad(noise_deg)),
-    )
-    recorded, model, theta = simulate(scene, planned, perturbation, seed)
+    recorded, model, theta = simulate(scene, planned, perturbation_of(error_mm, error_deg, noise_deg), seed)
     prov = scene.provenance(seed)
     prov["simulation"] = {
         "postures": plan_path,
@@ -85,20 +80,34 @@ def simulate_plan_file(
     }
     measurements = Path(output)
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
+    write_truth(truth, model, theta, prov)
+    write_measurements(measurements, scene, recorded, prov)
+    return Simulated(contacts=len(recorded), measurements=measurements, truth=truth)
+
+
+def perturbation_of(error_mm: float, error_deg: float, noise_deg: float) -> Perturbation:
+    """The perturbation of the command line's units: placement errors in mm and deg, encoder noise in deg."""
+    return Perturbation(
+        length_m=error_mm * 1e-3,
+        angle_rad=float(np.deg2rad(error_deg)),
+        encoder_noise_rad=float(np.deg2rad(noise_deg)),
+    )
+
+
+def write_truth(path: Path, model: ContactModel, theta: FloatArray, provenance: dict[str, Any]) -> None:
+    """Write the true parameters of a simulated robot beside what it recorded (``posegen-truth``)."""
     nominal = model.nominal()
     write_yaml(
-        truth,
+        path,
         {
             "format": TRUTH_FORMAT,
             "format_version": 1,
-            "provenance": prov,
+            "provenance": provenance,
             "parameters": {
                 p.name: {"true": float(theta[i]), "nominal": float(nominal[i])} for i, p in enumerate(model.parameters)
             },
         },
     )
-    write_measurements(measurements, scene, recorded, prov)
-    return Simulated(contacts=len(recorded), measurements=measurements, truth=truth)
 
 
 def read_contacts(items: Sequence[str], scene: Scene, rejected: list[str]) -> Contacts:

@@ -15,10 +15,11 @@ import os
 import sys
 
 from posegen import __version__
-from posegen.cli import calibrate, check, export, pool, route, select, simulate, view
+from posegen.cli import calibrate, check, export, measure, pool, route, select, simulate, view
 from posegen.errors import PosegenError
 
-COMMANDS = (pool, check, select, route, export, simulate, calibrate, view)  # in pipeline order, as --help lists them
+# in pipeline order, as --help lists them
+COMMANDS = (pool, check, select, route, export, simulate, measure, calibrate, view)
 EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130
 
@@ -28,8 +29,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="posegen",
         description="Plan and run the whole-body geometric calibration of a humanoid touching a table.",
-        epilog="pipeline: pool -> select -> route -> (record on the robot) -> calibrate; "
-        "simulate rehearses it on a perturbed robot; view shows any of their files in 3D. "
+        epilog="pipeline: pool -> select -> route -> export -> (record a rosbag2 on the robot) -> measure "
+        "-> calibrate; simulate rehearses it on a perturbed robot; view shows any of their files in 3D. "
         "Exit codes: 0 ok, 1 check found violations, 2 bad input or infeasible problem, 130 interrupted.",
     )
     parser.add_argument("--version", action="version", version=f"posegen {__version__}")

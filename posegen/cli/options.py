@@ -7,6 +7,7 @@ import os
 
 DEFAULT_CONFIG = "configs/talos_table.yaml"
 EXIT_VIOLATIONS = 1  # a check found violations
+JOINT_STATES_TOPIC = "/joint_states"  # ROS 2 convention (joint_state_broadcaster)
 
 
 def positive(text: str) -> int:

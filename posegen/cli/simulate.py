@@ -1,19 +1,19 @@
-"""``posegen simulate``: contacts of a perturbed robot at planned postures."""
+"""``posegen simulate``: contacts of a perturbed robot at planned postures, or a recorded session (``--bag``)."""
 
 from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import DEFAULT_CONFIG
+from posegen.cli.options import DEFAULT_CONFIG, JOINT_STATES_TOPIC
 
 NAME = "simulate"
-HELP = "contacts of a perturbed robot at planned postures"
+HELP = "contacts of a perturbed robot at planned postures, or its recorded run of a route (--bag)"
 PROGRESS = False  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
-    parser.add_argument("postures", help="pool or selection file")
+    parser.add_argument("postures", help="pool or selection file; with --bag, a route file")
     parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
     parser.add_argument("--seed", type=int, default=0, help="seed of the robot errors and noise (default 0)")
     parser.add_argument("--error-mm", type=float, default=2.0, help="sigma of length errors (default 2 mm)")
@@ -23,12 +23,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--noise-deg", type=float, default=0.005, help="encoder noise sigma (default 0.005 deg)")
     parser.add_argument("--session", default="sim", help="table session name (default sim)")
     parser.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
+    bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
+    bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR.truth.yaml")
+    bag.add_argument("--rate", type=float, default=500.0, help="joint state and wrench rate in Hz (default 500)")
+    bag.add_argument(
+        "--joint-topic", default=JOINT_STATES_TOPIC, help=f"JointState topic (default {JOINT_STATES_TOPIC})"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
-    """Simulate, write the measurements and the truth, and say where."""
-    from posegen.calibrate import simulate_plan_file
+    """Simulate, write the measurements (or the bag) and the truth, and say where."""
+    from posegen.calibrate import simulate_plan_file, simulate_route_bag
 
+    if args.bag:
+        recorded = simulate_route_bag(
+            args.postures,
+            args.bag,
+            config_path=args.config,
+            seed=args.seed,
+            error_mm=args.error_mm,
+            error_deg=args.error_deg,
+            noise_deg=args.noise_deg,
+            session=args.session,
+            rate_hz=args.rate,
+            joint_topic=args.joint_topic,
+        )
+        print(
+            f"simulate: {recorded.contacts} contacts, {recorded.duration_s:.1f} s recorded at {args.rate:g} Hz "
+            f"({recorded.samples} joint states) -> {recorded.bag}/ (true parameters: {recorded.truth})"
+        )
+        return 0
     simulated = simulate_plan_file(
         args.postures,
         args.output,

@@ -168,7 +168,7 @@ def decode(layout: Layout, rows: ByteRows, blocks: Sequence[int] | None = None) 
     sec = np.ascontiguousarray(rows[:, 4:8]).view("<i4").reshape(n).astype(np.int64)
     nanosec = np.ascontiguousarray(rows[:, 8:12]).view("<u4").reshape(n).astype(np.int64)
     wanted = range(len(layout.blocks)) if blocks is None else blocks
-    values = []
+    values: list[FloatArray] = []
     for index in wanted:
         offset, count = layout.blocks[index]
         raw = np.ascontiguousarray(rows[:, offset : offset + 8 * count])

@@ -1,0 +1,186 @@
+"""Static contact windows in a recorded session.
+
+A contact is held where the wrist force exceeds a threshold while every joint is still
+(the criterion of the paper's force controller), for at least a minimum time. Without a
+wrench topic the joints' stillness alone marks candidate windows, and the route's planned
+postures tell contacts from other pauses (a pause that holds no planned posture, or a
+stop too short to be a contact, is not reported).
+
+Each window is trimmed at both ends (the force controller settles there) and its joint
+angles are averaged. A window is reported, with its times and the reason, and left out
+when it is too short, too noisy (a joint varying more than a bound within it), or when
+the force is on both wrists. With the route, windows are matched in order to its contacts
+by their planned posture; a window that holds no planned posture, or several, or one
+already passed, or one another window also holds, or whose force is on the other wrist,
+is reported and left out: never guessed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from posegen.robot import FloatArray, RecordingConfig
+
+
+@dataclass(frozen=True)
+class PlannedContact:
+    """A contact of the route, in visiting order."""
+
+    chain: str
+    label: str  # e.g. "posture 12 (pool 345)"
+    joints: FloatArray  # (nj,) rad, the planned posture, in the recording's joint order
+
+
+@dataclass(frozen=True)
+class Window:
+    """A contact window."""
+
+    start_s: float
+    end_s: float
+    chain: str  # the arm at the table ("" until known, without a wrench topic)
+    label: str  # the route contact it holds ("" without the route)
+    joints: FloatArray  # (nj,) rad, mean over the trimmed window
+    samples: int  # samples averaged
+    std_rad: float  # largest joint standard deviation within the trimmed window
+    force_n: float  # mean wrist force over the trimmed window (nan without a wrench topic)
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """A window left out, and why."""
+
+    start_s: float
+    end_s: float
+    reason: str
+
+
+def joint_speed(times: FloatArray, positions: FloatArray, span_s: float) -> FloatArray:
+    """Largest joint speed (n,) in rad/s, by central differences over ``span_s`` (works without velocities)."""
+    n = len(times)
+    if n < 2:
+        return np.zeros(n)
+    h = max(1, round(0.5 * span_s * (n - 1) / max(float(times[-1] - times[0]), 1e-12)))
+    lo = np.maximum(np.arange(n) - h, 0)
+    hi = np.minimum(np.arange(n) + h, n - 1)
+    return np.asarray(np.abs(positions[hi] - positions[lo]).max(axis=1) / np.maximum(times[hi] - times[lo], 1e-12))
+
+
+def wrist_force(times: FloatArray, wrench_times: FloatArray, forces: FloatArray) -> FloatArray:
+    """Force magnitude (n,) in N at ``times``, each component's offset (its median over the session) removed."""
+    magnitude = np.linalg.norm(forces - np.median(forces, axis=0), axis=1)
+    return np.asarray(np.interp(times, wrench_times, magnitude))
+
+
+def _runs(mask: NDArray[np.bool_], max_gap: int) -> list[tuple[int, int]]:
+    """[first, stop) index ranges where ``mask`` holds; interruptions up to ``max_gap`` samples bridged."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    runs: list[tuple[int, int]] = []
+    for first, stop in zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True):
+        if runs and first - runs[-1][1] <= max_gap:
+            runs[-1] = (runs[-1][0], stop)
+        else:
+            runs.append((first, stop))
+    return runs
+
+
+def find_windows(
+    times: FloatArray,
+    positions: FloatArray,
+    forces: Mapping[str, FloatArray] | None,
+    planned: Sequence[PlannedContact] | None,
+    settings: RecordingConfig,
+) -> tuple[list[Window], list[Rejection]]:
+    """Accepted contact windows and the rejected ones, in time order.
+
+    Args:
+        times: (n,) s, increasing.
+        positions: (n, nj) rad.
+        forces: Per chain, the force magnitude (n,) in N at ``times``; None without a wrench topic.
+        planned: The route's contacts in visiting order, or None.
+        settings: Thresholds.
+
+    Raises:
+        ValueError: Neither forces nor planned contacts are given (nothing tells a contact from a pause).
+
+    """
+    if forces is None and planned is None:
+        raise ValueError("without a wrench topic, the route is needed to tell contacts from pauses")
+    rate = (len(times) - 1) / max(float(times[-1] - times[0]), 1e-12)
+    mask = joint_speed(times, positions, settings.speed_span_s) < settings.speed_threshold_rad_s
+    pressed = {chain: force > settings.force_threshold_n for chain, force in (forces or {}).items()}
+    if pressed:
+        mask &= np.logical_or.reduce(list(pressed.values()))
+    trim = round(settings.trim_s * rate)
+    windows: list[Window] = []
+    rejected: list[Rejection] = []
+    for first, stop in _runs(mask, round(settings.max_gap_s * rate)):
+        start_s, end_s = float(times[first]), float(times[stop - 1])
+        if end_s - start_s < settings.min_duration_s or stop - first <= 2 * trim:
+            if forces is not None:  # without force, a short stop is a motion's end, not a contact
+                rejected.append(Rejection(start_s, end_s, f"too short ({end_s - start_s:.2f} s)"))
+            continue
+        inner = positions[first + trim : stop - trim]
+        std = float(inner.std(axis=0).max())
+        chain, force = "", float("nan")
+        if forces is not None:
+            on = sorted(c for c, p in pressed.items() if np.mean(p[first:stop]) > 0.5)
+            if len(on) != 1:
+                rejected.append(Rejection(start_s, end_s, f"force on {' and '.join(on) or 'no'} wrist"))
+                continue
+            chain = on[0]
+            force = float(np.mean(forces[chain][first + trim : stop - trim]))
+        if std > settings.max_std_rad:
+            rejected.append(Rejection(start_s, end_s, f"too noisy (a joint varies by {std:.1e} rad std)"))
+            continue
+        windows.append(Window(start_s, end_s, chain, "", inner.mean(axis=0), len(inner), std, force))
+    if planned is not None:
+        windows = _match(windows, planned, settings.match_tolerance_rad, rejected, forces is not None)
+    rejected.sort(key=lambda r: r.start_s)
+    return windows, rejected
+
+
+def _match(
+    windows: list[Window],
+    planned: Sequence[PlannedContact],
+    tolerance: float,
+    rejected: list[Rejection],
+    report_unmatched: bool,
+) -> list[Window]:
+    """Name each window after the route contact whose planned posture it holds, in route order."""
+    targets = np.array([p.joints for p in planned])  # (m, nj)
+    claims: dict[int, list[Window]] = {}
+    last = -1
+    for window in windows:
+        deviation = np.abs(targets - window.joints).max(axis=1)  # (m,)
+        near = np.flatnonzero(deviation <= tolerance).tolist()
+        if not near:
+            if report_unmatched:
+                best = int(np.argmin(deviation))
+                reason = f"holds no route contact (nearest: {planned[best].label}, {deviation[best]:.3f} rad away)"
+                rejected.append(Rejection(window.start_s, window.end_s, reason))
+        elif len(near) > 1:
+            labels = ", ".join(planned[j].label for j in near)
+            rejected.append(Rejection(window.start_s, window.end_s, f"holds several route contacts ({labels})"))
+        elif near[0] < last:
+            reason = f"out of route order ({planned[near[0]].label} after {planned[last].label})"
+            rejected.append(Rejection(window.start_s, window.end_s, reason))
+        else:
+            last = near[0]
+            claims.setdefault(last, []).append(window)
+    accepted = []
+    for index, claimed in sorted(claims.items()):
+        contact = planned[index]
+        for window in claimed:
+            if len(claimed) > 1:
+                reason = f"one of {len(claimed)} windows at {contact.label}"
+            elif window.chain and window.chain != contact.chain:
+                reason = f"force on the {window.chain} wrist; the route has the {contact.chain} arm at {contact.label}"
+            else:
+                accepted.append(replace(window, chain=contact.chain, label=contact.label))
+                continue
+            rejected.append(Rejection(window.start_s, window.end_s, reason))
+    return accepted

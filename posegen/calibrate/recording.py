@@ -1,0 +1,250 @@
+"""The calibrate stage's rosbag2 commands: ``posegen simulate ROUTE --bag`` and ``posegen measure``.
+
+``simulate --bag`` rehearses a session (:mod:`posegen.calibrate.session`) and records it
+as a real robot would: ``sensor_msgs/JointState`` at the recording rate and one
+``geometry_msgs/WrenchStamped`` topic per wrist (the chains' ``wrench_topic``). ``measure``
+reads such a bag, finds the contact windows (:mod:`posegen.calibrate.contact_windows`)
+and writes posegen measurements, one contact per accepted window.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posegen.calibrate.contact_windows import PlannedContact, Rejection, Window, find_windows, wrist_force
+from posegen.calibrate.measurements import LIMIT_TOLERANCE_RAD, measurements_to_dict
+from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
+from posegen.calibrate.workflow import perturbation_of, write_truth
+from posegen.errors import InputError, unknown_name
+from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
+from posegen.model import Contacts
+from posegen.robot import Scene, load_config, read_route, scene_for
+
+
+@dataclass(frozen=True)
+class SimulatedSession:
+    """What ``posegen simulate --bag`` wrote."""
+
+    bag: Path
+    truth: Path  # the true parameters, beside the bag
+    contacts: int
+    duration_s: float  # of the recording
+    samples: int  # joint states
+
+
+@dataclass(frozen=True)
+class Measured:
+    """What ``posegen measure`` found and wrote."""
+
+    output: Path
+    windows: tuple[Window, ...]  # accepted, one contact each
+    rejected: tuple[Rejection, ...]
+    wrench_topics: dict[str, str]  # chain -> topic ({} when measured on joint speed alone)
+    duration_s: float  # of the joint states
+
+
+def _sha256(path: str | Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def wrench_topics(scene: Scene) -> dict[str, str]:
+    """Each chain's wrist force/torque topic, from the config.
+
+    Raises:
+        InputError: A chain names no ``wrench_topic``.
+
+    """
+    missing = [c.name for c in scene.config.chains if not c.wrench_topic]
+    if missing:
+        raise InputError(
+            f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with --no-wrench)"
+        )
+    return {c.name: c.wrench_topic for c in scene.config.chains}
+
+
+def _route(route_path: str, config_path: str | None) -> tuple[Motion, Scene, dict[str, Any]]:
+    data = read_route(route_path)
+    provenance = dict(data.get("provenance") or {})
+    scene = scene_for(provenance, config_path)
+    scene.check_made_for(provenance, route_path)
+    motion = route_motion(data)
+    if motion.joint_names != scene.joint_names:
+        raise InputError(f"{route_path}: its joints are not the robot's ({len(motion.joint_names)} names)")
+    return motion, scene, provenance
+
+
+def simulate_route_bag(
+    route_path: str,
+    bag: str,
+    *,
+    config_path: str | None,
+    seed: int,
+    error_mm: float,
+    error_deg: float,
+    noise_deg: float,
+    session: str,
+    rate_hz: float,
+    joint_topic: str,
+) -> SimulatedSession:
+    """Record a perturbed robot executing a route, as a rosbag2; the truth goes beside it.
+
+    Args:
+        route_path: Route file.
+        bag: Bag directory to write (``<bag>.truth.yaml`` beside it).
+        config_path: Scene config; None: the one saved in the route.
+        seed: Seed of the robot's errors (the robot ``posegen simulate`` makes) and of the noise.
+        error_mm: Sigma of placement length errors (mm).
+        error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
+        noise_deg: Sigma of the encoder noise, per sample (deg).
+        session: Table session (names the true plane).
+        rate_hz: Recording rate of the joint states and wrenches.
+        joint_topic: Topic of the joint states.
+
+    Raises:
+        PosegenError: Not a route, a route without contacts or for another robot, or a
+            contact that does not settle on the true plane.
+
+    """
+    motion, scene, _ = _route(route_path, config_path)
+    wrench_topics(scene)  # before the simulation: every wrist needs a topic
+    if not motion.contacts:
+        raise InputError(f"{route_path}: the route makes no contact")
+    perturbation = perturbation_of(error_mm, error_deg, noise_deg)
+    settings = SessionSettings(rate_hz=rate_hz)
+    recorded = simulate_session(scene, motion, session, perturbation, settings, seed)
+    prov = scene.provenance(seed)
+    prov["simulation"] = {
+        "route": route_path,
+        "route_sha256": _sha256(route_path),
+        "session": session,
+        "error_mm": error_mm,
+        "error_deg": error_deg,
+        "encoder_noise_deg": noise_deg,
+        "sensors": dataclasses.asdict(settings),
+    }
+    wrenches = {
+        topic: Wrenches(recorded.times_s, recorded.forces[chain], recorded.torques[chain])
+        for chain, topic in wrench_topics(scene).items()
+    }
+    joints = JointStates(scene.joint_names, recorded.times_s, recorded.positions)
+    bag_path = Path(bag)
+    truth = bag_path.with_name(bag_path.name + ".truth.yaml")
+    write_recording(bag_path, joints, joint_topic, wrenches, prov)
+    write_truth(truth, recorded.model, recorded.theta, prov)
+    return SimulatedSession(bag_path, truth, len(motion.contacts), float(recorded.times_s[-1]), len(recorded.times_s))
+
+
+def _columns(scene: Scene, joints: JointStates, where: str) -> tuple[list[int], list[str]]:
+    """Model index of each recorded joint, and the locked joints the recording lacks."""
+    unknown = [n for n in joints.names if n not in scene.joint_names]
+    if unknown:
+        raise InputError(f"{where}: {unknown_name('joint', unknown[0], scene.joint_names)}")
+    columns = [scene.joint_names.index(n) for n in joints.names]
+    absent = [i for i in range(len(scene.joint_names)) if i not in set(columns)]
+    free = [scene.joint_names[i] for i in absent if not scene.locked[i]]
+    if free:
+        raise InputError(f"{where}: no {', '.join(free)} (every joint the config does not lock is needed)")
+    return columns, [scene.joint_names[i] for i in absent]
+
+
+def measure_bag(
+    bag: str,
+    output: str,
+    *,
+    config_path: str,
+    route_path: str | None,
+    session: str | None,
+    joint_topic: str,
+    use_wrench: bool,
+) -> Measured:
+    """Turn a recorded session into posegen measurements, one contact per static contact window.
+
+    Args:
+        bag: rosbag2 directory.
+        output: Measurement file to write.
+        config_path: Scene config (joints, chains' wrench topics, thresholds in ``recording``).
+        route_path: The route the robot ran: names the arm and posture of each window,
+            aligned in order. Needed without a wrench topic.
+        session: Table session of the contacts (default: the bag's directory name).
+        joint_topic: ``sensor_msgs/JointState`` topic.
+        use_wrench: Read the wrist wrenches (the config's topics); False: joint speed alone.
+
+    Raises:
+        PosegenError: Not a readable rosbag2, a missing topic or a message of another type,
+            joints the robot does not have, or no contact window.
+
+    """
+    scene = Scene(load_config(config_path))
+    planned_motion = None
+    if route_path is not None:
+        planned_motion = _route(route_path, config_path)[0]
+    elif not use_wrench:
+        raise InputError("without a wrench topic, --route is needed to tell contacts from pauses")
+    topics = wrench_topics(scene) if use_wrench else {}
+    recorded = RecordedBag(bag)
+    joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
+    columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
+    forces = None
+    if use_wrench:
+        forces = {c: wrist_force(joints.times_s, w.times_s, w.forces) for c, w in zip(topics, wrenches, strict=True)}
+    planned = None
+    if planned_motion is not None:
+        planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
+    settings = scene.config.recording
+    windows, rejected = find_windows(joints.times_s, joints.positions, forces, planned, settings)
+    base = np.where(scene.locked, scene.locked_values, scene.reference)
+    accepted: list[Window] = []
+    full = []
+    for window in windows:
+        values = base.copy()
+        values[columns] = window.joints
+        outside = (values < scene.lower - LIMIT_TOLERANCE_RAD) | (values > scene.upper + LIMIT_TOLERANCE_RAD)
+        if np.any(outside):
+            name = scene.joint_names[int(np.flatnonzero(outside)[0])]
+            rejected.append(Rejection(window.start_s, window.end_s, f"{name} outside its limits"))
+            continue
+        accepted.append(window)
+        full.append(values)
+    rejected.sort(key=lambda r: r.start_s)
+    if not accepted:
+        first = f"; first rejected: {rejected[0].start_s:.2f} s, {rejected[0].reason}" if rejected else ""
+        raise InputError(f"{bag}: no contact window found ({len(rejected)} rejected{first})")
+    name = session or Path(bag).resolve().name
+    labels = tuple(f"{Path(bag).name}:{w.label or 'contact'}@{w.start_s:.2f}s" for w in accepted)
+    contacts = Contacts(np.array(full), tuple(w.chain for w in accepted), (name,) * len(accepted), labels)
+    prov = scene.provenance(None)
+    prov["recording"] = {
+        "bag": str(bag),
+        "bag_sha256": digest,
+        "storage": recorded.storage,
+        "session": name,
+        "topics": {"joint_states": joint_topic, "wrenches": topics},
+        "thresholds": dataclasses.asdict(settings),
+        "route": route_path,
+        "route_sha256": _sha256(route_path) if route_path else None,
+        "joint_states": {"samples": len(joints.times_s), "duration_s": float(joints.times_s[-1] - joints.times_s[0])},
+        "joints_not_recorded": absent,
+    }
+    data = measurements_to_dict(scene, contacts, prov)
+    for entry, window in zip(data["contacts"], accepted, strict=True):
+        entry.update(_window_fields(window))
+    data["rejected"] = [{"start_s": r.start_s, "end_s": r.end_s, "reason": r.reason} for r in rejected]
+    write_yaml(output, data)
+    duration = float(joints.times_s[-1] - joints.times_s[0])
+    return Measured(Path(output), tuple(accepted), tuple(rejected), topics, duration)
+
+
+def _window_fields(window: Window) -> dict[str, Any]:
+    return {
+        "start_s": round(window.start_s, 6),
+        "end_s": round(window.end_s, 6),
+        "samples": window.samples,
+        "joint_std_rad": float(window.std_rad),
+        "force_n": None if np.isnan(window.force_n) else round(window.force_n, 3),
+    }

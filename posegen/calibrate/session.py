@@ -1,0 +1,177 @@
+"""A rehearsal of a recorded session: a perturbed robot executes a route (``posegen simulate --bag``).
+
+The true robot is the one ``posegen simulate`` makes from the same seed (same
+perturbation model, same chains and session). It follows the route's trajectory,
+sampled at the recording rate (cubic Hermite through the route's positions and
+velocities). At each contact the force controller carries the arm from the planned
+contact posture to the settled one, where the true contact is flush with the true table
+(the settle step): the correction grows over the go-to-contact segment, is held, and
+fades over the release. The wrist of that arm reads the normal force, growing and fading
+with the correction; both wrists read a constant sensor offset and noise, and the
+encoders read the angles plus noise. The recording starts and ends with the robot at rest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from posegen.calibrate.simulation import Perturbation, true_parameters
+from posegen.model import ContactModel, Contacts, settle_contacts
+from posegen.robot import FloatArray, Scene, SegmentType, route_arrays
+
+TORQUE_ARM_M = 0.1  # torque noise = force noise x this lever
+
+
+@dataclass(frozen=True)
+class SessionSettings:
+    """What the simulated sensors read."""
+
+    rate_hz: float = 500.0  # joint states and wrenches
+    contact_force_n: float = 40.0  # normal force held in contact
+    force_noise_n: float = 0.5  # sigma of each force component (torques: x TORQUE_ARM_M)
+    force_offset_n: float = 3.0  # sigma of each wrist sensor's constant offset, per component
+    rest_s: float = 1.0  # at rest before the route starts and after it ends
+
+
+@dataclass(frozen=True)
+class ContactPhase:
+    """When the route makes one contact, and where."""
+
+    chain: str
+    label: str  # "posture 3 (pool 17)"
+    posture: FloatArray  # (nj,) rad, the planned contact posture (the hold's)
+    press_s: float  # go-to-contact starts (route time)
+    hold_s: float  # hold starts
+    lift_s: float  # release starts
+    free_s: float  # release ends
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A route's timed trajectory and its contacts."""
+
+    joint_names: tuple[str, ...]
+    times: FloatArray  # (m,) s from the route's start, increasing
+    positions: FloatArray  # (m, nj) rad
+    velocities: FloatArray  # (m, nj) rad/s
+    contacts: tuple[ContactPhase, ...]
+
+
+@dataclass(frozen=True)
+class Session:
+    """What the robot's sensors recorded, and the robot that made it."""
+
+    times_s: FloatArray  # (n,) s from the recording's start
+    positions: FloatArray  # (n, nj) rad, encoder readings
+    forces: dict[str, FloatArray]  # per chain, (n, 3) N in the wrist sensor frame
+    torques: dict[str, FloatArray]  # per chain, (n, 3) N m
+    route_start_s: float  # the route's time 0 on the recording's clock
+    model: ContactModel
+    theta: FloatArray  # (p,) true parameters
+
+
+def contact_label(posture: Any, pool_id: Any) -> str:
+    """How a route's contact is named in reports: ``posture 3 (pool 17)``."""
+    return f"posture {posture}" + ("" if pool_id is None else f" (pool {pool_id})")
+
+
+def route_motion(data: dict[str, Any]) -> Motion:
+    """The trajectory and contacts of a route file's data (as read by ``posegen.robot.read_route``)."""
+    times, positions, velocities, _ = route_arrays(data)
+    phases: dict[Any, dict[SegmentType, dict[str, Any]]] = {}
+    for segment in data["segments"]:
+        kind = SegmentType(segment["type"])
+        if kind.in_contact:
+            phases.setdefault(segment["posture"], {})[kind] = segment
+    contacts = []
+    for steps in phases.values():
+        go, hold, release = (steps.get(k) for k in (SegmentType.GO_TO_CONTACT, SegmentType.HOLD, SegmentType.RELEASE))
+        if go is None or hold is None or release is None:
+            continue  # a route always has the three; a hand-edited one may not
+        contacts.append(
+            ContactPhase(
+                chain=str(hold["chain"]),
+                label=contact_label(hold["posture"], hold.get("pool_id")),
+                posture=positions[int(hold["first_point"])].copy(),
+                press_s=float(times[int(go["first_point"])]),
+                hold_s=float(times[int(hold["first_point"])]),
+                lift_s=float(times[int(release["first_point"])]),
+                free_s=float(times[int(release["last_point"])]),
+            )
+        )
+    contacts.sort(key=lambda c: c.hold_s)
+    return Motion(tuple(data["trajectory"]["joint_names"]), times, positions, velocities, tuple(contacts))
+
+
+def hermite(times: FloatArray, positions: FloatArray, velocities: FloatArray, at: FloatArray) -> FloatArray:
+    """Cubic Hermite interpolation (n, nj) at ``at`` (n,); constant before and after ``times``."""
+    k = np.clip(np.searchsorted(times, at, side="right") - 1, 0, len(times) - 2)
+    h = (times[k + 1] - times[k])[:, None]
+    s = np.clip((at - times[k])[:, None] / h, 0.0, 1.0)
+    s2, s3 = s * s, s * s * s
+    return np.asarray(
+        (2 * s3 - 3 * s2 + 1) * positions[k]
+        + (s3 - 2 * s2 + s) * h * velocities[k]
+        + (3 * s2 - 2 * s3) * positions[k + 1]
+        + (s3 - s2) * h * velocities[k + 1]
+    )
+
+
+def _smoothstep(x: FloatArray) -> FloatArray:
+    x = np.clip(x, 0.0, 1.0)
+    return np.asarray(x * x * (3.0 - 2.0 * x))
+
+
+def contact_weight(phase: ContactPhase, at: FloatArray) -> FloatArray:
+    """(n,) how far the force controller has pressed at route times ``at``: 0 free, 1 flush and held."""
+    rise = _smoothstep((at - phase.press_s) / max(phase.hold_s - phase.press_s, 1e-9))
+    fall = 1.0 - _smoothstep((at - phase.lift_s) / max(phase.free_s - phase.lift_s, 1e-9))
+    return np.where(at < phase.lift_s, rise, fall)
+
+
+def simulate_session(
+    scene: Scene, motion: Motion, session: str, perturbation: Perturbation, settings: SessionSettings, seed: int
+) -> Session:
+    """Record a perturbed robot executing a route.
+
+    Args:
+        scene: Scene of the nominal robot (the route's joints in its order).
+        motion: The route.
+        session: Table session of the contacts (names the true plane).
+        perturbation: Error sizes; the encoder noise is per sample.
+        settings: Sensor rate, contact force and noise.
+        seed: Seed of the robot's errors (as ``posegen simulate``) and of the sensor noise.
+
+    Raises:
+        InfeasibleError: The route has no contact, or a contact does not settle on the true plane.
+
+    """
+    chains = tuple(c.chain for c in motion.contacts)
+    labels = tuple(c.label for c in motion.contacts)
+    planned = Contacts(np.array([c.posture for c in motion.contacts]), chains, (session,) * len(chains), labels)
+    model = ContactModel(scene, sorted(set(chains)), [session])
+    theta = true_parameters(model, perturbation, seed)
+    settled = settle_contacts(model, theta, planned)
+    step = 1.0 / settings.rate_hz
+    times = np.arange(int(np.floor((float(motion.times[-1]) + 2 * settings.rest_s) / step)) + 1) * step
+    route_time = times - settings.rest_s
+    positions = hermite(motion.times, motion.positions, motion.velocities, route_time)
+    pressed = {chain.name: np.zeros(len(times)) for chain in scene.config.chains}
+    for k, phase in enumerate(motion.contacts):
+        first, stop = np.searchsorted(route_time, [phase.press_s, phase.free_s])
+        weight = contact_weight(phase, route_time[first:stop])
+        positions[first:stop] += weight[:, None] * (settled.joints[k] - planned.joints[k])
+        pressed[phase.chain][first:stop] = np.maximum(pressed[phase.chain][first:stop], weight)
+    rng = np.random.default_rng([seed, 2])  # [seed, 1] is ``simulate``'s encoder noise
+    readings = positions + rng.normal(0.0, perturbation.encoder_noise_rad, positions.shape)
+    forces: dict[str, FloatArray] = {}
+    torques: dict[str, FloatArray] = {}
+    for name, weight in pressed.items():
+        offset = rng.normal(0.0, settings.force_offset_n, 6)
+        wrench = offset + rng.normal(0.0, settings.force_noise_n, (len(times), 6))
+        wrench[:, 2] -= settings.contact_force_n * weight  # the table pushes the gripper along the sensor's -z
+        forces[name], torques[name] = wrench[:, :3], wrench[:, 3:] * TORQUE_ARM_M
+    return Session(times, readings, forces, torques, settings.rest_s, model, theta)
