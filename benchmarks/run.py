@@ -182,6 +182,81 @@ def bench_route(pool_path: Path, workdir: Path, k: int = 41) -> None:
     print(f"| `posegen check` of every point (meshes) | {t_check:.1f} s, {verdict} |")
 
 
+def _timed(argv: list[str]) -> tuple[float, float, float]:
+    """Run a posegen command in a fresh process: wall s, CPU s (user + system), peak resident MB."""
+    code = (
+        "import resource, sys, time; from posegen.cli import main; start = time.perf_counter(); "
+        f"code = main({argv!r}); wall = time.perf_counter() - start; u = resource.getrusage(resource.RUSAGE_SELF); "
+        "print(wall, u.ru_utime + u.ru_stime, u.ru_maxrss / 1024, file=sys.stderr); sys.exit(code)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
+    wall, cpu, peak = (float(v) for v in done.stderr.strip().splitlines()[-1].split())
+    return wall, cpu, peak
+
+
+def _ten_minutes(bag: Path, out: Path, minutes: float = 10.0) -> tuple[int, int, float]:
+    """A long session: the simulated one repeated back to back; returns samples, joints, size in MB."""
+    from posegen.io import JointStates, RecordedBag, Wrenches, write_recording
+
+    recorded = RecordedBag(bag)
+    topics = sorted(t for t, m in recorded.topics.items() if m.endswith("WrenchStamped"))
+    joints, wrenches = recorded.read("/joint_states", topics)
+    period = joints.times_s[-1] + joints.times_s[1] - joints.times_s[0]
+    repeats = int(np.ceil(minutes * 60 / period))
+    n = round(minutes * 60 / (joints.times_s[1] - joints.times_s[0]))
+
+    def tile(times: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        stretched = np.concatenate([times + r * period for r in range(repeats)])[:n]
+        return stretched, np.tile(values, (repeats, 1))[:n]
+
+    times, positions = tile(joints.times_s, joints.positions)
+    long = {}
+    for topic, series in zip(topics, wrenches, strict=True):
+        at, forces = tile(series.times_s, series.forces)
+        long[topic] = Wrenches(at, forces, tile(series.times_s, series.torques)[1])
+    write_recording(out, JointStates(joints.names, times, positions), "/joint_states", long, {"bench": "tiled"})
+    return n, len(joints.names), sum(f.stat().st_size for f in out.iterdir()) / 1e6
+
+
+def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
+    route = workdir / "route.yaml"
+    if not route.exists():
+        bench_route(pool_path, workdir, k)
+    export = _timed(["export", str(route), "--bag", str(workdir / "route_bag")])
+    simulate = _timed(["simulate", str(route), "--bag", str(workdir / "session"), "--seed", "7"])
+    measure_route = _timed(
+        ["measure", str(workdir / "session"), "--route", str(route), "-o", str(workdir / "measured.yaml")]
+    )
+    samples, joints, size = _ten_minutes(workdir / "session", workdir / "ten_minutes")
+    runs = [_timed(["measure", str(workdir / "ten_minutes"), "-o", str(workdir / "ten.yaml")]) for _ in range(3)]
+    wall, cpu, peak = min(runs)
+    from rosbags.rosbag2 import Reader
+
+    start = time.perf_counter()
+    with Reader(workdir / "ten_minutes") as reader:
+        connections = [c for c in reader.connections if c.topic == "/joint_states"]
+        count = sum(1 for _ in reader.messages(connections=connections))
+    iterate = time.perf_counter() - start
+    print(f"\n### rosbag2: {k}-posture route, simulated session, 10-minute bag ({machine()})\n")
+    print("| figure | value |\n|---|---|")
+    print(f"| `posegen export ROUTE --bag` (wall / CPU, incl. start-up) | {export[0]:.1f} s / {export[1]:.1f} s |")
+    print(
+        f"| `posegen simulate ROUTE --bag` at 500 Hz (wall / CPU) | {simulate[0]:.1f} s / {simulate[1]:.1f} s, "
+        f"peak {simulate[2]:.0f} MB |"
+    )
+    print(
+        f"| `posegen measure` of that session with `--route` (wall / CPU) | "
+        f"{measure_route[0]:.1f} s / {measure_route[1]:.1f} s |"
+    )
+    print(
+        f"| `posegen measure` of a 10-min bag ({samples} joint states x {joints} joints at 500 Hz, 2 wrench "
+        f"topics, {size:.0f} MB): wall / CPU, best of 3 | **{wall:.1f} s** / {cpu:.1f} s (goal 5 s); "
+        f"all runs {', '.join(f'{r[0]:.1f}' for r in runs)} s |"
+    )
+    print(f"| its peak memory (resident) | {peak:.0f} MB |")
+    print(f"| for comparison: rosbags iterating the {count} raw JointState messages alone | {iterate:.1f} s |")
+
+
 def bench_calibration() -> None:
     from posegen.calibrate import calibrate, held_out_residuals, identify, read_measurements
     from posegen.robot import Scene, load_config
@@ -279,7 +354,7 @@ def main() -> None:
     parser.add_argument(
         "--only",
         nargs="*",
-        default=["pool", "dask", "select", "route", "calibration", "view", "scale"],
+        default=["pool", "dask", "select", "route", "bag", "calibration", "view", "scale"],
         help="stages to run",
     )
     parser.add_argument("--n", type=int, default=1500, help="pool size")
@@ -301,6 +376,8 @@ def main() -> None:
         bench_select(pool_path, workdir)
     if "route" in args.only:
         bench_route(pool_path, workdir)
+    if "bag" in args.only:
+        bench_bag(pool_path, workdir)
     if "calibration" in args.only:
         bench_calibration()
     if "view" in args.only:

@@ -4,15 +4,16 @@ A contact is held where the wrist force exceeds a threshold while every joint is
 (the criterion of the paper's force controller), for at least a minimum time. Without a
 wrench topic the joints' stillness alone marks candidate windows, and the route's planned
 postures tell contacts from other pauses (a pause that holds no planned posture, or a
-stop too short to be a contact, is not reported).
+stop too short to be a contact, is not reported; :mod:`posegen.calibrate.recording` also
+drops the pauses whose gripper is not at the table, as at an approach posture).
 
 Each window is trimmed at both ends (the force controller settles there) and its joint
 angles are averaged. A window is reported, with its times and the reason, and left out
 when it is too short, too noisy (a joint varying more than a bound within it), or when
 the force is on both wrists. With the route, windows are matched in order to its contacts
-by their planned posture; a window that holds no planned posture, or several, or one
-already passed, or one another window also holds, or whose force is on the other wrist,
-is reported and left out: never guessed.
+by their planned posture (:func:`match_windows`); a window that holds no planned posture,
+or several, or one already passed, or one another window also holds, or whose force is on
+the other wrist, is reported and left out: never guessed.
 """
 
 from __future__ import annotations
@@ -88,27 +89,18 @@ def _runs(mask: NDArray[np.bool_], max_gap: int) -> list[tuple[int, int]]:
 
 
 def find_windows(
-    times: FloatArray,
-    positions: FloatArray,
-    forces: Mapping[str, FloatArray] | None,
-    planned: Sequence[PlannedContact] | None,
-    settings: RecordingConfig,
+    times: FloatArray, positions: FloatArray, forces: Mapping[str, FloatArray] | None, settings: RecordingConfig
 ) -> tuple[list[Window], list[Rejection]]:
-    """Accepted contact windows and the rejected ones, in time order.
+    """Candidate contact windows and the rejected ones, in time order.
 
     Args:
         times: (n,) s, increasing.
         positions: (n, nj) rad.
-        forces: Per chain, the force magnitude (n,) in N at ``times``; None without a wrench topic.
-        planned: The route's contacts in visiting order, or None.
+        forces: Per chain, the force magnitude (n,) in N at ``times``; None without a wrench topic
+            (every still window is a candidate: :func:`match_windows` tells contacts from pauses).
         settings: Thresholds.
 
-    Raises:
-        ValueError: Neither forces nor planned contacts are given (nothing tells a contact from a pause).
-
     """
-    if forces is None and planned is None:
-        raise ValueError("without a wrench topic, the route is needed to tell contacts from pauses")
     rate = (len(times) - 1) / max(float(times[-1] - times[0]), 1e-12)
     mask = joint_speed(times, positions, settings.speed_span_s) < settings.speed_threshold_rad_s
     pressed = {chain: force > settings.force_threshold_n for chain, force in (forces or {}).items()}
@@ -137,20 +129,29 @@ def find_windows(
             rejected.append(Rejection(start_s, end_s, f"too noisy (a joint varies by {std:.1e} rad std)"))
             continue
         windows.append(Window(start_s, end_s, chain, "", inner.mean(axis=0), len(inner), std, force))
-    if planned is not None:
-        windows = _match(windows, planned, settings.match_tolerance_rad, rejected, forces is not None)
-    rejected.sort(key=lambda r: r.start_s)
     return windows, rejected
 
 
-def _match(
-    windows: list[Window],
+def match_windows(
+    windows: Sequence[Window],
     planned: Sequence[PlannedContact],
     tolerance: float,
     rejected: list[Rejection],
-    report_unmatched: bool,
+    report_unmatched: bool = True,
 ) -> list[Window]:
-    """Name each window after the route contact whose planned posture it holds, in route order."""
+    """Name each window after the route contact whose planned posture it holds, in route order.
+
+    Args:
+        windows: Candidate windows, in time order.
+        planned: The route's contacts, in visiting order.
+        tolerance: Largest joint deviation (rad) of a window from its planned posture.
+        rejected: Where the windows left out are reported (appended, then sorted by time).
+        report_unmatched: Report windows that hold no planned posture (False: they are pauses).
+
+    Returns:
+        The accepted windows, with the arm and the label of their contact.
+
+    """
     targets = np.array([p.joints for p in planned])  # (m, nj)
     claims: dict[int, list[Window]] = {}
     last = -1
@@ -183,4 +184,5 @@ def _match(
                 accepted.append(replace(window, chain=contact.chain, label=contact.label))
                 continue
             rejected.append(Rejection(window.start_s, window.end_s, reason))
+    rejected.sort(key=lambda r: r.start_s)
     return accepted

@@ -17,14 +17,21 @@ from typing import Any
 
 import numpy as np
 
-from posegen.calibrate.contact_windows import PlannedContact, Rejection, Window, find_windows, wrist_force
+from posegen.calibrate.contact_windows import (
+    PlannedContact,
+    Rejection,
+    Window,
+    find_windows,
+    match_windows,
+    wrist_force,
+)
 from posegen.calibrate.measurements import LIMIT_TOLERANCE_RAD, measurements_to_dict
 from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
 from posegen.calibrate.workflow import perturbation_of, write_truth
 from posegen.errors import InputError, unknown_name
 from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
-from posegen.model import Contacts
-from posegen.robot import Scene, load_config, read_route, scene_for
+from posegen.model import ContactModel, Contacts
+from posegen.robot import FloatArray, Scene, load_config, read_route, scene_for
 
 
 @dataclass(frozen=True)
@@ -153,6 +160,33 @@ def _columns(scene: Scene, joints: JointStates, where: str) -> tuple[list[int], 
     return columns, [scene.joint_names[i] for i in absent]
 
 
+def _at_table(
+    scene: Scene, windows: list[Window], motion: Motion, columns: list[int], base: FloatArray
+) -> list[Window]:
+    """The still windows whose gripper is at the table: a pause at an approach posture is no contact.
+
+    The window's contact frame, under the nominal model, must be within half the approach
+    standoff of where it is at the planned contact nearest in joint space (heights are
+    compared, so neither the table's true height nor the kinematic errors, both well
+    under the standoff, matter).
+    """
+    if not windows:
+        return windows
+    targets = np.array([c.posture[columns] for c in motion.contacts])  # (m, nw)
+    nearest = [int(np.argmin(np.abs(targets - w.joints).max(axis=1))) for w in windows]
+    chains = tuple(motion.contacts[k].chain for k in nearest)
+    held = np.repeat(base[None, :], len(windows), axis=0)
+    held[:, columns] = [w.joints for w in windows]
+    planned = np.array([motion.contacts[k].posture for k in nearest])
+    model = ContactModel(scene, sorted(set(chains)), ["nominal"])
+    heights = [
+        model.residuals(model.nominal(), Contacts(q, chains, ("nominal",) * len(chains), ("",) * len(chains)))[:, 0]
+        for q in (held, planned)
+    ]
+    near = np.abs(heights[0] - heights[1]) < 0.5 * scene.config.table.approach_standoff_m
+    return [w for w, keep in zip(windows, near, strict=True) if keep]
+
+
 def measure_bag(
     bag: str,
     output: str,
@@ -180,25 +214,25 @@ def measure_bag(
             joints the robot does not have, or no contact window.
 
     """
-    scene = Scene(load_config(config_path))
-    planned_motion = None
-    if route_path is not None:
-        planned_motion = _route(route_path, config_path)[0]
-    elif not use_wrench:
+    if route_path is None and not use_wrench:
         raise InputError("without a wrench topic, --route is needed to tell contacts from pauses")
+    recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
+    scene = Scene(load_config(config_path))
+    planned_motion = None if route_path is None else _route(route_path, config_path)[0]
     topics = wrench_topics(scene) if use_wrench else {}
-    recorded = RecordedBag(bag)
     joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
     columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
     forces = None
     if use_wrench:
         forces = {c: wrist_force(joints.times_s, w.times_s, w.forces) for c, w in zip(topics, wrenches, strict=True)}
-    planned = None
+    settings = scene.config.recording
+    windows, rejected = find_windows(joints.times_s, joints.positions, forces, settings)
+    base = np.where(scene.locked, scene.locked_values, scene.reference)
     if planned_motion is not None:
         planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
-    settings = scene.config.recording
-    windows, rejected = find_windows(joints.times_s, joints.positions, forces, planned, settings)
-    base = np.where(scene.locked, scene.locked_values, scene.reference)
+        if not use_wrench:
+            windows = _at_table(scene, windows, planned_motion, columns, base)
+        windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, report_unmatched=use_wrench)
     accepted: list[Window] = []
     full = []
     for window in windows:

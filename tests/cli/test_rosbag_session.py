@@ -1,0 +1,227 @@
+"""End to end without a robot: select -> route -> export --bag -> simulate --bag -> measure -> calibrate.
+
+One arm of the example pool (itself made by ``posegen pool``), 30 selected postures: the
+fewest that identify every base parameter of one chain. The simulated robot must be
+recovered: the held-out error on the pool's other postures of that arm at least 10x
+smaller than the nominal model's, and every identifiable combination of the true
+parameters within 3 posterior standard deviations of the calibration.
+"""
+
+import contextlib
+import io
+import shutil
+
+import numpy as np
+import pytest
+import yaml
+
+from posegen.calibrate import Settings, calibrate, held_out_residuals, read_measurements
+from posegen.cli import main
+from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
+from posegen.model import Contacts, settle_contacts
+from posegen.robot import read_route
+from tests.cli.test_cli import assert_fails_cleanly
+
+CHAIN = "left"
+K = 30
+SEED = 7
+SHORT = 3  # contacts of the short route
+
+
+@pytest.fixture(scope="module")
+def chain(example_pool, tmp_path_factory):
+    """Every step's output, made once; and a short route (its first contacts) for the cheap tests."""
+    folder = tmp_path_factory.mktemp("session")
+    data = example_pool.to_dict()
+    data["postures"] = [p for p in data["postures"] if p["chain"] == CHAIN]
+    write_yaml(folder / "pool.yaml", data)
+    route, bag = str(folder / "route.yaml"), str(folder / "bag")
+    steps = {
+        "select": ["select", str(folder / "pool.yaml"), "--k", str(K), "-q", "-o", str(folder / "selected.yaml")],
+        "route": ["route", str(folder / "selected.yaml"), "-q", "-o", route],
+        "simulate": ["simulate", route, "--bag", bag, "--seed", str(SEED)],
+        "measure": ["measure", bag, "--route", route, "--session", "sim", "-o", str(folder / "measurements.yaml")],
+    }
+    printed = {}
+    for name, argv in steps.items():
+        code, out, err = run_plain(argv)
+        assert code == 0, (name, err)
+        printed[name] = out
+    selected = {tuple(p["joints"]) for p in yaml.safe_load((folder / "selected.yaml").read_text())["postures"]}
+    data["postures"] = [p for p in data["postures"] if tuple(p["joints"]) not in selected]
+    write_yaml(folder / "others.yaml", data)
+    code, _, err = run_plain(
+        ["simulate", str(folder / "others.yaml"), "--seed", str(SEED), "-o", str(folder / "held.yaml")]
+    )
+    assert code == 0, err
+    short = read_route(route)
+    last = [i for i, seg in enumerate(short["segments"]) if seg["type"] == "release"][SHORT - 1]
+    end = short["segments"][last]["last_point"]
+    short["segments"] = short["segments"][: last + 1]
+    short["trajectory"]["points"] = short["trajectory"]["points"][: end + 1]
+    write_yaml(folder / "short.yaml", short)
+    code, _, err = run_plain(
+        ["simulate", str(folder / "short.yaml"), "--bag", str(folder / "short_bag"), "--seed", "3"]
+    )
+    assert code == 0, err
+    return folder, printed
+
+
+def run_plain(argv):
+    """Run a command outside a test function (capsys is per test); return code, stdout, stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+def test_every_routed_contact_is_measured(chain):
+    folder, printed = chain
+    assert f"measure: {K} contacts" in printed["measure"] and "0 windows left out" in printed["measure"]
+    data = yaml.safe_load((folder / "measurements.yaml").read_text())
+    recording = data["provenance"]["recording"]
+    assert recording["bag_sha256"] == RecordedBag(folder / "bag").sha256()
+    assert recording["topics"] == {
+        "joint_states": "/joint_states",
+        "wrenches": {"left": "/left_wrist_ft", "right": "/right_wrist_ft"},
+    }
+    assert recording["thresholds"]["force_threshold_n"] == 15.0 and recording["route"].endswith("route.yaml")
+    assert {c["chain"] for c in data["contacts"]} == {CHAIN} and data["rejected"] == []
+    labels = [c["label"] for c in data["contacts"]]
+    assert len(set(labels)) == K and all("posture" in label for label in labels)
+
+
+def test_the_simulated_robot_is_recovered(chain, scene):
+    folder, _ = chain
+    train = read_measurements(folder / "measurements.yaml", scene).contacts
+    held = read_measurements(folder / "held.yaml", scene).contacts
+    calibration = calibrate(scene, train, ["sim"], Settings())
+    residuals = held_out_residuals(calibration, held)["training_plane"]
+    before = np.abs(residuals["before"]).mean(axis=0)  # m, rad, rad
+    after = np.abs(residuals["after"]).mean(axis=0)
+    assert len(held) >= 60 and np.all(before >= 10 * after), (before, after)
+
+    # The true identifiable combinations: the base parameters that reproduce the true robot
+    # exactly (noiseless, settled contacts at every pool posture of the arm, no prior).
+    model = calibration.model
+    truth = yaml.safe_load((folder / "bag.truth.yaml").read_text())["parameters"]
+    theta = np.array([truth[p.name]["true"] for p in model.parameters])
+    exact = settle_contacts(
+        model,
+        theta,
+        Contacts(
+            np.vstack([train.joints, held.joints]),
+            (CHAIN,) * (len(train) + len(held)),
+            ("sim",) * (len(train) + len(held)),
+            ("",) * (len(train) + len(held)),
+        ),
+    )
+    reference = calibrate(scene, exact, ["sim"], Settings(kappa=1e4), base=calibration.base)
+    assert np.abs(reference.after.residuals).max() < 1e-9
+    columns = list(calibration.base.columns)
+    deviation = (calibration.after.theta[columns] - reference.after.theta[columns]) / calibration.after.std[columns]
+    assert np.abs(deviation).max() < 3.0, np.abs(deviation).max()
+
+
+def test_export_writes_every_segment(chain, tmp_path):
+    folder, _ = chain
+    code, printed, err = run_plain(["export", str(folder / "short.yaml"), "--bag", str(tmp_path / "route_bag")])
+    assert code == 0, err
+    assert f"in {5 * SHORT} segments" in printed
+    bag = RecordedBag(tmp_path / "route_bag")
+    assert bag.topics == {
+        "/joint_trajectory_controller/joint_trajectory": "trajectory_msgs/msg/JointTrajectory",
+        "/posegen/segments": "diagnostic_msgs/msg/DiagnosticArray",
+    }
+
+
+def test_simulation_is_deterministic(chain, tmp_path):
+    folder, _ = chain
+    again = tmp_path / "short_bag"  # same name, another folder
+    code, _, err = run_plain(["simulate", str(folder / "short.yaml"), "--bag", str(again), "--seed", "3"])
+    assert code == 0, err
+    for name in ("metadata.yaml", "short_bag.mcap"):
+        assert (again / name).read_bytes() == (folder / "short_bag" / name).read_bytes(), name
+
+
+def _rewritten(folder, tmp_path, name, joints=None, wrenches=True):
+    """The short simulated bag written again with its joint states (or wrenches) changed."""
+    bag = RecordedBag(folder / "short_bag")
+    recorded, forces = bag.read("/joint_states", ["/left_wrist_ft", "/right_wrist_ft"])
+    series = {"/left_wrist_ft": forces[0], "/right_wrist_ft": forces[1]} if wrenches else {}
+    if wrenches == "idle":
+        series = {t: Wrenches(w.times_s, np.zeros_like(w.forces), w.torques) for t, w in series.items()}
+    write_recording(tmp_path / name, joints or recorded, "/joint_states", series, {})
+    return recorded
+
+
+def test_any_joint_order_and_no_wrench_topic(chain, tmp_path):
+    folder, _ = chain
+    route = str(folder / "short.yaml")
+    out = tmp_path / "reference.yaml"
+    code, _, err = run_plain(["measure", str(folder / "short_bag"), "--route", route, "-o", str(out)])
+    assert code == 0, err
+    reference = yaml.safe_load(out.read_text())["contacts"]
+    assert len(reference) == SHORT
+    recorded = RecordedBag(folder / "short_bag").read("/joint_states")[0]
+    order = np.argsort(recorded.names)  # alphabetical, as many drivers publish
+    shuffled = JointStates(tuple(np.array(recorded.names)[order]), recorded.times_s, recorded.positions[:, order])
+    _rewritten(folder, tmp_path, "shuffled", joints=shuffled)
+    code, _, err = run_plain(["measure", str(tmp_path / "shuffled"), "--route", route, "-o", str(out)])
+    assert code == 0, err
+    contacts = yaml.safe_load(out.read_text())["contacts"]
+    assert np.array_equal([c["joints"] for c in contacts], [c["joints"] for c in reference])
+
+    _rewritten(folder, tmp_path, "no_wrench", wrenches=False)
+    argv = ["measure", str(tmp_path / "no_wrench"), "--route", route, "--no-wrench", "-o", str(out)]
+    code, printed, err = run_plain(argv)
+    assert code == 0 and "joint speed and the route" in printed, err
+    contacts = yaml.safe_load(out.read_text())["contacts"]
+    assert [c["chain"] for c in contacts] == [c["chain"] for c in reference]
+    assert [c["label"].split(":")[1].split("@")[0] for c in contacts] == [
+        c["label"].split(":")[1].split("@")[0] for c in reference
+    ]
+    assert np.abs(np.array([c["joints"] for c in contacts]) - [c["joints"] for c in reference]).max() < 1e-4  # rad
+
+
+def test_bad_bags_fail_cleanly(chain, tmp_path, capsys):
+    folder, _ = chain
+    out = tmp_path / "m.yaml"
+    short = folder / "short_bag"
+
+    def measure(bag, *extra):
+        return assert_fails_cleanly(["measure", str(bag), "-o", str(out), *extra], out, capsys)
+
+    assert "not a rosbag2 directory" in measure(folder / "short.yaml")
+    assert "no topic '/nope'" in measure(short, "--joint-topic", "/nope")
+    assert "holds geometry_msgs/msg/WrenchStamped, expected sensor_msgs/msg/JointState" in measure(
+        short, "--joint-topic", "/left_wrist_ft"
+    )
+    code, _, err = run_plain(["export", str(folder / "short.yaml"), "--bag", str(tmp_path / "route_bag")])
+    assert code == 0, err
+    assert "no topic '/joint_states'; its topics: /joint_trajectory_controller" in measure(tmp_path / "route_bag")
+
+    broken = tmp_path / "broken"
+    shutil.copytree(short, broken)
+    meta = broken / "metadata.yaml"
+    meta.write_text(meta.read_text().replace("storage_identifier: mcap", "storage_identifier: rosbag_v3"))
+    assert "unknown storage plugin 'rosbag_v3'; valid: mcap, sqlite3" in measure(broken)
+    meta.write_text(meta.read_text().replace("storage_identifier: rosbag_v3", "storage_identifier: mcap"))
+    storage = broken / "short_bag.mcap"
+    storage.write_bytes(storage.read_bytes()[: storage.stat().st_size * 2 // 3])
+    assert "truncated MCAP file" in measure(broken)
+
+    _rewritten(folder, tmp_path, "idle", wrenches="idle")
+    assert "no contact window found" in measure(tmp_path / "idle")
+
+    recorded = RecordedBag(short).read("/joint_states")[0]
+    renamed = JointStates(("elbow_joint", *recorded.names[1:]), recorded.times_s, recorded.positions)
+    _rewritten(folder, tmp_path, "renamed", joints=renamed)
+    err = measure(tmp_path / "renamed")
+    assert "unknown joint 'elbow_joint'; valid joints: " in err and "arm_left_1_joint" in err
+
+    assert "--route is needed" in assert_fails_cleanly(
+        ["measure", str(short), "--no-wrench", "-o", str(out)], out, capsys
+    )
+    bag = tmp_path / "bag_out"
+    assert "route" in assert_fails_cleanly(["simulate", str(folder / "selected.yaml"), "--bag", str(bag)], bag, capsys)
