@@ -4,8 +4,8 @@ A contact is held where the wrist force exceeds a threshold while every joint is
 (the criterion of the paper's force controller), for at least a minimum time. Without a
 wrench topic the joints' stillness alone marks candidate windows, and the route's planned
 postures tell contacts from other pauses (a pause that holds no planned posture, or a
-stop too short to be a contact, is not reported; :mod:`posegen.calibrate.recording` also
-drops the pauses whose gripper is not at the table, as at an approach posture).
+stop too short to be a contact, is not reported; of the pauses near one contact, the
+contact is the lowest, the others are at its approach posture).
 
 Each window is trimmed at both ends (the force controller settles there) and its joint
 angles are averaged. A window is reported, with its times and the reason, and left out
@@ -137,7 +137,7 @@ def match_windows(
     planned: Sequence[PlannedContact],
     tolerance: float,
     rejected: list[Rejection],
-    report_unmatched: bool = True,
+    heights: Sequence[float] | None = None,
 ) -> list[Window]:
     """Name each window after the route contact whose planned posture it holds, in route order.
 
@@ -146,20 +146,24 @@ def match_windows(
         planned: The route's contacts, in visiting order.
         tolerance: Largest joint deviation (rad) of a window from its planned posture.
         rejected: Where the windows left out are reported (appended, then sorted by time).
-        report_unmatched: Report windows that hold no planned posture (False: they are pauses).
+        heights: Without a wrench topic, the height (m) of each window's gripper: of the
+            still windows near one contact, the contact is the lowest (the others are pauses
+            above it, at its approach posture; they are reported). Windows that hold no
+            planned posture are then pauses and not reported. None: with wrenches, several
+            windows at one contact are all ambiguous.
 
     Returns:
         The accepted windows, with the arm and the label of their contact.
 
     """
     targets = np.array([p.joints for p in planned])  # (m, nj)
-    claims: dict[int, list[Window]] = {}
+    claims: dict[int, list[int]] = {}
     last = -1
-    for window in windows:
+    for k, window in enumerate(windows):
         deviation = np.abs(targets - window.joints).max(axis=1)  # (m,)
         near = np.flatnonzero(deviation <= tolerance).tolist()
         if not near:
-            if report_unmatched:
+            if heights is None:
                 best = int(np.argmin(deviation))
                 reason = f"holds no route contact (nearest: {planned[best].label}, {deviation[best]:.3f} rad away)"
                 rejected.append(Rejection(window.start_s, window.end_s, reason))
@@ -171,12 +175,17 @@ def match_windows(
             rejected.append(Rejection(window.start_s, window.end_s, reason))
         else:
             last = near[0]
-            claims.setdefault(last, []).append(window)
+            claims.setdefault(last, []).append(k)
     accepted = []
     for index, claimed in sorted(claims.items()):
         contact = planned[index]
-        for window in claimed:
-            if len(claimed) > 1:
+        lowest = None if heights is None else min(claimed, key=lambda k: heights[k])
+        for k in claimed:
+            window = windows[k]
+            if lowest is not None and heights is not None and k != lowest:
+                above = 100 * (heights[k] - heights[lowest])
+                reason = f"a pause {above:.1f} cm above the contact window at {contact.label}"
+            elif len(claimed) > 1 and lowest is None:
                 reason = f"one of {len(claimed)} windows at {contact.label}"
             elif window.chain and window.chain != contact.chain:
                 reason = f"force on the {window.chain} wrist; the route has the {contact.chain} arm at {contact.label}"

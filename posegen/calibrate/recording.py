@@ -160,31 +160,21 @@ def _columns(scene: Scene, joints: JointStates, where: str) -> tuple[list[int], 
     return columns, [scene.joint_names[i] for i in absent]
 
 
-def _at_table(
-    scene: Scene, windows: list[Window], motion: Motion, columns: list[int], base: FloatArray
-) -> list[Window]:
-    """The still windows whose gripper is at the table: a pause at an approach posture is no contact.
+def _heights(scene: Scene, windows: list[Window], motion: Motion, columns: list[int], base: FloatArray) -> list[float]:
+    """Height (m, nominal kinematics) of each window's contact frame, on the arm of its nearest planned contact.
 
-    The window's contact frame, under the nominal model, must be within half the approach
-    standoff of where it is at the planned contact nearest in joint space (heights are
-    compared, so neither the table's true height nor the kinematic errors, both well
-    under the standoff, matter).
+    Only compared between windows of one contact: an approach posture is
+    ``approach_standoff_m`` above its contact whatever the robot's kinematic errors.
     """
     if not windows:
-        return windows
+        return []
     targets = np.array([c.posture[columns] for c in motion.contacts])  # (m, nw)
-    nearest = [int(np.argmin(np.abs(targets - w.joints).max(axis=1))) for w in windows]
-    chains = tuple(motion.contacts[k].chain for k in nearest)
+    chains = tuple(motion.contacts[int(np.argmin(np.abs(targets - w.joints).max(axis=1)))].chain for w in windows)
     held = np.repeat(base[None, :], len(windows), axis=0)
     held[:, columns] = [w.joints for w in windows]
-    planned = np.array([motion.contacts[k].posture for k in nearest])
     model = ContactModel(scene, sorted(set(chains)), ["nominal"])
-    heights = [
-        model.residuals(model.nominal(), Contacts(q, chains, ("nominal",) * len(chains), ("",) * len(chains)))[:, 0]
-        for q in (held, planned)
-    ]
-    near = np.abs(heights[0] - heights[1]) < 0.5 * scene.config.table.approach_standoff_m
-    return [w for w, keep in zip(windows, near, strict=True) if keep]
+    contacts = Contacts(held, chains, ("nominal",) * len(chains), ("",) * len(chains))
+    return [float(h) for h in model.residuals(model.nominal(), contacts)[:, 0]]
 
 
 def measure_bag(
@@ -230,9 +220,8 @@ def measure_bag(
     base = np.where(scene.locked, scene.locked_values, scene.reference)
     if planned_motion is not None:
         planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
-        if not use_wrench:
-            windows = _at_table(scene, windows, planned_motion, columns, base)
-        windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, report_unmatched=use_wrench)
+        heights = None if use_wrench else _heights(scene, windows, planned_motion, columns, base)
+        windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights)
     accepted: list[Window] = []
     full = []
     for window in windows:

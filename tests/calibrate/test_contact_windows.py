@@ -44,7 +44,8 @@ def windows_of(times, positions, forces, planned):
     """Find the windows, then match them to the route's contacts (when given)."""
     windows, rejected = find_windows(times, positions, forces, SETTINGS)
     if planned is not None:
-        windows = match_windows(windows, planned, SETTINGS.match_tolerance_rad, rejected, forces is not None)
+        heights = None if forces is not None else [0.0] * len(windows)
+        windows = match_windows(windows, planned, SETTINGS.match_tolerance_rad, rejected, heights)
     return windows, rejected
 
 
@@ -107,3 +108,19 @@ def test_speed_and_force_signals():
     forces[400:600, 2] += 30.0
     magnitude = wrist_force(times, times, forces)
     assert np.allclose(magnitude[400:600], 30.0) and np.allclose(magnitude[:400], 0.0)  # offset removed
+
+
+def test_without_force_the_lowest_window_at_a_contact_is_the_contact():
+    from posegen.calibrate.contact_windows import Window
+
+    posture = np.zeros(3)
+    planned = [PlannedContact("left", "p0", posture)]
+
+    def still(start, offset):
+        return Window(start, start + 1.0, "", "", posture + offset, 500, 1e-4, float("nan"))
+
+    windows = [still(1.0, 0.03), still(3.0, 0.0), still(5.0, 0.03)]  # approach pause, hold, approach pause
+    rejected = []
+    accepted = match_windows(windows, planned, SETTINGS.match_tolerance_rad, rejected, heights=[0.73, 0.68, 0.73])
+    assert [w.start_s for w in accepted] == [3.0] and accepted[0].chain == "left"
+    assert [r.reason for r in rejected] == ["a pause 5.0 cm above the contact window at p0"] * 2

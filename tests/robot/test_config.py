@@ -62,3 +62,22 @@ def test_unknown_reference_posture():
     data["stance"]["reference_posture"] = "crouching"
     with pytest.raises(ConfigError, match="half_sitting"):
         Scene(parse_config(data))
+
+
+def test_recording_section_and_wrench_topics():
+    data = raw()
+    config = parse_config(data)
+    assert config.recording.force_threshold_n == data["recording"]["force_threshold_n"]
+    assert [c.wrench_topic for c in config.chains] == ["/left_wrist_ft", "/right_wrist_ft"]
+    del data["recording"]
+    del data["chains"]["left"]["wrench_topic"]
+    defaults = parse_config(data)
+    assert defaults.recording.min_duration_s == 0.5 and defaults.chains[0].wrench_topic == ""
+    data["recording"] = {"force_threshold": 3.0}
+    with pytest.raises(
+        ConfigError, match=r"recording: unknown keys \['force_threshold'\]; valid keys: force_threshold_n"
+    ):
+        parse_config(data)
+    data["recording"] = {"trim_s": -1.0}
+    with pytest.raises(ConfigError, match=r"recording\.trim_s: must be >= 0"):
+        parse_config(data)

@@ -1,0 +1,67 @@
+"""A simulated recording: the robot follows the route, and holds each contact flush on the true robot."""
+
+import numpy as np
+import pytest
+
+from posegen.calibrate import Perturbation, simulate
+from posegen.calibrate.session import ContactPhase, Motion, SessionSettings, hermite, simulate_session
+from posegen.model import Contacts
+
+
+def test_hermite_reproduces_cubics_and_holds_the_ends():
+    times = np.array([0.0, 0.7, 1.5, 3.0])
+    cubic = lambda t: 0.3 * t**3 - t**2 + 2 * t - 1  # noqa: E731
+    slope = lambda t: 0.9 * t**2 - 2 * t + 2  # noqa: E731
+    at = np.linspace(-1.0, 4.0, 301)
+    values = hermite(times, cubic(times)[:, None], slope(times)[:, None], at)[:, 0]
+    inside = (at >= 0) & (at <= 3)
+    assert np.allclose(values[inside], cubic(at[inside]))
+    assert np.allclose(values[at < 0], cubic(0.0)) and np.allclose(values[at > 3], cubic(3.0))
+
+
+@pytest.fixture(scope="module")
+def two_contacts(example_pool):
+    rows = [next(i for i, p in enumerate(example_pool.postures) if p.chain == c) for c in ("left", "right")]
+    a, b = example_pool.joints()[rows]
+    times = np.array([0.0, 1.0, 2.0, 3.0, 5.0, 6.0, 7.0, 8.0])
+    positions = np.array([a, a, a, a, b, b, b, b])
+    contacts = (
+        ContactPhase("left", "posture 0", a, 0.0, 1.0, 2.0, 3.0),
+        ContactPhase("right", "posture 1", b, 5.0, 6.0, 7.0, 8.0),
+    )
+    return Motion(example_pool.joint_names, times, positions, np.zeros_like(positions), contacts), (a, b)
+
+
+def test_each_hold_is_flush_on_the_true_robot(scene, two_contacts):
+    motion, (a, b) = two_contacts
+    settings = SessionSettings(rate_hz=100.0, force_noise_n=0.0, force_offset_n=0.0)
+    session = simulate_session(scene, motion, "sim", Perturbation(), settings, seed=4)
+    times = session.times_s - session.route_start_s
+    for k, (chain, planned) in enumerate((("left", a), ("right", b))):
+        hold = (times >= motion.contacts[k].hold_s) & (times <= motion.contacts[k].lift_s)
+        held = session.positions[hold]
+        assert np.ptp(held, axis=0).max() < 1e-12  # still
+        contact = Contacts(held[:1], (chain,), ("sim",), ("",))
+        assert np.abs(session.model.residuals(session.theta, contact)).max() < 1e-9  # flush on the true robot
+        assert np.abs(held[0] - planned).max() > 1e-4  # ... which the planned posture is not
+        assert np.allclose(session.forces[chain][hold, 2], -settings.contact_force_n)
+        other = "right" if chain == "left" else "left"
+        assert np.allclose(session.forces[other][hold], 0.0)
+    free = (times > 3.2) & (times < 4.8)
+    assert np.allclose(session.forces["left"][free], 0.0) and np.allclose(session.forces["right"][free], 0.0)
+    at_rest = times < 0
+    assert np.allclose(session.positions[at_rest], a)
+
+
+def test_the_true_robot_is_the_one_simulate_makes(scene, two_contacts):
+    motion, (a, b) = two_contacts
+    perturbation = Perturbation(encoder_noise_rad=1e-4)
+    session = simulate_session(scene, motion, "sim", perturbation, SessionSettings(rate_hz=50.0), seed=9)
+    again = simulate_session(scene, motion, "sim", perturbation, SessionSettings(rate_hz=50.0), seed=9)
+    planned = Contacts(np.array([a, b]), ("left", "right"), ("sim", "sim"), ("", ""))
+    _, _, theta = simulate(scene, planned, perturbation, seed=9)
+    assert np.array_equal(session.theta, theta)
+    assert np.array_equal(session.positions, again.positions)
+    assert all(np.array_equal(session.forces[c], again.forces[c]) for c in session.forces)
+    noise = session.positions[session.times_s < 0.9] - a
+    assert 0.5e-4 < noise.std() < 2e-4
