@@ -35,34 +35,22 @@ def run(args: argparse.Namespace) -> int:
     """Simulate, write the measurements (or the bag) and the truth, and say where."""
     from posegen.calibrate import simulate_plan_file, simulate_route_bag
 
+    robot = {
+        "config_path": args.config,
+        "seed": args.seed,
+        "error_mm": args.error_mm,
+        "error_deg": args.error_deg,
+        "noise_deg": args.noise_deg,
+        "session": args.session,
+    }
     if args.bag:
-        recorded = simulate_route_bag(
-            args.postures,
-            args.bag,
-            config_path=args.config,
-            seed=args.seed,
-            error_mm=args.error_mm,
-            error_deg=args.error_deg,
-            noise_deg=args.noise_deg,
-            session=args.session,
-            rate_hz=args.rate,
-            joint_topic=args.joint_topic,
-        )
+        recorded = simulate_route_bag(args.postures, args.bag, rate_hz=args.rate, joint_topic=args.joint_topic, **robot)
         print(
             f"simulate: {recorded.contacts} contacts, {recorded.duration_s:.1f} s recorded at {args.rate:g} Hz "
             f"({recorded.samples} joint states) -> {recorded.bag}/ (true parameters: {recorded.truth})"
         )
         return 0
-    simulated = simulate_plan_file(
-        args.postures,
-        args.output,
-        config_path=args.config,
-        seed=args.seed,
-        error_mm=args.error_mm,
-        error_deg=args.error_deg,
-        noise_deg=args.noise_deg,
-        session=args.session,
-    )
+    simulated = simulate_plan_file(args.postures, args.output, **robot)
     print(
         f"simulate: {simulated.contacts} contacts of a perturbed robot -> {simulated.measurements} "
         f"(true parameters: {simulated.truth})"

@@ -19,7 +19,7 @@ from posegen.calibrate import Settings, calibrate, held_out_residuals, read_meas
 from posegen.cli import main
 from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
 from posegen.model import Contacts, settle_contacts
-from posegen.robot import read_route
+from posegen.robot import read_route, route_arrays
 from tests.cli.test_cli import assert_fails_cleanly
 
 CHAIN = "left"
@@ -54,17 +54,38 @@ def chain(example_pool, tmp_path_factory):
         ["simulate", str(folder / "others.yaml"), "--seed", str(SEED), "-o", str(folder / "held.yaml")]
     )
     assert code == 0, err
-    short = read_route(route)
-    last = [i for i, seg in enumerate(short["segments"]) if seg["type"] == "release"][SHORT - 1]
-    end = short["segments"][last]["last_point"]
-    short["segments"] = short["segments"][: last + 1]
-    short["trajectory"]["points"] = short["trajectory"]["points"][: end + 1]
+    short = first_contacts(read_route(route), SHORT)
     write_yaml(folder / "short.yaml", short)
     code, _, err = run_plain(
         ["simulate", str(folder / "short.yaml"), "--bag", str(folder / "short_bag"), "--seed", "3"]
     )
     assert code == 0, err
     return folder, printed
+
+
+def first_contacts(data, contacts):
+    """A route cut after its first contacts (format version 1: points inline)."""
+    times, positions, velocities, accelerations = route_arrays(data)
+    last = [i for i, seg in enumerate(data["segments"]) if seg["type"] == "release"][contacts - 1]
+    end = data["segments"][last]["last_point"]
+    points = [
+        {
+            "positions": positions[k].tolist(),
+            "velocities": velocities[k].tolist(),
+            "accelerations": accelerations[k].tolist(),
+            "effort": [],
+            "time_from_start": dict(zip(("sec", "nanosec"), divmod(round(times[k] * 1e9), 10**9), strict=True)),
+        }
+        for k in range(end + 1)
+    ]
+    trajectory = {"header": data["trajectory"]["header"], "joint_names": data["trajectory"]["joint_names"]}
+    keep = ("format", "provenance", "postures", "skipped", "summary")
+    return {
+        **{key: data[key] for key in keep},
+        "format_version": 1,
+        "trajectory": {**trajectory, "points": points},
+        "segments": data["segments"][: last + 1],
+    }
 
 
 def run_plain(argv):
