@@ -75,15 +75,16 @@ def wrench_topics(scene: Scene) -> dict[str, str]:
     return {c.name: c.wrench_topic for c in scene.config.chains}
 
 
-def _route(route_path: str, config_path: str | None) -> tuple[Motion, Scene, dict[str, Any]]:
+def _route(route_path: str, scene: Scene | None, config_path: str | None = None) -> tuple[Motion, Scene]:
+    """A route's motion, and the scene it runs in (``scene``, or the route's own config or ``config_path``)."""
     data = read_route(route_path)
     provenance = dict(data.get("provenance") or {})
-    scene = scene_for(provenance, config_path)
+    scene = scene or scene_for(provenance, config_path)
     scene.check_made_for(provenance, route_path)
     motion = route_motion(data)
     if motion.joint_names != scene.joint_names:
         raise InputError(f"{route_path}: its joints are not the robot's ({len(motion.joint_names)} names)")
-    return motion, scene, provenance
+    return motion, scene
 
 
 def simulate_route_bag(
@@ -118,7 +119,7 @@ def simulate_route_bag(
             contact that does not settle on the true plane.
 
     """
-    motion, scene, _ = _route(route_path, config_path)
+    motion, scene = _route(route_path, None, config_path)
     wrench_topics(scene)  # before the simulation: every wrist needs a topic
     if not motion.contacts:
         raise InputError(f"{route_path}: the route makes no contact")
@@ -208,7 +209,7 @@ def measure_bag(
         raise InputError("without a wrench topic, --route is needed to tell contacts from pauses")
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
     scene = Scene(load_config(config_path))
-    planned_motion = None if route_path is None else _route(route_path, config_path)[0]
+    planned_motion = None if route_path is None else _route(route_path, scene)[0]
     topics = wrench_topics(scene) if use_wrench else {}
     joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
     columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
