@@ -222,6 +222,11 @@ def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
     route = workdir / "route.yaml"
     if not route.exists():
         bench_route(pool_path, workdir, k)
+    from posegen.robot import read_route
+
+    start = time.process_time()
+    read_route(route)
+    reading = time.process_time() - start
     export = _timed(["export", str(route), "--bag", str(workdir / "route_bag")])
     simulate = _timed(["simulate", str(route), "--bag", str(workdir / "session"), "--seed", "7"])
     measure_route = _timed(
@@ -237,8 +242,10 @@ def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
         connections = [c for c in reader.connections if c.topic == "/joint_states"]
         count = sum(1 for _ in reader.messages(connections=connections))
     iterate = time.perf_counter() - start
-    print(f"\n### rosbag2: {k}-posture route, simulated session, 10-minute bag ({machine()})\n")
+    load = os.getloadavg()[0]
+    print(f"\n### rosbag2: {k}-posture route, simulated session, 10-minute bag ({machine()}, load {load:.1f})\n")
     print("| figure | value |\n|---|---|")
+    print(f"| reading the route file alone (CPU; YAML points, read by each command below) | {reading:.1f} s |")
     print(f"| `posegen export ROUTE --bag` (wall / CPU, incl. start-up) | {export[0]:.1f} s / {export[1]:.1f} s |")
     print(
         f"| `posegen simulate ROUTE --bag` at 500 Hz (wall / CPU) | {simulate[0]:.1f} s / {simulate[1]:.1f} s, "

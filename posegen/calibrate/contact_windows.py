@@ -59,15 +59,23 @@ class Rejection:
     reason: str
 
 
-def joint_speed(times: FloatArray, positions: FloatArray, span_s: float) -> FloatArray:
-    """Largest joint speed (n,) in rad/s, by central differences over ``span_s`` (works without velocities)."""
+def joint_speed(times: FloatArray, positions: FloatArray, span_s: float, block: int = 1 << 16) -> FloatArray:
+    """Largest joint speed (n,) in rad/s, by central differences over ``span_s`` (works without velocities).
+
+    The first and last half spans take the nearest central value. Computed ``block`` rows
+    at a time, so that a long recording needs no (n, nj) temporaries.
+    """
     n = len(times)
-    if n < 2:
+    h = max(1, round(0.5 * span_s * (n - 1) / max(float(times[-1] - times[0]), 1e-12))) if n > 1 else 1
+    if n <= 2 * h:
         return np.zeros(n)
-    h = max(1, round(0.5 * span_s * (n - 1) / max(float(times[-1] - times[0]), 1e-12)))
-    lo = np.maximum(np.arange(n) - h, 0)
-    hi = np.minimum(np.arange(n) + h, n - 1)
-    return np.asarray(np.abs(positions[hi] - positions[lo]).max(axis=1) / np.maximum(times[hi] - times[lo], 1e-12))
+    speed = np.empty(n)
+    for start in range(h, n - h, block):
+        stop = min(start + block, n - h)
+        step = np.abs(positions[start + h : stop + h] - positions[start - h : stop - h]).max(axis=1)
+        speed[start:stop] = step / np.maximum(times[start + h : stop + h] - times[start - h : stop - h], 1e-12)
+    speed[:h], speed[n - h :] = speed[h], speed[n - h - 1]
+    return speed
 
 
 def wrist_force(times: FloatArray, wrench_times: FloatArray, forces: FloatArray) -> FloatArray:

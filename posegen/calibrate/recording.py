@@ -123,6 +123,8 @@ def simulate_route_bag(
     wrench_topics(scene)  # before the simulation: every wrist needs a topic
     if not motion.contacts:
         raise InputError(f"{route_path}: the route makes no contact")
+    if not rate_hz > 0:
+        raise InputError(f"the recording rate must be positive (Hz), got {rate_hz}")
     perturbation = perturbation_of(error_mm, error_deg, noise_deg)
     settings = SessionSettings(rate_hz=rate_hz)
     recorded = simulate_session(scene, motion, session, perturbation, settings, seed)
@@ -228,7 +230,8 @@ def measure_bag(
     for window in windows:
         values = base.copy()
         values[columns] = window.joints
-        outside = (values < scene.lower - LIMIT_TOLERANCE_RAD) | (values > scene.upper + LIMIT_TOLERANCE_RAD)
+        outside = ~np.isfinite(values) | (values < scene.lower - LIMIT_TOLERANCE_RAD)
+        outside |= values > scene.upper + LIMIT_TOLERANCE_RAD
         if np.any(outside):
             name = scene.joint_names[int(np.flatnonzero(outside)[0])]
             rejected.append(Rejection(window.start_s, window.end_s, f"{name} outside its limits"))

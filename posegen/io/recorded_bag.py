@@ -64,6 +64,7 @@ class _Topic:
 
     def __init__(self, topic: str, msgtype: str) -> None:
         self.topic, self.msgtype = topic, msgtype
+        self._store: Any = None  # rosbags' deserialiser, made when a message needs it
         self.layout: cdr.Layout | None = None
         self.names: tuple[str, ...] = ()
         self.parts: list[tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]] = []  # stamps, log times, values
@@ -96,13 +97,16 @@ class _Topic:
         column = {name: k for k, name in enumerate(names)}
         return np.asarray(message.position, dtype=float)[[column[n] for n in self.names]]
 
+    def _deserialise(self, batch: mcap_index.Batch, k: int) -> Any:
+        """Message ``k`` of a batch, deserialised by rosbags."""
+        if self._store is None:
+            self._store = _typestore()
+        start = int(batch.offsets[k])
+        return self._store.deserialize_cdr(batch.buffer[start : start + int(batch.lengths[k])].tobytes(), self.msgtype)
+
     def add(self, batch: mcap_index.Batch) -> None:
-        store = _typestore()
         if self.layout is None and len(batch):
-            start = int(batch.offsets[0])
-            self._first(
-                store.deserialize_cdr(batch.buffer[start : start + int(batch.lengths[0])].tobytes(), self.msgtype)
-            )
+            self._first(self._deserialise(batch, 0))
         layout = self.layout
         if layout is None:
             return
@@ -116,8 +120,7 @@ class _Topic:
             stamps, blocks = cdr.decode(layout, rows, [0] if self.msgtype == JOINT_STATE else None)
             self.parts.append((stamps, batch.log_times[decoded], np.hstack(blocks)))
         for k in np.flatnonzero(~decoded).tolist():
-            start = int(batch.offsets[k])
-            message = store.deserialize_cdr(batch.buffer[start : start + int(batch.lengths[k])].tobytes(), self.msgtype)
+            message = self._deserialise(batch, k)
             stamp = np.array([message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec])
             self.parts.append((stamp, batch.log_times[[k]], self._values(message, int(batch.log_times[k]))[None, :]))
 
