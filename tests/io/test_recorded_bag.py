@@ -171,3 +171,49 @@ def test_rosbags_reads_what_posegen_writes(recorded):
     first = STORE.deserialize_cdr(raw[0], "sensor_msgs/msg/JointState")
     assert tuple(first.name) == NAMES and np.array_equal(first.position, joints.positions[0])
     assert len(raw) == len(joints.times_s)
+
+
+def _rewritten_by_mcap(path, copy, compression, chunked):
+    """The bag at ``path`` copied to ``copy``, its storage re-written by the mcap library (CRCs on)."""
+    from mcap.reader import make_reader
+    from mcap.writer import CompressionType
+    from mcap.writer import Writer as McapWriter
+
+    shutil.copytree(path, copy)
+    storage = next(copy.glob("*.mcap"))
+    with next(path.glob("*.mcap")).open("rb") as source, storage.open("wb") as target:
+        reader = make_reader(source)
+        writer = McapWriter(target, compression=getattr(CompressionType, compression), use_chunking=chunked)
+        writer.start(profile="ros2", library="test")
+        schemas, channels = {}, {}
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            if schema.id not in schemas:
+                schemas[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schemas[schema.id], channel.metadata
+                )
+            writer.add_message(channels[channel.id], message.log_time, message.data, message.publish_time)
+        writer.finish()
+    return storage
+
+
+@pytest.mark.parametrize(("compression", "chunked"), [("LZ4", True), ("ZSTD", True), ("NONE", True), ("NONE", False)])
+def test_bags_written_by_the_mcap_library_read_the_same(recorded, tmp_path, compression, chunked):
+    """The same messages re-written by another MCAP writer: lz4, zstd or no chunks."""
+    path, joints, wrench = recorded
+    _rewritten_by_mcap(path, tmp_path / "copy", compression, chunked)
+    bag = RecordedBag(tmp_path / "copy")
+    assert (bag.summaries[0] is not None) == chunked  # unchunked: no chunk index, rosbags' path
+    back, (forces,) = bag.read("/joint_states", ["/left_ft"])
+    assert np.array_equal(back.positions, joints.positions) and np.array_equal(forces.forces, wrench.forces)
+
+
+def test_a_corrupt_chunk_is_an_error(recorded, tmp_path):
+    path, _, _ = recorded
+    storage = _rewritten_by_mcap(path, tmp_path / "copy", "NONE", True)
+    data = bytearray(storage.read_bytes())
+    data[len(data) // 3] ^= 0xFF  # a bit flipped inside a chunk's messages
+    storage.write_bytes(bytes(data))
+    with pytest.raises(InputError, match="corrupt MCAP chunk"):
+        RecordedBag(tmp_path / "copy").read("/joint_states")
