@@ -180,6 +180,32 @@ def _heights(scene: Scene, windows: list[Window], motion: Motion, columns: list[
     return [float(h) for h in model.residuals(model.nominal(), contacts)[:, 0]]
 
 
+def _within_limits(
+    scene: Scene, windows: list[Window], columns: list[int], base: FloatArray, rejected: list[Rejection]
+) -> tuple[list[Window], list[FloatArray]]:
+    """The windows whose angles are finite and within the limits (widened as for recorded files).
+
+    Returns:
+        Those windows, and their joint angles (nj,) in the robot's order (joints the
+        recording lacks at their locked value); the others are reported in ``rejected``.
+
+    """
+    accepted: list[Window] = []
+    full: list[FloatArray] = []
+    for window in windows:
+        values = base.copy()
+        values[columns] = window.joints
+        outside = ~np.isfinite(values) | (values < scene.lower - LIMIT_TOLERANCE_RAD)
+        outside |= values > scene.upper + LIMIT_TOLERANCE_RAD
+        if np.any(outside):
+            name = scene.joint_names[int(np.flatnonzero(outside)[0])]
+            rejected.append(Rejection(window.start_s, window.end_s, f"{name} outside its limits"))
+            continue
+        accepted.append(window)
+        full.append(values)
+    return accepted, full
+
+
 def measure_bag(
     bag: str,
     output: str,
@@ -225,19 +251,7 @@ def measure_bag(
         planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
         heights = None if use_wrench else _heights(scene, windows, planned_motion, columns, base)
         windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights)
-    accepted: list[Window] = []
-    full = []
-    for window in windows:
-        values = base.copy()
-        values[columns] = window.joints
-        outside = ~np.isfinite(values) | (values < scene.lower - LIMIT_TOLERANCE_RAD)
-        outside |= values > scene.upper + LIMIT_TOLERANCE_RAD
-        if np.any(outside):
-            name = scene.joint_names[int(np.flatnonzero(outside)[0])]
-            rejected.append(Rejection(window.start_s, window.end_s, f"{name} outside its limits"))
-            continue
-        accepted.append(window)
-        full.append(values)
+    accepted, full = _within_limits(scene, windows, columns, base, rejected)
     rejected.sort(key=lambda r: r.start_s)
     if not accepted:
         first = f"; first rejected: {rejected[0].start_s:.2f} s, {rejected[0].reason}" if rejected else ""

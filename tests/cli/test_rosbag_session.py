@@ -138,7 +138,7 @@ def test_the_simulated_robot_is_recovered(chain, scene):
         ),
     )
     reference = calibrate(scene, exact, ["sim"], Settings(kappa=1e4), base=calibration.base)
-    assert np.abs(reference.after.residuals).max() < 1e-9
+    assert np.abs(reference.after.residuals).max() < 1e-6  # m, rad: the true robot, reproduced
     columns = list(calibration.base.columns)
     deviation = (calibration.after.theta[columns] - reference.after.theta[columns]) / calibration.after.std[columns]
     assert np.abs(deviation).max() < 3.0, np.abs(deviation).max()
@@ -236,6 +236,10 @@ def test_bad_bags_fail_cleanly(chain, tmp_path, capsys):
     assert "no contact window found" in measure(tmp_path / "idle")
 
     recorded = RecordedBag(short).read("/joint_states")[0]
+    shifted = recorded.positions.copy()
+    shifted[:, recorded.names.index("arm_left_4_joint")] += 3.0  # a wrong encoder offset
+    _rewritten(folder, tmp_path, "shifted", joints=JointStates(recorded.names, recorded.times_s, shifted))
+    assert "arm_left_4_joint outside its limits" in measure(tmp_path / "shifted")
     renamed = JointStates(("elbow_joint", *recorded.names[1:]), recorded.times_s, recorded.positions)
     _rewritten(folder, tmp_path, "renamed", joints=renamed)
     err = measure(tmp_path / "renamed")
