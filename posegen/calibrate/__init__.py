@@ -6,6 +6,7 @@ outliers, before/after, held-out protocols), simulated contacts of a perturbed r
 the calibrated URDF, the report and the folder read back (:func:`read_calibration`).
 """
 
+from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
 from posegen.calibrate.calibration import (
     Calibration,
     CvPoint,
@@ -38,7 +39,6 @@ from posegen.calibrate.record import (
     read_calibration,
     write_record,
 )
-from posegen.calibrate.recording import Measured, SimulatedSession, measure_bag, simulate_route_bag
 from posegen.calibrate.report import format_table, residual_stats, write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
 from posegen.calibrate.urdf_export import calibrated_urdf
