@@ -184,10 +184,12 @@ def bench_route(pool_path: Path, workdir: Path, k: int = 41) -> None:
 
 def _timed(argv: list[str]) -> tuple[float, float, float]:
     """Run a posegen command in a fresh process: wall s, CPU s (user + system), peak resident MB."""
+    # The peak is VmHWM (reset by exec), not ru_maxrss, which counts the forked copy of this process.
     code = (
         "import resource, sys, time; from posegen.cli import main; start = time.perf_counter(); "
         f"code = main({argv!r}); wall = time.perf_counter() - start; u = resource.getrusage(resource.RUSAGE_SELF); "
-        "print(wall, u.ru_utime + u.ru_stime, u.ru_maxrss / 1024, file=sys.stderr); sys.exit(code)"
+        "hwm = next(int(l.split()[1]) for l in open('/proc/self/status') if l.startswith('VmHWM')); "
+        "print(wall, u.ru_utime + u.ru_stime, hwm / 1024, file=sys.stderr); sys.exit(code)"
     )
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
     wall, cpu, peak = (float(v) for v in done.stderr.strip().splitlines()[-1].split())
