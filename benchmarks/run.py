@@ -138,50 +138,6 @@ def bench_select(pool_path: Path, workdir: Path) -> None:
         )
 
 
-def bench_route(pool_path: Path, workdir: Path, k: int = 41) -> None:
-    import yaml
-
-    selection = workdir / f"selected_k{k}.yaml"
-    subprocess.run(
-        [POSEGEN, "select", str(pool_path), "--k", str(k), "-q", "-o", str(selection)],
-        check=True,
-        cwd=ROOT,
-        stdout=subprocess.DEVNULL,
-    )
-    route = workdir / "route.yaml"
-    start = time.perf_counter()
-    subprocess.run(
-        [POSEGEN, "route", str(selection), "-q", "-o", str(route)],
-        check=True,
-        cwd=ROOT,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    wall = time.perf_counter() - start
-    data = yaml.load(route.read_text(), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
-    summary = data["summary"]
-    by_type: dict[str, float] = {}
-    for seg in data["segments"]:
-        by_type[seg["type"]] = by_type.get(seg["type"], 0.0) + seg["end_s"] - seg["start_s"]
-    start = time.perf_counter()
-    check = subprocess.run([POSEGEN, "check", str(route), "-q"], cwd=ROOT, capture_output=True, text=True)
-    t_check = time.perf_counter() - start
-    print(f"\n### route: {k} selected postures ({machine()})\n")
-    print("| figure | value |\n|---|---|")
-    print(f"| wall time, `posegen route` (incl. start-up) | {wall:.1f} s |")
-    print(f"| postures routed / skipped | {summary['routed']} / {summary['skipped']} |")
-    total, per = summary["duration_s"], summary["robot_time_per_contact_s"]
-    print(f"| robot time, total / per contact | {total:.0f} s / {per:.1f} s |")
-    print("| robot time by segment type | " + ", ".join(f"{t} {v:.0f} s" for t, v in by_type.items()) + " |")
-    print(
-        f"| TSP order vs nearest neighbour (time-like length) | {summary['tsp_length_s']:.1f} s vs "
-        f"{summary['nearest_neighbour_length_s']:.1f} s |"
-    )
-    print(f"| trajectory points | {summary['points']} |")
-    verdict = "no violation" if check.returncode == 0 else "VIOLATIONS"
-    print(f"| `posegen check` of every point (meshes) | {t_check:.1f} s, {verdict} |")
-
-
 def _timed(argv: list[str]) -> tuple[float, float, float]:
     """Run a posegen command in a fresh process: wall s, CPU s (user + system), peak resident MB."""
     # The peak is VmHWM (reset by exec), not ru_maxrss, which counts the forked copy of this process.
@@ -221,10 +177,11 @@ def _ten_minutes(bag: Path, out: Path, minutes: float = 10.0) -> tuple[int, int,
 
 
 def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
-    route = workdir / "route.yaml"
-    if not route.exists():
-        bench_route(pool_path, workdir, k)
+    from route_bench import route_of
+
     from posegen.robot import read_route
+
+    route = route_of(POSEGEN, ROOT, pool_path, workdir, k)
 
     start = time.process_time()
     read_route(route)
@@ -384,7 +341,9 @@ def main() -> None:
     if "select" in args.only:
         bench_select(pool_path, workdir)
     if "route" in args.only:
-        bench_route(pool_path, workdir)
+        from route_bench import bench_routes
+
+        bench_routes(POSEGEN, ROOT, workdir, machine)
     if "bag" in args.only:
         bench_bag(pool_path, workdir)
     if "calibration" in args.only:

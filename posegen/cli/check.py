@@ -16,32 +16,40 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("file", help="pool or route file")
     parser.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
+    parser.add_argument(
+        "--min-dt", type=float, default=None, help="route: smallest time step between points in s (default 0.001)"
+    )
     add_backend_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check the file and print the worst case of each invariant."""
-    from posegen.errors import InputError
+    """Check the file and print the worst case of each invariant (and, for a route, the first violations)."""
     from posegen.parallel import open_backend
     from posegen.pool import check_pool_file
     from posegen.robot import is_route_file
-    from posegen.route import check_route_file
+    from posegen.route import MIN_DT_S, check_route_file
 
     is_route = is_route_file(args.file)
-    if is_route and args.scheduler:
-        raise InputError("--scheduler applies to pool files; a route file is checked on this machine")
-    with ProgressBar(args.quiet) as bar:
+    with ProgressBar(args.quiet) as bar, open_backend(args.workers, args.scheduler) as backend:
         if is_route:
-            result = check_route_file(args.file, args.config, bar)
+            min_dt = MIN_DT_S if args.min_dt is None else args.min_dt
+            result = check_route_file(args.file, args.config, bar, backend, min_dt)
         else:
-            with open_backend(args.workers, args.scheduler) as backend:
-                result = check_pool_file(args.file, args.config, bar, backend)
+            result = check_pool_file(args.file, args.config, bar, backend)
     unit = "point" if is_route else "posture"
     print(f"checked {result.checked} {unit}s of {args.file} (meshes, pinocchio; not the planner's word)")
     for worst in result.worst:
+        if not worst.checked:
+            print(f"  SKIP {worst.invariant.value:<13} {worst.detail}")
+            continue
         status = "OK  " if worst.violations == 0 else "FAIL"
-        print(
-            f"  {status} {worst.invariant.value:<13} violations {worst.violations:>4}  "
-            f"worst: {unit} {worst.posture} ({worst.detail})"
-        )
+        if not is_route:
+            print(
+                f"  {status} {worst.invariant.value:<13} violations {worst.violations:>4}  "
+                f"worst: {unit} {worst.posture} ({worst.detail})"
+            )
+            continue
+        print(f"  {status} {worst.invariant.value:<13} violations {worst.violations:>4}  ({worst.detail})")
+        for example in worst.examples[1:] if worst.examples[:1] == (worst.detail,) else worst.examples:
+            print(f"         {example}")
     return 0 if result.ok else EXIT_VIOLATIONS

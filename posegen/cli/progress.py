@@ -27,6 +27,8 @@ class ProgressBar:
             self._bar = tqdm(
                 total=progress.total, unit=progress.unit, disable=self.quiet, file=sys.stderr, dynamic_ncols=True
             )
+        if progress.total != self._bar.total:  # work that grows as it goes (a route's repairs)
+            self._bar.total = progress.total
         if progress.step:
             self._bar.set_description(progress.step, refresh=False)
         if progress.attempts is not None:

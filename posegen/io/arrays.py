@@ -3,14 +3,17 @@
 The YAML file stays the human-readable header (provenance, summary); the arrays go to
 ``<stem>.npz`` next to it, and the header records its file name and sha256, so a stale or
 swapped sidecar is refused rather than read. The bytes depend on the arrays only (zip
-entries carry a fixed date, no compression), so same seed, same bytes holds for
-sidecars too; any ``numpy.load`` reads them.
+entries carry a fixed date), so same seed, same bytes holds for sidecars too; any
+``numpy.load`` reads them. Entries are stored as they are, or deflated (``compress``:
+smaller, slower to write; a route's points); each array keeps its memory order, so a
+column-major time series, which deflate compresses better, loads column-major.
 """
 
 from __future__ import annotations
 
 import hashlib
 import io
+import json
 import zipfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -25,18 +28,29 @@ from posegen.io.atomic import write_atomic
 
 SIDECAR_SUFFIX = ".npz"
 _EPOCH = (1980, 1, 1, 0, 0, 0)  # the zip format's earliest date: no clock in the bytes
+COMPRESS_LEVEL = 9  # deflate level of compressed sidecars
 
 
-def encode_arrays(arrays: Mapping[str, NDArray[Any]]) -> bytes:
-    """The ``.npz`` bytes of some named arrays, deterministic."""
+def encode_arrays(arrays: Mapping[str, NDArray[Any]], compress: bool = False) -> bytes:
+    """The ``.npz`` bytes of some named arrays, deterministic (deflated with ``compress``)."""
     buffer = io.BytesIO()
-    with zipfile.ZipFile(buffer, "w", compression=zipfile.ZIP_STORED) as archive:
+    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+    level = COMPRESS_LEVEL if compress else None
+    with zipfile.ZipFile(buffer, "w", compression=method, compresslevel=level) as archive:
         for name, array in arrays.items():
             entry = zipfile.ZipInfo(f"{name}.npy", date_time=_EPOCH)
             entry.external_attr = 0o644 << 16
+            entry.compress_type = method
             with archive.open(entry, "w", force_zip64=True) as handle:
-                np.lib.format.write_array(handle, np.ascontiguousarray(array), allow_pickle=False)
+                np.lib.format.write_array(handle, _ordered(np.asanyarray(array)), allow_pickle=False)
     return buffer.getvalue()
+
+
+def _ordered(array: NDArray[Any]) -> NDArray[Any]:
+    """The array as it is if C- or Fortran-contiguous (the .npy header says which), else a C copy."""
+    if array.flags.c_contiguous or array.flags.f_contiguous:
+        return array
+    return np.ascontiguousarray(array)
 
 
 def sidecar_path(path: str | Path) -> Path:
@@ -83,12 +97,15 @@ def read_arrays(path: str | Path, reference: Any, names: tuple[str, ...]) -> dic
         raise InputError(f"{file}: not a readable .npz file ({exc})") from exc
 
 
-def write_with_arrays(path: str | Path, header: dict[str, Any], arrays: Mapping[str, NDArray[Any]]) -> None:
-    """Write an artefact as a YAML header and its ``.npz`` sidecar, each atomically.
+def write_with_arrays(
+    path: str | Path, header: dict[str, Any], arrays: Mapping[str, NDArray[Any]], compress: bool = False
+) -> None:
+    """Write an artefact as a header (YAML, or JSON if the name ends in ``.json``) and its ``.npz`` sidecar.
 
-    The sidecar goes first and the header, which names it by hash, last: a header on disk
-    never points at arrays that are not fully written.
+    Each is written atomically. The sidecar goes first and the header, which names it by
+    hash, last: a header on disk never points at arrays that are not fully written.
     """
-    data = encode_arrays(arrays)
+    data = encode_arrays(arrays, compress)
     write_atomic(sidecar_path(path), data)
-    write_atomic(path, dump_yaml({**header, "arrays": sidecar_reference(path, data)}))
+    full = {**header, "arrays": sidecar_reference(path, data)}
+    write_atomic(path, json.dumps(full, indent=1) if Path(path).suffix.lower() == ".json" else dump_yaml(full))

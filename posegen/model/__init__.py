@@ -2,11 +2,14 @@
 
 Parametric sole-to-contact kinematics of each chain, the plane-constrained contact
 model with its analytic Jacobian, the parameters and their names, noise and prior
-weights, initial plane estimates, the settle step of a force-controlled contact, and
-identifiability (base parameters by QR, structural base parameters, O1).
+weights, initial plane estimates, the settle step of a force-controlled contact,
+identifiability (base parameters by QR, structural base parameters, O1), and the
+experiment design (one information matrix per candidate posture) that selection solves
+and the route's repair consults.
 """
 
 from posegen.model.contact_model import ContactModel, Contacts
+from posegen.model.design import RIDGE, SINGULAR, Design, build_design
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
 from posegen.model.kinematics import ChainModel, offset_matrix, placement_derivatives, placement_matrix, rpy_matrix
 from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter, Unit
@@ -29,6 +32,8 @@ __all__ = [
     "OFFSET_FIELDS",
     "PLACEMENT_FIELDS",
     "RANK_TOLERANCE",
+    "RIDGE",
+    "SINGULAR",
     "STRUCTURAL_POSTURES",
     "UNIT_PRIOR_ANGLE_RAD",
     "UNIT_PRIOR_LENGTH_M",
@@ -36,11 +41,13 @@ __all__ = [
     "ChainModel",
     "ContactModel",
     "Contacts",
+    "Design",
     "Group",
     "Parameter",
     "Unit",
     "Weights",
     "base_parameters",
+    "build_design",
     "initial_planes",
     "level_planes",
     "level_postures",

@@ -115,35 +115,66 @@ def _run_in_process(name: str, run: Callable[[Any, Any], Any], item: Any) -> Any
 
 
 class ProcessBackend(Backend):
-    """``workers`` local processes (forkserver); with one worker, or one item, all runs in this process."""
+    """``workers`` local processes (forkserver); with one worker, or one item, all runs in this process.
+
+    Used as a context manager (``with``), it keeps each job's worker processes, and its
+    in-process state, from one :meth:`map` to the next until it is closed, so a stage
+    that maps a job several times (a route's stops, then its transfers, then its
+    repairs) loads the robot once per worker. Otherwise each map starts and stops its own.
+    """
 
     def __init__(self, workers: int) -> None:
         self.workers = max(1, workers)
+        self._keep = False  # inside ``with``: keep processes and states between maps
+        self._executors: dict[str, concurrent.futures.ProcessPoolExecutor] = {}
+        self._states: dict[str, Any] = {}
 
     @property
     def slots(self) -> int:
         """Number of worker processes."""
         return self.workers
 
+    def __enter__(self) -> ProcessBackend:
+        self._keep = True
+        return self
+
     def map(self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT]) -> Generator[ResultT, None, None]:
         """Run ``job`` on ``items``; see :meth:`Backend.map`."""
         iterator = iter(items)
         head = list(itertools.islice(iterator, 2))
-        if self.workers == 1 or len(head) < 2:  # one item: not worth starting processes
-            state = job.setup()
+        if self.workers == 1 or (len(head) < 2 and job.name not in self._executors):  # not worth starting processes
+            state = self._states[job.name] if job.name in self._states else job.setup()
+            if self._keep:
+                self._states[job.name] = state
             for item in itertools.chain(head, iterator):
                 yield job.run(state, item)
             return
         items = itertools.chain(head, iterator)
-        context = multiprocessing.get_context("forkserver")
-        with concurrent.futures.ProcessPoolExecutor(
-            max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job,)
-        ) as executor:
+        executor = self._executors.get(job.name)
+        if executor is None:
+            context = multiprocessing.get_context("forkserver")
+            executor = concurrent.futures.ProcessPoolExecutor(
+                max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job,)
+            )
+        try:
             yield from in_order(
                 lambda item: executor.submit(_run_in_process, job.name, job.run, item),
                 items,
                 WINDOW_PER_SLOT * self.workers,
             )
+        finally:
+            if self._keep:
+                self._executors[job.name] = executor
+            else:
+                executor.shutdown(wait=True, cancel_futures=True)
+
+    def close(self) -> None:
+        """Stop the kept worker processes and drop the kept states."""
+        for executor in self._executors.values():
+            executor.shutdown(wait=True, cancel_futures=True)
+        self._executors.clear()
+        self._states.clear()
+        self._keep = False
 
 
 def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:

@@ -55,18 +55,37 @@ from posegen.robot.postures import (
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for
 from posegen.robot.stance_space import StanceSpace
-from posegen.robot.trajectory import ROUTE_FORMAT, ROUTE_VERSION, SegmentType, is_route_file, read_route, route_arrays
-from posegen.robot.verification import Verification, Worst, WorstSoFar, summarize
+from posegen.robot.trajectory import (
+    ACCELERATION_STEP,
+    POSITION_DTYPE,
+    ROUTE_ARRAYS,
+    ROUTE_FORMAT,
+    ROUTE_VERSION,
+    TIME_DTYPE,
+    VELOCITY_STEP,
+    SegmentType,
+    is_route_file,
+    read_route,
+    route_arrays,
+    stamp,
+)
+from posegen.robot.verification import EXAMPLES, Verification, Worst, WorstSoFar, summarize, worst_case
 
 __all__ = [
+    "ACCELERATION_STEP",
+    "EXAMPLES",
     "POOL_FORMAT",
     "POOL_VERSION",
+    "POSITION_DTYPE",
+    "ROUTE_ARRAYS",
     "ROUTE_FORMAT",
     "ROUTE_VERSION",
     "SELECTION_FORMAT",
     "SOLE_ANGLE_TOL_RAD",
     "SOLE_POSITION_TOL_M",
     "TABLE",
+    "TIME_DTYPE",
+    "VELOCITY_STEP",
     "Assessment",
     "ChainConfig",
     "CollisionChecker",
@@ -112,8 +131,10 @@ __all__ = [
     "read_route",
     "route_arrays",
     "scene_for",
+    "stamp",
     "summarize",
     "tilt_angles",
+    "worst_case",
     "write_pool",
     "yaw_rotation",
 ]

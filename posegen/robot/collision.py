@@ -87,7 +87,8 @@ class CollisionChecker:
                 if table_index in (p.first, p.second) and frame_of[min(p.first, p.second)] in tips
             ]
         self._model_data = model.createData()
-        self._fast: dict[str | None, pin.GeometryData] = {}
+        self._fast: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]] = {}
+        self._fast_margin: dict[str | None, float] = {}
         self._screen: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]] = {}
         self._bounds: BoundingSpheres | None = None
 
@@ -165,15 +166,27 @@ class CollisionChecker:
     def collides(self, q: FloatArray, contact_chain: str | None, margin_m: float) -> bool:
         """Whether any active pair is closer than ``margin_m`` (a fast yes/no for planning).
 
-        Reuses one GeometryData per contact chain: coal's warm starts could only change
-        a verdict for a pair within numerical precision (1e-15 m) of the margin.
+        Only the pairs whose bounding-sphere bound (:mod:`posegen.robot.bounds`) is below
+        the margin are asked of coal; the others cannot be closer. Reuses one
+        GeometryData per contact chain: coal's warm starts could only change a verdict
+        for a pair within numerical precision (1e-15 m) of the margin.
         """
+        if self._bounds is None:
+            self._bounds = BoundingSpheres(self.geom)
         if contact_chain not in self._fast:
-            self._fast[contact_chain] = self._fresh_data(contact_chain)
-        data = self._fast[contact_chain]
-        for request in data.collisionRequests:
-            request.security_margin = margin_m
-        return bool(pin.computeCollisions(self.scene.model, self._model_data, self.geom, data, q, True))
+            data = self._fresh_data(contact_chain)
+            self._fast[contact_chain] = (data, np.array(data.activeCollisionPairs, dtype=bool))
+        data, active = self._fast[contact_chain]
+        if self._fast_margin.get(contact_chain) != margin_m:
+            for request in data.collisionRequests:
+                request.security_margin = margin_m
+            self._fast_margin[contact_chain] = margin_m
+        pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
+        bounds = self._bounds.lower_bounds(data)
+        for k in np.flatnonzero((bounds < margin_m) & active).tolist():
+            if pin.computeCollision(self.geom, data, k):
+                return True
+        return False
 
     def colliding_pairs(self, q: FloatArray, contact_chain: str | None, margin_m: float) -> list[Proximity]:
         """Pairs closer than ``margin_m`` (coal collision queries with a security margin).

@@ -74,6 +74,8 @@ class Scene:
         self.urdf_xml = augmented_urdf(nominal_text, nominal, config)
         self.model = pin.buildModelFromXML(self.urdf_xml, pin.JointModelFreeFlyer())
         self._data = self.model.createData()  # scratch space of configuration()
+        self._closing: tuple[int, list[int], np.ndarray] | None = None  # see close_stance
+        self._anchor_frame = self.model.getFrameId(config.stance.sole_frames[0])
         self.joint_names = tuple(
             str(self.model.names[j]) for j in range(1, self.model.njoints) if self.model.joints[j].nq == 1
         )
@@ -200,8 +202,8 @@ class Scene:
         q = pin.neutral(self.model)
         q[self._q_index] = joints
         data = self._data
-        pin.framesForwardKinematics(self.model, data, q)
-        base_to_sole = data.oMf[self.model.getFrameId(self.anchor_sole)]
+        pin.forwardKinematics(self.model, data, q)
+        base_to_sole = pin.updateFramePlacement(self.model, data, self._anchor_frame)  # the one frame needed
         base = pin.SE3(self.sole_poses[self.anchor_sole]) * base_to_sole.inverse()
         q[:7] = pin.SE3ToXYZQUAT(base)
         return q
@@ -260,19 +262,21 @@ class Scene:
 
         """
         frame = self.second_sole
-        frame_id = self.frame_id(frame)
-        leg = self.leg_joints(frame)
+        if self._closing is None:  # (frame id, leg joint indices, their velocity indices), found once
+            leg = self.leg_joints(frame)
+            self._closing = (self.frame_id(frame), leg, self._v_index[leg])
+        frame_id, leg, columns = self._closing
         out = np.array(joints, dtype=float)
         target = pin.SE3(self.sole_poses[frame])
         data = self._data
         for _ in range(iterations):
             q = self.configuration(out)
-            pin.framesForwardKinematics(self.model, data, q)
+            pin.computeJointJacobians(self.model, data, q)  # placements and Jacobians in one pass
+            pin.updateFramePlacements(self.model, data)
             error = pin.log6(data.oMf[frame_id].actInv(target)).vector
             if np.linalg.norm(error) < 1e-10:
                 return out
-            pin.computeJointJacobians(self.model, data, q)
-            jac = pin.getFrameJacobian(self.model, data, frame_id, pin.LOCAL)[:, self._v_index[leg]]
+            jac = pin.getFrameJacobian(self.model, data, frame_id, pin.LOCAL)[:, columns]
             out[leg] += np.linalg.lstsq(jac, error, rcond=None)[0]
             if np.any(out[leg] < self.lower[leg]) or np.any(out[leg] > self.upper[leg]):
                 return None

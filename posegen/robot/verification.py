@@ -7,7 +7,7 @@ Shared by ``posegen check`` of pools (:mod:`posegen.pool`) and of routes
 from __future__ import annotations
 
 import enum
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Generic, TypeVar
 
@@ -17,6 +17,8 @@ from posegen.robot.geometry import FloatArray
 
 K = TypeVar("K", bound=enum.Enum)
 
+EXAMPLES = 5  # violations named per invariant by :func:`worst_case`
+
 
 @dataclass(frozen=True)
 class Worst:
@@ -24,9 +26,11 @@ class Worst:
 
     invariant: enum.Enum  # an Invariant, or a route's invariant
     excess: float  # how far past its bound (> 0: violated), in the invariant's unit
-    posture: int  # index of the posture where it occurs
-    violations: int  # number of postures violating it
+    posture: int  # index of the posture (or route point) where it occurs
+    violations: int  # number of postures (or points) violating it
     detail: str
+    examples: tuple[str, ...] = ()  # the first violations, each named (where, what, value, limit)
+    checked: bool = True  # False: not checked, because an earlier defect makes it meaningless
 
 
 @dataclass(frozen=True)
@@ -98,3 +102,22 @@ class WorstSoFar(Generic[K]):
                 Worst(k, self._excess[k], self._index[k], self._violations[k], self._detail[k]) for k in self._keys
             ),
         )
+
+
+def worst_case(invariant: enum.Enum, excess: FloatArray, describe: Callable[[int], str], ok: str) -> Worst:
+    """The worst item of an invariant and its first violations, each described.
+
+    Args:
+        invariant: The invariant.
+        excess: (n,) each item's excess over its bound (> 0 or NaN: violated; -inf: not checked).
+        describe: Names a violation at an item (where, what, value, limit).
+        ok: What to say when nothing is violated.
+
+    """
+    excess = np.where(np.isnan(excess), np.inf, np.asarray(excess, dtype=float))
+    if not np.any(np.isfinite(excess) | (excess == np.inf)):
+        return Worst(invariant, 0.0, -1, 0, "nothing to check")
+    bad = np.flatnonzero(excess > 0)
+    i = int(np.argmax(excess))
+    detail = describe(i) if len(bad) else ok
+    return Worst(invariant, float(excess[i]), i, len(bad), detail, tuple(describe(int(k)) for k in bad[:EXAMPLES]))

@@ -1,42 +1,72 @@
 """Stage 3: a robot-ready trajectory through the selected postures.
 
-The visiting order (TSP), geometric paths in the stance space (vertical approach and
-contact, free motions by straight lines, via postures or OMPL), toppra timing, the ROS 2
-``JointTrajectory`` export, and the independent check of every exported point.
+The visiting order (TSP on rest-to-rest times), stops and transfers planned over worker
+processes (vertical approach and contact; free motions by straight lines, via states or
+OMPL, shortened and blended), one toppra timing per transfer, the repair of a selection
+whose posture cannot be reached, the route file (YAML header and ``.npz`` sidecar), and
+the independent check of every exported point.
 """
 
-from posegen.route.check import RouteInvariant, verify_route
-from posegen.route.export import route_to_dict, write_route
-from posegen.route.motion import Vertical, plan_free, seed_planner, straight, vertical_paths
-from posegen.route.ordering import Order, order_postures, time_distances
-from posegen.route.route import Route, Segment, plan_route, start_posture
+from posegen.route.check import MIN_DT_S, RouteInvariant, verify_route
+from posegen.route.export import route_arrays_of, route_header, write_route
+from posegen.route.free_motion import FreeMotion, Method, plan_free, via_sequences
+from posegen.route.motion import Vertical, follow, straight, through, vertical_paths
+from posegen.route.ordering import Order, order_postures, rest_to_rest_time, transfer_times
+from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer, start_posture
+from posegen.route.pose_check import PoseInvariant, check_poses
+from posegen.route.repair import Substitutes, Substitution, insertion_places, ranked_substitutes
+from posegen.route.route import Route, Segment, plan_route
+from posegen.route.smoothing import blend_corners, corners, path_length, shortcut
 from posegen.route.timing import SAFETY, Timed, hold, parameterize
 from posegen.route.workflow import Exported, Routed, check_route_file, export_route_bag, route_plan_file
 
 __all__ = [
+    "MIN_DT_S",
     "SAFETY",
+    "START",
     "Exported",
+    "FreeMotion",
+    "Method",
     "Order",
+    "Planner",
+    "PoseInvariant",
     "Route",
     "RouteInvariant",
     "Routed",
     "Segment",
+    "Stop",
+    "Substitutes",
+    "Substitution",
     "Timed",
+    "Transfer",
     "Vertical",
+    "blend_corners",
+    "check_poses",
     "check_route_file",
+    "corners",
     "export_route_bag",
+    "follow",
     "hold",
+    "insertion_places",
     "order_postures",
     "parameterize",
+    "path_length",
     "plan_free",
     "plan_route",
+    "plan_stop",
+    "plan_transfer",
+    "ranked_substitutes",
+    "rest_to_rest_time",
+    "route_arrays_of",
+    "route_header",
     "route_plan_file",
-    "route_to_dict",
-    "seed_planner",
+    "shortcut",
     "start_posture",
     "straight",
-    "time_distances",
+    "through",
+    "transfer_times",
     "verify_route",
     "vertical_paths",
+    "via_sequences",
     "write_route",
 ]

@@ -1,62 +1,64 @@
-"""Writing a route: the ROS 2 ``JointTrajectory`` file with segment annotations, and a CSV.
+"""Writing a route: the YAML header with segment annotations, its ``.npz`` sidecar, optionally a CSV.
 
 The file format is described, and read back, in :mod:`posegen.robot.trajectory` (below
-the stages, so that any of them may read a route). YAML, or JSON when the file name ends
-in ``.json``. The CSV beside it has one row per point: time (s), segment, chain,
-posture, then the joint positions (rad).
+the stages, so that any of them may read a route). The header is YAML, or JSON when the
+file name ends in ``.json``; the points go to ``<name>.npz`` beside it. The CSV, when
+asked for, has one row per point: time (s), segment, chain, posture, then the joint
+positions (rad), as stored.
 """
 
 from __future__ import annotations
 
 import csv
 import io
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from posegen.io import dump_yaml, write_atomic
-from posegen.robot import ROUTE_FORMAT, ROUTE_VERSION
+from posegen.io import sidecar_path, write_atomic, write_with_arrays
+from posegen.robot import ACCELERATION_STEP, POSITION_DTYPE, ROUTE_FORMAT, ROUTE_VERSION, TIME_DTYPE, VELOCITY_STEP
 from posegen.route.route import Route
 
 
-def _stamp(seconds: float) -> dict[str, int]:
-    sec = int(np.floor(seconds))
-    nanosec = round((seconds - sec) * 1e9)
-    if nanosec >= 1_000_000_000:
-        sec, nanosec = sec + 1, nanosec - 1_000_000_000
-    return {"sec": sec, "nanosec": nanosec}
+def route_arrays_of(route: Route) -> dict[str, np.ndarray]:
+    """The sidecar's arrays of a route, in their stored types and resolutions (column-major: they compress better)."""
+    return {
+        "time_from_start": np.asarray(route.times, dtype=TIME_DTYPE),
+        "positions": np.asfortranarray(route.positions, dtype=POSITION_DTYPE),
+        "velocities": np.asfortranarray(_toward_zero(route.velocities, VELOCITY_STEP), dtype=POSITION_DTYPE),
+        "accelerations": np.asfortranarray(_toward_zero(route.accelerations, ACCELERATION_STEP), dtype=POSITION_DTYPE),
+    }
 
 
-def route_to_dict(
-    route: Route, postures: list[dict[str, Any]], provenance: dict[str, Any], summary: dict[str, Any]
+def _toward_zero(values: np.ndarray, step: float) -> np.ndarray:
+    """Values on a grid of ``step``, rounded toward zero: never past a limit the exact ones respect."""
+    return np.asarray(np.trunc(np.asarray(values) / step) * step)
+
+
+def route_header(
+    route: Route,
+    entries: dict[int, dict[str, Any]],
+    provenance: dict[str, Any],
+    summary: dict[str, Any],
 ) -> dict[str, Any]:
-    """Plain data of a route file.
+    """Plain data of a route file's header (without the sidecar reference).
 
     Args:
         route: The timed route.
-        postures: The input postures' plain data (selection or pool entries).
+        entries: The plain data (selection or pool entry) of every node the route
+            mentions (visited, skipped, substituted), by node.
         provenance: Provenance block.
         summary: Figures to record.
 
     """
 
-    def pool_id(index: int | None) -> int | None:
-        if index is None:
+    def pool_id(node: int | None) -> int | None:
+        if node is None:
             return None
-        return int(postures[index].get("pool_id", postures[index].get("id", index)))
+        entry = entries[node]
+        return int(entry.get("pool_id", entry.get("id", node)))
 
-    points = [
-        {
-            "positions": [float(v) for v in route.positions[k]],
-            "velocities": [float(v) for v in route.velocities[k]],
-            "accelerations": [float(v) for v in route.accelerations[k]],
-            "effort": [],
-            "time_from_start": _stamp(float(route.times[k])),
-        }
-        for k in range(len(route.times))
-    ]
     return {
         "format": ROUTE_FORMAT,
         "format_version": ROUTE_VERSION,
@@ -64,7 +66,7 @@ def route_to_dict(
         "trajectory": {
             "header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
             "joint_names": list(route.joint_names),
-            "points": points,
+            "points": len(route.times),
         },
         "segments": [
             {
@@ -79,37 +81,55 @@ def route_to_dict(
             }
             for s in route.segments
         ],
-        "postures": [postures[i] for i in route.visited],
+        "postures": [entries[i] for i in route.visited],
         "skipped": [{"posture": i, "pool_id": pool_id(i), "reason": reason} for i, reason in route.skipped],
+        "substitutions": [
+            {
+                "posture": s.lost,
+                "pool_id": pool_id(s.lost),
+                "reason": s.reason,
+                "substitute_pool_id": s.substitute,
+                "log_det_gain": s.gain,
+                "o1_before": s.o1_before,
+                "o1_after": s.o1_after,
+                "rank_before": s.rank_before,
+                "rank_after": s.rank_after,
+            }
+            for s in route.substitutions
+        ],
         "summary": summary,
     }
 
 
-def write_route(path: Path, data: dict[str, Any]) -> Path:
-    """Write the route file (YAML or JSON by suffix) and its CSV; return the CSV path."""
-    text = json.dumps(data, indent=1) if path.suffix.lower() == ".json" else dump_yaml(data)
+def write_route(path: Path, route: Route, header: dict[str, Any], csv_too: bool = False) -> list[Path]:
+    """Write the route (the deflated sidecar first, the header that names it last; the CSV if asked).
+
+    Returns:
+        The paths written: the header, its sidecar, and the CSV if asked.
+
+    """
+    arrays = route_arrays_of(route)
+    written = [path, sidecar_path(path)]
+    if csv_too:
+        csv_path = path.with_suffix(".csv")
+        write_atomic(csv_path, _csv(header, arrays))
+        written.append(csv_path)
+    write_with_arrays(path, header, arrays, compress=True)
+    return written
+
+
+def _csv(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    names = data["trajectory"]["joint_names"]
-    writer.writerow(["time_s", "segment", "chain", "posture", *names])
-    segment_of = {}
-    for seg in data["segments"]:
+    writer.writerow(["time_s", "segment", "chain", "posture", *header["trajectory"]["joint_names"]])
+    segment_of: dict[int, dict[str, Any]] = {}
+    for seg in header["segments"]:
         for k in range(seg["first_point"], seg["last_point"] + 1):
             segment_of[k] = seg  # a shared boundary point belongs to the later segment
-    for k, point in enumerate(data["trajectory"]["points"]):
+    for k, (time_s, positions) in enumerate(zip(arrays["time_from_start"], arrays["positions"], strict=True)):
         seg = segment_of[k]
-        stamp = point["time_from_start"]
-        time_s = stamp["sec"] + stamp["nanosec"] * 1e-9
+        posture = seg["posture"] if seg["posture"] is not None else ""
         writer.writerow(
-            [
-                f"{time_s:.9f}",
-                seg["type"],
-                seg["chain"] or "",
-                seg["posture"] if seg["posture"] is not None else "",
-                *(repr(v) for v in point["positions"]),
-            ]
+            [f"{time_s:.9f}", seg["type"], seg["chain"] or "", posture, *(repr(float(v)) for v in positions)]
         )
-    csv_path = path.with_suffix(".csv")
-    write_atomic(path, text)
-    write_atomic(csv_path, buffer.getvalue())
-    return csv_path
+    return buffer.getvalue()

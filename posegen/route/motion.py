@@ -4,16 +4,17 @@
   its contact point (from the approach standoff down to ``overshoot_m`` below the plane,
   where force control takes over). Each height is a placo projection *from the contact
   posture*, so the path passes through the selected posture itself at height zero.
-* Free motion: a straight line in the stance space is tried first; if any state on it
-  is invalid, OMPL's RRTConnect plans in the stance space (seeded), then the path is
-  shortened and densified. Every returned waypoint has both soles exact and was checked.
+* Straight lines in the stance space, split so that no joint (the solved leg included)
+  moves more than ``waypoint_step_rad`` between checked waypoints: the building block of
+  every free motion (:mod:`posegen.route.free_motion`). Every returned waypoint has both
+  soles exact and was checked.
 """
 
 from __future__ import annotations
 
 import itertools
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,10 +25,8 @@ from posegen.robot import FloatArray, Projector, StanceSpace, contact_in_table
 LOG = logging.getLogger(__name__)
 
 HEIGHT_STEP_M = 0.005  # between the projected heights of a vertical path
-SEARCH_STEP_RAD = 0.05  # OMPL's validity-checking resolution while searching
 CLEARANCE_M = 0.15  # height of the via posture above a contact
 MAX_HALVINGS = 4  # of one interval of a straight line, to keep every joint's step small
-SIMPLIFY_STEPS = 100  # vertex-reduction attempts when shortening OMPL's path
 
 
 @dataclass(frozen=True)
@@ -83,21 +82,42 @@ def vertical_paths(space: StanceSpace, projector: Projector, joints: FloatArray,
 
 
 def straight(space: StanceSpace, start: FloatArray, goal: FloatArray) -> list[FloatArray] | None:
-    """Waypoints of the straight line in stance coordinates, each checked; None if blocked.
+    """Waypoints of the straight line in stance coordinates, each checked; None if blocked (see :func:`follow`)."""
+    a, b = space.coordinates_of(start), space.coordinates_of(goal)
+    return follow(space, lambda f: a + (b - a) * f, float(np.max(np.abs(b - a))), start, goal)
+
+
+def follow(
+    space: StanceSpace,
+    curve: Callable[[float], FloatArray],
+    length: float,
+    start: FloatArray,
+    goal: FloatArray,
+) -> list[FloatArray] | None:
+    """Waypoints along a curve in stance coordinates, each closed and checked; None if blocked.
 
     No joint moves more than ``waypoint_step_rad`` between consecutive waypoints: the
-    coordinates are split evenly, and an interval where the solved second leg moves
-    further is halved until it does not (or until MAX_HALVINGS).
+    curve's parameter is split evenly by its ``length`` (largest coordinate change), and
+    an interval where the solved second leg moves further is halved until it does not
+    (or until MAX_HALVINGS).
+
+    Args:
+        space: The stance space.
+        curve: Coordinates at a parameter in [0, 1]; curve(0) and curve(1) are those of
+            ``start`` and ``goal``.
+        length: Largest coordinate change along the curve, rad.
+        start: (nj,) the first state (its second leg warm-starts the first closure).
+        goal: (nj,) the last state, which the curve reaches at 1.
+
     """
-    a, b = space.coordinates_of(start), space.coordinates_of(goal)
     step = space.scene.route.waypoint_step_rad
-    count = max(1, int(np.ceil(np.max(np.abs(b - a)) / step)))
+    count = max(1, int(np.ceil(length / step)))
     path = [np.array(start, dtype=float)]
     fractions = [k / count for k in range(count, 0, -1)]  # a stack: the next fraction is last
     done, halvings = 0.0, 0
     while fractions:
         f = fractions[-1]
-        state = space.joints_of(a + (b - a) * f, path[-1])
+        state = space.joints_of(curve(f), path[-1])
         if state is None:
             return None
         if np.max(np.abs(state - path[-1])) > step * (1 + 1e-9) and halvings < MAX_HALVINGS:
@@ -113,94 +133,12 @@ def straight(space: StanceSpace, start: FloatArray, goal: FloatArray) -> list[Fl
     return path
 
 
-def plan_free(
-    space: StanceSpace, start: FloatArray, goal: FloatArray, vias: Sequence[Sequence[FloatArray]] = ()
-) -> list[FloatArray] | None:
-    """A checked free motion from ``start`` to ``goal`` (both valid), or None.
-
-    Tries, in order: the straight line; straight lines through each list of via
-    postures (e.g. up above the table and down again, or through the start posture);
-    OMPL's RRTConnect.
-    """
-    for via in [(), *vias]:
-        corners = [start, *via, goal]
-        path: list[FloatArray] = [np.array(start, dtype=float)]
-        for a, b in itertools.pairwise(corners):
-            leg = straight(space, a, b)
-            if leg is None:
-                break
-            path.extend(leg[1:])
-        else:
-            return path
-    return _plan_ompl(space, start, goal)
-
-
-def seed_planner(seed: int) -> None:
-    """Seed OMPL's process-wide random generator; effective only before its first use.
-
-    Called once at the start of ``posegen route`` so that a run is repeatable.
-    """
-    from ompl import util as ou
-
-    ou.setLogLevel(ou.LOG_ERROR)
-    ou.RNG.setSeed(seed + 1)  # OMPL takes 0 as "no seed"
-
-
-def _plan_ompl(space: StanceSpace, start: FloatArray, goal: FloatArray) -> list[FloatArray] | None:
-    from ompl import base as ob
-    from ompl import geometric as og
-    from ompl import util as ou
-
-    ou.setLogLevel(ou.LOG_ERROR)
-    n = len(space.coordinates)
-    state_space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    for i in range(n):
-        bounds.setLow(i, float(space.lower[i]))
-        bounds.setHigh(i, float(space.upper[i]))
-    state_space.setBounds(bounds)
-    setup = og.SimpleSetup(state_space)
-    ends = [
-        (space.coordinates_of(start), np.array(start, dtype=float)),
-        (space.coordinates_of(goal), np.array(goal, dtype=float)),
-    ]
-
-    checks = [0]
-
-    def valid(state: object) -> bool:
-        checks[0] += 1
-        x = np.array([state[i] for i in range(n)])  # type: ignore[index]
-        warm = min(ends, key=lambda end: float(np.max(np.abs(end[0] - x))))[1]  # close the leg from the nearer end
-        joints = space.joints_of(x, warm)
-        return joints is not None and space.is_valid(joints, None)
-
-    setup.setStateValidityChecker(valid)
-    info = setup.getSpaceInformation()
-    info.setStateValidityCheckingResolution(  # coarse while searching: the result is re-checked finely
-        SEARCH_STEP_RAD / max(state_space.getMaximumExtent(), 1e-9)
-    )
-    s0, s1 = state_space.allocState(), state_space.allocState()
-    for i, (u, v) in enumerate(zip(space.coordinates_of(start), space.coordinates_of(goal), strict=True)):
-        s0[i], s1[i] = float(u), float(v)
-    setup.setStartAndGoalStates(s0, s1)
-    setup.setPlanner(og.RRTConnect(info))
-    budget = int(space.scene.route.planning_checks)
-    # a budget of state checks, not of seconds: the same seed gives the same path on any machine
-    solved = setup.solve(ob.PlannerTerminationCondition(lambda: checks[0] >= budget))
-    if not solved or not setup.haveExactSolutionPath():
-        LOG.info("OMPL found no path in %d state checks", budget)
-        return None
-    solution = setup.getSolutionPath()
-    simplifier = og.PathSimplifier(info)
-    simplifier.reduceVertices(solution, SIMPLIFY_STEPS, SIMPLIFY_STEPS // 4)
-    simplifier.ropeShortcutPath(solution)
-    corners = [np.array([solution.getState(k)[i] for i in range(n)]) for k in range(solution.getStateCount())]
-    path = [np.array(start, dtype=float)]
-    for corner in corners[1:]:
-        goal_joints = space.joints_of(corner, path[-1])
-        leg = straight(space, path[-1], goal_joints) if goal_joints is not None else None
+def through(space: StanceSpace, corners: Sequence[FloatArray]) -> list[FloatArray] | None:
+    """Straight lines from corner to corner (see :func:`straight`), each checked; None if one is blocked."""
+    path: list[FloatArray] = [np.array(corners[0], dtype=float)]
+    for a, b in itertools.pairwise(corners):
+        leg = straight(space, a, b)
         if leg is None:
-            LOG.info("OMPL's path failed the fine check")
             return None
         path.extend(leg[1:])
     return path

@@ -1,7 +1,11 @@
 """The order postures are visited in: an open travelling-salesman path (python-tsp).
 
-Distance between two postures: the time the slowest joint needs at its velocity limit,
-max_j |q_a,j - q_b,j| / v_max,j (s). The path starts at a given posture (half-sitting) and
+Distance between two postures: the shortest rest-to-rest time of a straight joint-space
+move between them, max_j T(|q_a,j - q_b,j|; v_j, a_j) (s), with T the time of a
+trapezoidal (or triangular) velocity profile under the velocity and acceleration limits.
+Between contacts the robot starts and ends at rest and most moves never reach the
+velocity limit, so this is the robot time a move costs; max_j |dq_j| / v_j, which
+ignores accelerations, ranked the moves differently. The path starts at a given posture (half-sitting) and
 ends anywhere: the matrix column of the start is zeroed, so returning costs nothing.
 Nearest neighbour gives the start order, then 2-opt local search improves it.
 """
@@ -23,22 +27,43 @@ class Order:
     """A visiting order."""
 
     sequence: tuple[int, ...]  # indices of the postures, in visiting order
-    length_s: float  # sum of the time-like distances from the start along the sequence
+    length_s: float  # sum of the rest-to-rest times from the start along the sequence
     nearest_neighbour_s: float  # the same for the nearest-neighbour order
 
 
-def time_distances(points: FloatArray, velocity_limit: FloatArray) -> FloatArray:
-    """Pairwise max_j |dq_j| / v_j. points: (n, nj), returns (n, n) s."""
-    diff = np.abs(points[:, None, :] - points[None, :, :]) / velocity_limit[None, None, :]
-    return np.asarray(diff.max(axis=2))
+def rest_to_rest_time(distance: FloatArray, velocity_limit: FloatArray, acceleration_limit: FloatArray) -> FloatArray:
+    """Shortest time of each joint's rest-to-rest move, max over the last axis (joints).
+
+    Args:
+        distance: (..., nj) joint distances, rad.
+        velocity_limit: (nj,) rad/s.
+        acceleration_limit: (nj,) rad/s^2.
+
+    Returns:
+        (...) s.
+
+    """
+    d, v, a = np.abs(distance), velocity_limit, acceleration_limit
+    return np.asarray(np.max(np.where(d <= v**2 / a, 2.0 * np.sqrt(d / a), d / v + v / a), axis=-1))
+
+
+def transfer_times(points: FloatArray, velocity_limit: FloatArray, acceleration_limit: FloatArray) -> FloatArray:
+    """Pairwise rest-to-rest times. points: (n, nj), limits (nj,); returns (n, n) s."""
+    return rest_to_rest_time(points[:, None, :] - points[None, :, :], velocity_limit, acceleration_limit)
 
 
 def _path_length(distances: FloatArray, path: list[int]) -> float:
     return float(sum(distances[a, b] for a, b in itertools.pairwise(path)))
 
 
-def order_postures(start: FloatArray, postures: FloatArray, velocity_limit: FloatArray, seed: int = 0) -> Order:
-    """Open-path order of ``postures`` (n, nj) from ``start`` (nj,).
+def order_postures(
+    start: FloatArray,
+    postures: FloatArray,
+    velocity_limit: FloatArray,
+    acceleration_limit: FloatArray,
+    seed: int = 0,
+) -> Order:
+    """Open-path order of ``postures`` (n, nj) from ``start`` (nj,) under limits (nj,).
 
     python-tsp's 2-opt visits neighbours in an order drawn from Python's ``random``
     module: it is seeded with ``seed`` for the call, and its state restored after.
@@ -47,7 +72,7 @@ def order_postures(start: FloatArray, postures: FloatArray, velocity_limit: Floa
     if n == 0:
         return Order((), 0.0, 0.0)
     points = np.vstack([start[None], postures])
-    distances = time_distances(points, velocity_limit)
+    distances = transfer_times(points, velocity_limit, acceleration_limit)
     open_path = distances.copy()
     open_path[:, 0] = 0.0  # coming back to the start is free: an open path
     current, left, greedy = 0, set(range(1, n + 1)), [0]

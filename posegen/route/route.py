@@ -1,39 +1,63 @@
 """One robot-ready trajectory through the selected contact postures.
 
-Order (open TSP path from the start posture), then per posture: a free motion to its
-approach posture (the contact lifted by the standoff along the table normal, balanced),
-the approach down to just above the table, the go-to-contact through the contact to a
-small overshoot below the plane (force control takes over), a hold, and the release
-back up to the approach posture. Optionally a last free motion back to the start. A
-posture that cannot be reached is reported and skipped; the others are still routed.
-Every segment is timed rest to rest (:mod:`posegen.route.timing`), slower near the table.
+1. **Order**: an open TSP path from the start posture on rest-to-rest times
+   (:mod:`posegen.route.ordering`).
+2. **Stops**, one per posture, and **transfers**, one per consecutive pair
+   (:mod:`posegen.route.planner`), planned as independent jobs on a backend (local
+   processes or a Dask cluster, :mod:`posegen.parallel`); each job depends on its inputs
+   only, so the route is the same, byte for byte, whatever the backend and the number of
+   workers.
+3. **No posture lost** (:mod:`posegen.route.repair`): a posture whose transfer fails after
+   the whole ladder of attempts (:mod:`posegen.route.free_motion`) is taken out and tried
+   at other places in the order; if none works, or if it has no vertical approach, the
+   pool posture that restores the most information is routed instead. ``skipped`` lists
+   only postures for which the pool had no reachable substitute (or no pool was given).
+4. **Assembly**: transfer, go-to-contact, hold, transfer, ... and back to the start
+   posture (or, if that is impossible or not wanted, a last release up to the standoff).
+
+The robot is at rest at the start and the end, at every pre-contact pose (go-to-contact
+begins there, under force control) and in contact; nowhere else.
+
+Postures are numbered as nodes: ``0..n-1`` the input postures, ``n + r`` pool row ``r``
+(a substitute), -1 the start posture.
 """
 
 from __future__ import annotations
 
+import functools
+import itertools
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from posegen.errors import InfeasibleError
+from posegen.parallel import Backend, Job, ProcessBackend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import CollisionChecker, FloatArray, Posture, Projector, Scene, SegmentType, StanceSpace
-from posegen.route.motion import plan_free, vertical_paths
-from posegen.route.ordering import Order, order_postures
-from posegen.route.timing import Timed, hold, parameterize
+from posegen.robot import FloatArray, Posture, Scene, SegmentType
+from posegen.route.ordering import Order, order_postures, rest_to_rest_time
+from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer
+from posegen.route.repair import (
+    Substitutes,
+    Substitution,
+    insertion_places,
+    ranked_substitutes,
+    substitution,
+)
+from posegen.route.timing import SAFETY, Timed, hold, parameterize
 
 LOG = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
 class Segment:
-    """A run of trajectory points with one meaning."""
+    """A run of trajectory points with one meaning; consecutive segments share their boundary point."""
 
     type: SegmentType
     chain: str | None  # the arm at the table (None for free motions)
-    posture: int | None  # index of the posture in the input list
+    posture: int | None  # node of the posture (see the module docstring); None: none (the return)
     first: int  # index of its first point
     last: int  # index of its last point (inclusive)
 
@@ -48,128 +72,302 @@ class Route:
     velocities: FloatArray  # (m, nj) rad/s
     accelerations: FloatArray  # (m, nj) rad/s^2
     segments: tuple[Segment, ...]
-    order: Order
-    skipped: tuple[tuple[int, str], ...]  # (posture index, reason)
+    order: Order  # the TSP order of the input postures (before any repair)
+    skipped: tuple[tuple[int, str], ...]  # (posture node, reason): lost, with no substitute
+    substitutions: tuple[Substitution, ...]
+    methods: tuple[str, ...]  # how each transfer's free motion was found, in route order
+    returns: bool  # whether the route ends at the start posture
 
     @property
     def visited(self) -> tuple[int, ...]:
-        """Indices of the postures touched, in order."""
+        """Nodes of the postures touched, in order."""
         return tuple(s.posture for s in self.segments if s.type == SegmentType.HOLD and s.posture is not None)
-
-
-def start_posture(scene: Scene) -> FloatArray | None:
-    """The reference posture, locked joints at their values, second leg closed on its sole.
-
-    Returns:
-        (nj,) joint angles, or None if the second sole cannot be reached from it.
-
-    """
-    return scene.close_stance(np.where(scene.locked, scene.locked_values, scene.reference))
 
 
 def plan_route(
     scene: Scene,
     postures: Sequence[Posture],
     seed: int = 0,
+    workers: int | Backend = 1,
+    substitutes: Substitutes | None = None,
     progress: ProgressCallback = ignore_progress,
 ) -> Route:
-    """Plan and time the visit of every reachable posture.
+    """Plan and time the visit of every posture.
 
     Args:
         scene: Scene.
         postures: Contact postures (a selection or a pool).
-        seed: Seed of the TSP local search (OMPL's generator is seeded once per process,
-            see :func:`posegen.route.motion.seed_planner`).
-        progress: Told after each posture.
+        seed: Seed of the TSP local search, of OMPL's streams and of the shortcuts.
+        workers: Local worker processes planning stops and transfers (1: this process),
+            or the backend to run them on.
+        substitutes: The pool of a selection, to replace a posture that cannot be routed;
+            None: such a posture is skipped.
+        progress: Told after each planning job.
 
     Raises:
         InfeasibleError: The start posture is invalid, or no posture can be reached.
 
     """
-    checker = CollisionChecker(scene, convex=True)
-    space = StanceSpace(scene, checker)
-    projector = Projector(scene)
-    route_cfg = scene.route
-    start = start_posture(scene)
-    if start is None or not space.is_valid(start, None):
+    local = Planner(scene, seed)
+    start = local.start
+    if start is None or not local.space.is_valid(start, None):
         raise InfeasibleError("the start posture (reference posture) is not balanced and collision-free")
+    velocity = SAFETY * scene.velocity_limit * scene.route.velocity_scale_free
+    acceleration = SAFETY * np.full(len(scene.joint_names), scene.route.acceleration_limit_rad_s2)
     joints = np.array([p.joints for p in postures], dtype=float).reshape(len(postures), -1)
-    order = order_postures(start, joints, scene.velocity_limit, seed)
-    pieces: list[tuple[SegmentType, str | None, int | None, list[FloatArray]]] = []
-    skipped: list[tuple[int, str]] = []
-    current, current_high = start, None
-    for done, index in enumerate(order.sequence, start=1):
-        posture = postures[index]
-        vertical = vertical_paths(space, projector, joints[index], posture.chain)
-        if vertical is None:
-            skipped.append((index, "no balanced, collision-free vertical approach above the contact"))
-        else:
-            highs = [h for h in (current_high, vertical.clearance) if h is not None]
-            free = plan_free(space, current, vertical.approach[0], vias=[highs, [start]])
-            if free is None:
-                skipped.append((index, f"no free motion found in {int(route_cfg.planning_checks)} state checks"))
-            else:
-                down = list(vertical.approach) + list(vertical.go_to_contact[1:])
-                pieces += [
-                    (SegmentType.FREE, None, index, free),
-                    (SegmentType.APPROACH, posture.chain, index, list(vertical.approach)),
-                    (SegmentType.GO_TO_CONTACT, posture.chain, index, list(vertical.go_to_contact)),
-                    (SegmentType.HOLD, posture.chain, index, [vertical.go_to_contact[-1]]),
-                    (SegmentType.RELEASE, posture.chain, index, down[::-1]),
-                ]
-                current, current_high = vertical.approach[0], vertical.clearance
-        if skipped and skipped[-1][0] == index:
-            LOG.info("posture %d skipped: %s", index, skipped[-1][1])
-        progress(Progress(done, len(postures), "posture"))
-    if not pieces:
-        raise InfeasibleError(f"no posture could be reached ({len(skipped)} skipped)")
-    if route_cfg.return_to_start:
-        back = plan_free(space, current, start, vias=[[current_high]] if current_high is not None else [])
-        if back is None:
-            LOG.warning("no free motion back to the start posture: the route ends at the last approach posture")
-        else:
-            pieces.append((SegmentType.FREE, None, None, back))
-    return _assemble(scene, pieces, order, skipped)
+    order = order_postures(start, joints, velocity, acceleration, seed)
+    job = planning_job(scene, seed)
+    if isinstance(workers, Backend):
+        run = _Routing(scene, postures, substitutes, start, functools.partial(workers.map, job), progress)
+        run.plan(order.sequence)
+    else:
+        with ProcessBackend(workers) as backend:
+            run = _Routing(scene, postures, substitutes, start, functools.partial(backend.map, job), progress)
+            run.plan(order.sequence)
+    return run.assemble(order)
 
 
-def _assemble(
-    scene: Scene,
-    pieces: list[tuple[SegmentType, str | None, int | None, list[FloatArray]]],
-    order: Order,
-    skipped: list[tuple[int, str]],
-) -> Route:
-    cfg = scene.route
-    scale = {
-        SegmentType.FREE: cfg.velocity_scale_free,
-        SegmentType.APPROACH: cfg.velocity_scale_near,
-        SegmentType.RELEASE: cfg.velocity_scale_near,
-        SegmentType.GO_TO_CONTACT: cfg.velocity_scale_contact,
-        SegmentType.HOLD: cfg.velocity_scale_contact,
-    }
-    acceleration = np.full(len(scene.joint_names), cfg.acceleration_limit_rad_s2)
-    times: list[float] = []
-    rows: list[tuple[FloatArray, FloatArray, FloatArray]] = []
-    segments: list[Segment] = []
-    for kind, chain, posture, waypoints in pieces:
-        if kind == SegmentType.HOLD:
-            timed: Timed = hold(waypoints[0], cfg.hold_s)
-        else:
-            timed = parameterize(np.array(waypoints), scene.velocity_limit * scale[kind], acceleration)
-        offset = times[-1] if times else 0.0
-        skip = 1 if times else 0  # a segment starts where the previous one ended, at rest
-        first = max(len(times) - 1, 0)
-        for k in range(skip, len(timed.times)):
-            times.append(offset + float(timed.times[k]))
-            rows.append((timed.positions[k], timed.velocities[k], timed.accelerations[k]))
-        segments.append(Segment(kind, chain, posture, first, len(times) - 1))
-    positions, velocities, accelerations = (np.array([r[i] for r in rows]) for i in range(3))
-    return Route(
-        joint_names=scene.joint_names,
-        times=np.array(times),
-        positions=positions,
-        velocities=velocities,
-        accelerations=accelerations,
-        segments=tuple(segments),
-        order=order,
-        skipped=tuple(skipped),
+def _plan_one(planner: Planner, request: tuple[str, Any]) -> Stop | Transfer | str:
+    """One job of a route: a stop (``("stop", ...)``) or a transfer (``("transfer", ...)``)."""
+    kind, item = request
+    return plan_stop(planner, item) if kind == "stop" else plan_transfer(planner, item)
+
+
+def planning_job(scene: Scene, seed: int) -> Job[Planner, tuple[str, Any], Stop | Transfer | str]:
+    """The route's work: stops and transfers, each planned by a worker's planner."""
+    return Job(
+        name=job_name("route", scene.config.to_dict(), scene.files.sha256(), seed),
+        setup=functools.partial(Planner.from_config, scene.config, seed),
+        run=_plan_one,
     )
+
+
+class _Routing:
+    """The state of one planning: stops and transfers planned so far, the sequence, the repairs."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        postures: Sequence[Posture],
+        substitutes: Substitutes | None,
+        start: FloatArray,
+        run: Callable[[Iterable[tuple[str, Any]]], Iterator[Stop | Transfer | str]],
+        progress: ProgressCallback,
+    ) -> None:
+        self.scene = scene
+        self.postures = postures
+        self.substitutes = substitutes
+        self.start = start
+        self.run = run  # the backend's map of the planning job
+        self.progress = progress
+        self.stops: dict[int, Stop | str] = {}
+        self.transfers: dict[tuple[int, int], Transfer | str] = {}
+        self.sequence: list[int] = []
+        self.closed = scene.route.return_to_start
+        self.skipped: list[tuple[int, str]] = []
+        self.substitutions: list[Substitution] = []
+        self.jobs, self.expected = 0, 2 * len(postures) + 1
+        route = scene.route
+        self._velocity = SAFETY * scene.velocity_limit * route.velocity_scale_free
+        self._acceleration = SAFETY * np.full(len(scene.joint_names), route.acceleration_limit_rad_s2)
+
+    # -- nodes --------------------------------------------------------------------------
+
+    def posture(self, node: int) -> Posture:
+        """The posture of a node."""
+        if node < len(self.postures):
+            return self.postures[node]
+        assert self.substitutes is not None
+        return self.substitutes.postures[node - len(self.postures)]
+
+    def joints(self, node: int) -> FloatArray:
+        """The joint angles of a node (the start posture for -1). Shape (nj,)."""
+        return self.start if node == START else np.array(self.posture(node).joints, dtype=float)
+
+    def row(self, node: int) -> int | None:
+        """The pool row of a node, if known."""
+        if node >= len(self.postures):
+            return node - len(self.postures)
+        return self.substitutes.rows[node] if self.substitutes is not None else None
+
+    def time(self, a: int, b: int) -> float:
+        """Rest-to-rest time between two nodes at the free velocity scale, s."""
+        return float(rest_to_rest_time(self.joints(b) - self.joints(a), self._velocity, self._acceleration))
+
+    # -- jobs ---------------------------------------------------------------------------
+
+    def _report(self) -> None:
+        self.jobs += 1
+        self.expected = max(self.expected, self.jobs)
+        self.progress(Progress(self.jobs, self.expected, "job"))
+
+    def plan_stops(self, nodes: Sequence[int]) -> None:
+        """Plan the stops not planned yet (one batch over the workers)."""
+        todo = [n for n in dict.fromkeys(nodes) if n not in self.stops]
+        requests = [("stop", (n, tuple(self.posture(n).joints), self.posture(n).chain)) for n in todo]
+        for node, stop in zip(todo, self.run(requests), strict=True):
+            assert not isinstance(stop, Transfer)
+            self.stops[node] = stop
+            self._report()
+
+    def plan_transfers(self, pairs: Sequence[tuple[int, int]]) -> None:
+        """Plan the transfers not planned yet (one batch over the workers)."""
+        todo = [p for p in dict.fromkeys(pairs) if p not in self.transfers]
+        requests = [("transfer", (self._stop(a), self._stop(b))) for a, b in todo]
+        for pair, transfer in zip(todo, self.run(requests), strict=True):
+            assert not isinstance(transfer, Stop)
+            self.transfers[pair] = transfer
+            if isinstance(transfer, str):
+                LOG.info("transfer %s -> %s: %s", *pair, transfer)
+            self._report()
+
+    def _stop(self, node: int) -> Stop | None:
+        if node == START:
+            return None
+        stop = self.stops[node]
+        assert not isinstance(stop, str)
+        return stop
+
+    def pairs(self, sequence: Sequence[int], closed: bool) -> list[tuple[int, int]]:
+        """Consecutive pairs of a visiting order, from the start posture (and back to it if closed)."""
+        nodes = [START, *sequence, *([START] if closed and sequence else [])]
+        return list(itertools.pairwise(nodes))
+
+    # -- planning -----------------------------------------------------------------------
+
+    def plan(self, order: Sequence[int]) -> None:
+        """Plan stops and transfers, then place again or substitute what could not be reached."""
+        self.plan_stops(order)
+        lost = {n: s for n in order if isinstance(s := self.stops[n], str)}
+        self.sequence = [n for n in order if n not in lost]
+        unplaced: list[tuple[int, str]] = []
+        while self.sequence:
+            pairs = self.pairs(self.sequence, self.closed)
+            self.plan_transfers(pairs)
+            failed = [(a, b) for a, b in pairs if isinstance(self.transfers[(a, b)], str)]
+            if not failed:
+                break
+            for a, b in failed:
+                if b == START:
+                    LOG.warning("no free motion back to the start posture: the route ends above the last contact")
+                    self.closed = False
+                elif b in self.sequence:
+                    self.sequence.remove(b)
+                    unplaced.append((b, f"from posture {a}: {self.transfers[(a, b)]}"))
+        for node, reason in unplaced:
+            if not self.insert(node):
+                lost[node] = reason
+        for node in sorted(lost):
+            if not self.substitute(node, str(lost[node])):
+                self.skipped.append((node, str(lost[node])))
+                LOG.warning("posture %d skipped: %s", node, lost[node])
+        if not self.sequence:
+            raise InfeasibleError(f"no posture could be reached ({len(self.skipped)} skipped)")
+
+    def insert(self, node: int) -> bool:
+        """Try ``node`` at the cheapest other places in the order; True if placed."""
+        places = insertion_places(self.sequence, self.closed, node, self.time)
+        needed: list[tuple[int, int]] = []
+        for k in places:
+            trial = [*self.sequence[:k], node, *self.sequence[k:]]
+            needed.extend(p for p in self.pairs(trial, self.closed) if node in p)
+        self.plan_transfers(needed)
+        for k in places:
+            trial = [*self.sequence[:k], node, *self.sequence[k:]]
+            if all(not isinstance(self.transfers[p], str) for p in self.pairs(trial, self.closed) if node in p):
+                self.sequence = trial
+                return True
+        return False
+
+    def substitute(self, lost: int, reason: str) -> bool:
+        """Route the pool posture that restores the most information instead of ``lost``; True if done."""
+        if self.substitutes is None:
+            return False
+        tried: set[int] = {r for n in self.stops if (r := self.row(n)) is not None and n >= len(self.postures)}
+        routed = [r for n in self.sequence if (r := self.row(n)) is not None]
+        rows = ranked_substitutes(self.substitutes, routed, tried)
+        nodes = [len(self.postures) + r for r in rows]
+        self.plan_stops(nodes)
+        for node in nodes:
+            if not isinstance(self.stops[node], str) and self.insert(node):
+                row = node - len(self.postures)
+                record = substitution(self.substitutes, lost, reason, row, [*routed, row])
+                self.substitutions.append(record)
+                LOG.warning(
+                    "posture %d replaced by pool posture %d (O1 %.2f -> %.2f): %s",
+                    lost,
+                    row,
+                    record.o1_before,
+                    record.o1_after,
+                    reason,
+                )
+                return True
+        return False
+
+    # -- assembly -----------------------------------------------------------------------
+
+    def assemble(self, order: Order) -> Route:
+        """Concatenate the timed pieces into one trajectory with its segment table."""
+        route = self.scene.route
+        pieces: list[tuple[Timed, list[tuple[SegmentType, int | None]]]] = []
+        methods: list[str] = []
+        previous = START
+        for node in [*self.sequence, *([START] if self.closed else [])]:
+            transfer = self.transfers[(previous, node)]
+            assert isinstance(transfer, Transfer)
+            methods.append(transfer.method.value)
+            owner = {SegmentType.RELEASE: previous, SegmentType.FREE: node, SegmentType.APPROACH: node}
+            pieces.append((transfer.timed, [(k, owner[k] if owner[k] != START else None) for k in transfer.kinds]))
+            if node != START:
+                stop = self._stop(node)
+                assert stop is not None
+                contact = stop.go_to_contact
+                pieces.append((contact, [(SegmentType.GO_TO_CONTACT, node)] * len(contact.times)))
+                pieces.append((hold(contact.positions[-1], route.hold_s), [(SegmentType.HOLD, node)] * 2))
+            previous = node
+        if not self.closed:  # straight up to the standoff, at rest
+            stop = self._stop(previous)
+            assert stop is not None
+            up = np.vstack([stop.go_to_contact.positions[::-1], stop.approach[::-1][1:]])
+            limit = self.scene.velocity_limit * route.velocity_scale_near
+            timed = parameterize(up, limit, np.full(len(limit), route.acceleration_limit_rad_s2))
+            pieces.append((timed, [(SegmentType.RELEASE, previous)] * len(timed.times)))
+        return self._concatenate(pieces, order, tuple(methods))
+
+    def _concatenate(
+        self, pieces: list[tuple[Timed, list[tuple[SegmentType, int | None]]]], order: Order, methods: tuple[str, ...]
+    ) -> Route:
+        times: list[FloatArray] = []
+        rows: list[FloatArray] = []
+        tags: list[tuple[SegmentType, int | None]] = []
+        offset = 0.0
+        for timed, kinds in pieces:
+            skip = 1 if times else 0  # a piece starts where the previous one ended, at rest
+            times.append(offset + timed.times[skip:])
+            rows.append(np.hstack([timed.positions, timed.velocities, timed.accelerations])[skip:])
+            if skip:
+                tags[-1] = kinds[0]  # the shared point belongs to the later piece
+            tags.extend(kinds[skip:])
+            offset = float(times[-1][-1])
+        stacked = np.vstack(rows)
+        nj = len(self.scene.joint_names)
+        starts = [0] + [k for k in range(1, len(tags)) if tags[k] != tags[k - 1]]
+        segments = []
+        for i, first in enumerate(starts):
+            kind, node = tags[first]
+            chain = self.posture(node).chain if node is not None and kind != SegmentType.FREE else None
+            last = starts[i + 1] if i + 1 < len(starts) else len(tags) - 1  # ends where the next begins
+            segments.append(Segment(kind, chain, node, first, last))
+        return Route(
+            joint_names=self.scene.joint_names,
+            times=np.concatenate(times),
+            positions=stacked[:, :nj],
+            velocities=stacked[:, nj : 2 * nj],
+            accelerations=stacked[:, 2 * nj :],
+            segments=tuple(segments),
+            order=order,
+            skipped=tuple(self.skipped),
+            substitutions=tuple(self.substitutions),
+            methods=methods,
+            returns=self.closed,
+        )

@@ -5,10 +5,15 @@ checked for collisions, so no point is invented between them. toppra finds the f
 path velocity at the waypoints (a cubic spline through them as the path) under joint
 velocity and acceleration limits shrunk by ``SAFETY``; the result is then verified at
 every point and, should toppra overshoot a limit, the segment is slowed down uniformly.
+
+The velocity limit may differ from waypoint to waypoint (slow near the table, fast away
+from it): one path from a contact to the next is then timed at once, and the robot
+stops only at its two ends. Between two waypoints the lower of their limits holds.
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,8 +23,10 @@ import toppra.constraint
 
 from posegen.robot import FloatArray
 
+LOG = logging.getLogger(__name__)
+
 SAFETY = 0.95  # toppra plans to this fraction of the limits
-GRID_FACTOR = 4  # toppra grid points per waypoint
+GRID_FACTOR = 8  # toppra grid points per waypoint (with 4, the spline went up to 20 % past the limits between them)
 DUPLICATE_RAD = 1e-12
 
 
@@ -45,36 +52,46 @@ def parameterize(waypoints: FloatArray, velocity_limit: FloatArray, acceleration
 
     Args:
         waypoints: (m, nj) rad; consecutive duplicates are dropped.
-        velocity_limit: (nj,) rad/s.
+        velocity_limit: (nj,) rad/s, or (m, nj): the limit at each waypoint.
         acceleration_limit: (nj,) rad/s^2.
 
     """
-    points = [np.asarray(waypoints[0], dtype=float)]
-    for w in waypoints[1:]:
+    waypoints = np.asarray(waypoints, dtype=float)
+    limits = np.broadcast_to(np.asarray(velocity_limit, dtype=float), waypoints.shape)
+    points, point_limits = [waypoints[0]], [limits[0]]
+    for w, limit in zip(waypoints[1:], limits[1:], strict=True):
         if np.max(np.abs(w - points[-1])) > DUPLICATE_RAD:
-            points.append(np.asarray(w, dtype=float))
+            points.append(w)
+            point_limits.append(limit)
+        else:
+            point_limits[-1] = np.minimum(point_limits[-1], limit)
     positions = np.array(points)
+    vlim = np.array(point_limits)  # (m, nj) rad/s
     if len(positions) == 1:
         zeros = np.zeros_like(positions)
         return Timed(np.array([0.0]), positions, zeros, zeros.copy())
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))])
     if len(positions) == 2:  # no spline: the rest-to-rest time of the slowest joint (bang-bang)
         distance = np.abs(positions[1] - positions[0])
-        v, a = SAFETY * velocity_limit, SAFETY * acceleration_limit
+        v, a = SAFETY * np.minimum(vlim[0], vlim[1]), SAFETY * acceleration_limit
         duration = float(np.max(np.where(distance <= v**2 / a, 2 * np.sqrt(distance / a), distance / v + v / a)))
         zeros = np.zeros_like(positions)
         return Timed(np.array([0.0, duration]), positions, zeros, zeros.copy())
     path = toppra.SplineInterpolator(s, positions)
-    v = SAFETY * velocity_limit
     a = SAFETY * acceleration_limit
-    constraints = [
-        toppra.constraint.JointVelocityConstraint(np.column_stack([-v, v])),
-        toppra.constraint.JointAccelerationConstraint(np.column_stack([-a, a])),
-    ]
     # Grid: the waypoints plus a uniform subdivision. On the waypoints alone toppra can
     # return a near-zero path speed before a sharp turn (seen: 108 s for a 0.5 s move).
     grid = np.unique(np.concatenate([s, np.linspace(0.0, s[-1], GRID_FACTOR * len(s))]))
     at_waypoint = np.searchsorted(grid, s)
+    interval = np.clip(
+        np.searchsorted(s, grid, side="right") - 1, 0, len(s) - 2
+    )  # waypoint interval of each grid point
+    grid_limit = SAFETY * np.minimum(vlim[interval], vlim[interval + 1])  # (grid, nj)
+    bounds = {float(g): np.column_stack([-v, v]) for g, v in zip(grid, grid_limit, strict=True)}
+    constraints = [
+        toppra.constraint.JointVelocityConstraintVarying(lambda x: bounds[float(x)]),
+        toppra.constraint.JointAccelerationConstraint(np.column_stack([-a, a])),
+    ]
     instance = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
     sdd, sd, _ = instance.compute_parameterization(0, 0)
     if sd is None or sdd is None:
@@ -86,16 +103,38 @@ def parameterize(waypoints: FloatArray, velocity_limit: FloatArray, acceleration
     sd, sdd = sd[at_waypoint], sdd[at_waypoint]
     velocities = path(s, 1) * sd[:, None]
     accelerations = path(s, 2) * sd[:, None] ** 2 + path(s, 1) * sdd[:, None]
-    return _within_limits(Timed(times, positions, velocities, accelerations), velocity_limit, acceleration_limit)
+    return _within_limits(Timed(times, positions, velocities, accelerations), vlim, acceleration_limit)
+
+
+def consistency_ratio(timed: Timed, acceleration_limit: FloatArray) -> float:
+    """How far the velocities are from agreeing with the positions, as a fraction of what is allowed.
+
+    A motion whose acceleration stays within ``a`` has, between two points, a mean
+    velocity within a dt / 2 of the velocities at both ends. toppra bounds accelerations
+    at its grid points only; between them the timed spline may exceed the limit a
+    little, which this ratio (> 1) reveals. ``posegen check`` verifies the same rule.
+    """
+    if len(timed.times) < 2:
+        return 0.0
+    dt = np.diff(timed.times)[:, None]
+    mean = np.diff(timed.positions, axis=0) / dt
+    error = np.maximum(np.abs(mean - timed.velocities[:-1]), np.abs(mean - timed.velocities[1:]))
+    return float(np.max(error / (acceleration_limit * dt / 2)))
 
 
 def _within_limits(timed: Timed, velocity_limit: FloatArray, acceleration_limit: FloatArray) -> Timed:
-    """Slow the segment down uniformly (t -> l t) if it exceeds a limit anywhere."""
+    """Slow the segment down uniformly (t -> l t) if it exceeds a limit anywhere.
+
+    Velocities scale by 1 / l, accelerations and the consistency ratio by 1 / l^2.
+    ``velocity_limit`` is (nj,) or (m, nj), one row per point.
+    """
     ratio_v = float(np.max(np.abs(timed.velocities) / velocity_limit))
     ratio_a = float(np.max(np.abs(timed.accelerations) / acceleration_limit))
-    stretch = max(1.0, ratio_v, np.sqrt(ratio_a))
+    ratio_c = consistency_ratio(timed, acceleration_limit)
+    stretch = max(1.0, ratio_v, np.sqrt(ratio_a), np.sqrt(ratio_c))
     if stretch == 1.0:
         return timed
+    LOG.debug("slowed by %.3f (velocity %.3f, acceleration %.3f, consistency %.3f)", stretch, ratio_v, ratio_a, ratio_c)
     return Timed(
         timed.times * stretch,
         timed.positions,

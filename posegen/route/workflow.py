@@ -3,18 +3,25 @@
 from __future__ import annotations
 
 import hashlib
+import logging
+import statistics
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from posegen.io import SegmentRow, write_trajectory_bag
+from posegen.errors import InputError
+from posegen.model import Design, build_design
+from posegen.parallel import Backend
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import Verification, load_plan, read_route, route_arrays, scene_for
-from posegen.route.check import verify_route
-from posegen.route.export import route_to_dict, write_route
-from posegen.route.motion import seed_planner
+from posegen.io import SegmentRow, write_trajectory_bag
+from posegen.robot import Pool, Scene, SegmentType, Verification, load_plan, read_route, route_arrays, scene_for
+from posegen.route.check import MIN_DT_S, verify_route
+from posegen.route.export import route_header, write_route
+from posegen.route.repair import Substitutes, o1_figures
 from posegen.route.route import Route, plan_route
+
+LOG = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -23,21 +30,34 @@ class Routed:
 
     route: Route
     summary: dict[str, Any]  # the figures recorded in the route file
-    csv_path: Path  # the CSV written beside the route file
+    written: tuple[Path, ...]  # the route file, its arrays (and the CSV if asked)
     planning_s: float  # wall time of the planning
+    repair: str  # how a lost posture would be repaired: from which pool, or why not
 
 
 def route_plan_file(
-    plan_path: str, output: str, seed: int, config_path: str | None, progress: ProgressCallback = ignore_progress
+    plan_path: str,
+    output: str,
+    seed: int = 0,
+    config_path: str | None = None,
+    progress: ProgressCallback = ignore_progress,
+    *,
+    workers: int | Backend = 1,
+    pool_path: str | None = None,
+    csv: bool = False,
 ) -> Routed:
     """Plan, time and export a trajectory through the postures of a selection (or pool) file.
 
     Args:
         plan_path: Selection or pool file.
-        output: Route file, ``.yaml`` or ``.json``; a ``.csv`` is written beside it.
-        seed: Seed of the ordering and of OMPL (seeded once per process).
+        output: Route file, ``.yaml`` or ``.json``; its arrays go to ``.npz`` beside it.
+        seed: Seed of the ordering, of OMPL's streams and of the shortcuts.
         config_path: Scene config; None: the one saved in the plan.
-        progress: Told after each posture.
+        progress: Told after each planning job.
+        workers: Local worker processes planning the route's segments, or the backend to run them on.
+        pool_path: The pool a selection came from (to substitute a posture that cannot
+            be reached); None: the one the selection records, if it is still there.
+        csv: Also write a CSV of the points beside the route.
 
     Raises:
         PosegenError: Bad or empty plan, another robot model, or no posture reachable.
@@ -47,22 +67,18 @@ def route_plan_file(
     scene = scene_for(plan.provenance, config_path)
     scene.check_made_for(plan.provenance, plan_path)
     plan.check_joints(scene.joint_names, plan_path)
-    seed_planner(seed)
-    progress(Progress(0, len(plan.postures), "posture"))
+    substitutes, pool_entries, repair = _substitutes(scene, plan, entries, plan_path, pool_path)
+    progress(Progress(0, 2 * len(plan.postures) + 1, "job"))
     start = time.perf_counter()
-    route = plan_route(scene, plan.postures, seed, progress)
+    route = plan_route(scene, plan.postures, seed, workers, substitutes, progress)
     elapsed = time.perf_counter() - start
-    visited = len(route.visited)
-    summary = {
-        "postures": len(plan.postures),
-        "routed": visited,
-        "skipped": len(route.skipped),
-        "points": len(route.times),
-        "duration_s": float(route.times[-1]),
-        "robot_time_per_contact_s": float(route.times[-1]) / max(visited, 1),
-        "tsp_length_s": route.order.length_s,
-        "nearest_neighbour_length_s": route.order.nearest_neighbour_s,
-    }
+    n = len(entries)
+    nodes = {i: entries[i] for i in range(n)}
+    nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
+    summary = _summary(scene, route, len(plan.postures))
+    summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
+    if substitutes is not None and route.substitutions:
+        summary["information"] = o1_figures(substitutes, [r for v in route.visited if (r := _row(v, n, substitutes))])
     provenance = dict(plan.provenance)
     provenance.update(
         {
@@ -71,28 +87,102 @@ def route_plan_file(
             "selection_sha256": hashlib.sha256(Path(plan_path).read_bytes()).hexdigest(),
         }
     )
-    csv_path = write_route(Path(output), route_to_dict(route, entries, provenance, summary))
-    return Routed(route=route, summary=summary, csv_path=csv_path, planning_s=elapsed)
+    written = write_route(Path(output), route, route_header(route, nodes, provenance, summary), csv)
+    return Routed(route=route, summary=summary, written=tuple(written), planning_s=elapsed, repair=repair)
 
 
-def check_route_file(path: str, config_path: str | None, progress: ProgressCallback = ignore_progress) -> Verification:
+def _row(node: int, n: int, substitutes: Substitutes) -> int | None:
+    return node - n if node >= n else substitutes.rows[node]
+
+
+def _substitutes(
+    scene: Scene, plan: Pool, entries: list[dict[str, Any]], plan_path: str, pool_path: str | None
+) -> tuple[Substitutes | None, list[dict[str, Any]], str]:
+    """The pool a selection came from, if it can be found; and a word on what a repair can use."""
+    if not all("pool_id" in e for e in entries):
+        return None, [], "no repair: the input is a pool, not a selection"
+    recorded = plan.provenance.get("pool")
+    path = Path(pool_path) if pool_path else (Path(recorded) if recorded else None)
+    if path is None or not path.exists():
+        return None, [], f"no repair: the selection's pool {path} is not there (give it with --pool)"
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    expected = plan.provenance.get("pool_sha256")
+    if expected and digest != expected:
+        if pool_path:
+            raise InputError(f"{path}: sha256 differs from the pool the selection {plan_path} was made from")
+        return None, [], f"no repair: {path} changed since the selection was made (sha256 differs)"
+    pool, pool_entries = load_plan(path)
+    pool.check_joints(scene.joint_names, str(path))
+    chains = [p.chain for p in pool.postures]
+
+    def design() -> Design:
+        return build_design(scene, pool.joints(), chains)[0]
+
+    rows = tuple(int(e["pool_id"]) if 0 <= int(e["pool_id"]) < len(pool.postures) else None for e in entries)
+    return Substitutes(pool.postures, rows, design), pool_entries, f"repair from {path}"
+
+
+def _summary(scene: Scene, route: Route, postures: int) -> dict[str, Any]:
+    """The figures a route file records (no wall time: the same seed gives the same file)."""
+    per_contact = []  # from leaving the previous contact (or the start) to leaving this one
+    previous_end = 0.0
+    for seg in route.segments:
+        if seg.type == SegmentType.HOLD:
+            end = float(route.times[seg.last])
+            per_contact.append(end - previous_end)
+            previous_end = end
+    by_type: dict[str, float] = {}
+    for seg in route.segments:
+        by_type[seg.type.value] = by_type.get(seg.type.value, 0.0) + float(
+            route.times[seg.last] - route.times[seg.first]
+        )
+    visited = len(route.visited)
+    methods: dict[str, int] = {}
+    for method in route.methods:
+        methods[method] = methods.get(method, 0) + 1
+    return {
+        "postures": postures,
+        "routed": visited,
+        "substituted": len(route.substitutions),
+        "skipped": len(route.skipped),
+        "points": len(route.times),
+        "duration_s": float(route.times[-1]),
+        "robot_time_per_contact_s": float(route.times[-1]) / max(visited, 1),
+        "robot_time_per_contact_median_s": statistics.median(per_contact) if per_contact else 0.0,
+        "robot_time_by_segment_s": by_type,
+        "returns_to_start": route.returns,
+        "free_motions": methods,
+        "tsp_length_s": route.order.length_s,
+        "nearest_neighbour_length_s": route.order.nearest_neighbour_s,
+    }
+
+
+def check_route_file(
+    path: str,
+    config_path: str | None,
+    progress: ProgressCallback = ignore_progress,
+    workers: int | Backend = 1,
+    min_dt: float = MIN_DT_S,
+) -> Verification:
     """Re-verify every point of a route file from its joint angles, on the robot's meshes.
 
     Args:
-        path: Route file (YAML or JSON).
+        path: Route file (YAML or JSON header; its ``.npz`` beside it).
         config_path: Scene config; None: the one saved in the route.
-        progress: Told after each point.
+        progress: Told as points are checked.
+        workers: Local processes checking collisions, or the backend to run them on.
+        min_dt: Smallest allowed time step, s.
 
     Raises:
-        PosegenError: Not a route, or a route made for another robot model.
+        PosegenError: Not a route, arrays missing or not the header's, or a route made
+            for another robot model.
 
     """
     data = read_route(path)
     recorded = data.get("provenance") or {}
     scene = scene_for(recorded, config_path)
     scene.check_made_for(recorded, path)
-    progress(Progress(0, len(data["trajectory"]["points"]), "point"))
-    return verify_route(scene, data, progress)
+    return verify_route(scene, data, min_dt, workers, progress)
 
 
 @dataclass(frozen=True)

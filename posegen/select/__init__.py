@@ -6,7 +6,7 @@ exact k-posture designs (greedy, Fedorov exchange, DETMAX), IROC, and the select
 file with its plots.
 """
 
-from posegen.select.design import Design, build_design
+from posegen.model import Design, build_design
 from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
 from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import Iroc, detmax_runs, iroc, select_k, weight_of

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
+from posegen.model import Design
 from posegen.robot import FloatArray
-from posegen.select.design import Design
 
 REFRESH_EVERY = 50  # exact recomputation of M^-1 and d every this many steps
 WARM_START = 30  # multiplicative-algorithm steps before Frank-Wolfe (each a full pass)

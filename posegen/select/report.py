@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from posegen.model import Design
 from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool
-from posegen.select.design import Design
 from posegen.select.selection import Iroc
 from posegen.select.subset_selection import Subset
 

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from posegen.model import SINGULAR, Design
 from posegen.robot import FloatArray
-from posegen.select.design import SINGULAR, Design
 from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
 from posegen.select.subset_selection import Subset, detmax, exchange, greedy, subset_of
 

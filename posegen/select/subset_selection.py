@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from posegen.errors import InfeasibleError
+from posegen.model import RIDGE, Design
 from posegen.robot import FloatArray
-from posegen.select.design import RIDGE, Design
 
 IMPROVEMENT = 1e-9  # smallest log-det gain that counts
 

@@ -8,9 +8,9 @@ from pathlib import Path
 from typing import Any
 
 from posegen.io import write_yaml
+from posegen.model import build_design
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import load_pool, scene_for
-from posegen.select.design import build_design
 from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import detmax_runs, iroc, select_k
 from posegen.select.subset_selection import Subset, subset_of

@@ -183,10 +183,13 @@ def test_route_then_check(tmp_path, capsys):
     two = tmp_path / "two.yaml"
     write_yaml(two, data)
     out = tmp_path / "route.json"
-    code, stdout, _ = run(["route", str(two), "-q", "-o", str(out)], capsys)
-    assert code == 0 and "2 of 2 postures" in stdout and out.exists() and (tmp_path / "route.csv").exists()
-    code, stdout, _ = run(["check", str(out), "-q"], capsys)
+    code, stdout, _ = run(["route", str(two), "--workers", "1", "--csv", "-q", "-o", str(out)], capsys)
+    assert code == 0 and "2 of 2 postures" in stdout and out.exists()
+    assert (tmp_path / "route.npz").exists() and (tmp_path / "route.csv").exists()
+    code, stdout, _ = run(["check", str(out), "--workers", "1", "-q"], capsys)
     assert code == 0 and "FAIL" not in stdout and "points" in stdout
+    code, stdout, _ = run(["check", str(out), "--workers", "1", "--min-dt", "5", "-q"], capsys)
+    assert code == 1 and "FAIL times" in stdout and "minimum 5.000e+00 s" in stdout
 
 
 def test_unreachable_scheduler_fails_before_any_work(tmp_path, capsys, monkeypatch):
@@ -199,3 +202,33 @@ def test_unreachable_scheduler_fails_before_any_work(tmp_path, capsys, monkeypat
     )
     assert "cannot reach the Dask scheduler" in err
     assert not out.with_suffix(".npz").exists()
+
+
+def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
+    """A selected posture that cannot be reached is replaced by a pool posture, and the swap is reported."""
+    import hashlib
+
+    from tests.conftest import EXAMPLE_POOL
+
+    data = yaml.safe_load(EXAMPLE_POOL.read_text())
+    rows = [8, 9, 10]
+    postures = [{"pool_id": r, "rank": i + 1, "weight": 0.1, **data["postures"][r]} for i, r in enumerate(rows)]
+    other = "right" if postures[1]["chain"] == "left" else "left"
+    k = scene.joint_index(f"arm_{other}_1_joint")
+    postures[1]["joints"][k] = float(scene.upper[k])  # no valid state above this contact
+    data.update(format="posegen-selection", postures=postures, method="k", figures={})
+    data["provenance"] = {
+        **data["provenance"],
+        "pool": str(EXAMPLE_POOL),
+        "pool_sha256": hashlib.sha256(EXAMPLE_POOL.read_bytes()).hexdigest(),
+    }
+    selection = tmp_path / "selected.yaml"
+    write_yaml(selection, data)
+    out = tmp_path / "route.yaml"
+    code, stdout, _ = run(["route", str(selection), "--workers", "1", "-q", "-o", str(out)], capsys)
+    assert code == 0 and "3 of 3 postures (1 substituted)" in stdout
+    assert "posture 1 replaced by pool posture" in stdout and "vertical approach" in stdout
+    header = yaml.safe_load(out.read_text())
+    (swap,) = header["substitutions"]
+    assert swap["pool_id"] == 9 and swap["substitute_pool_id"] not in rows and not header["skipped"]
+    assert [p["pool_id"] for p in header["postures"]].count(swap["substitute_pool_id"]) == 1

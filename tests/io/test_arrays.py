@@ -45,3 +45,14 @@ def test_changed_missing_or_incomplete_sidecar_is_refused(tmp_path):
         read_arrays(
             path, {"file": "thing.npz", "sha256": __import__("hashlib").sha256(b"not a zip").hexdigest()}, ("a",)
         )
+
+
+def test_a_compressed_sidecar_keeps_values_memory_order_and_determinism(tmp_path):
+    series = {"t": np.linspace(0.0, 9.0, 400), "q": np.asfortranarray(np.cumsum(np.ones((400, 6)), axis=0))}
+    packed = encode_arrays(series, compress=True)
+    assert packed == encode_arrays({k: v.copy(order="K") for k, v in series.items()}, compress=True)
+    assert len(packed) < len(encode_arrays(series)) / 2
+    path = tmp_path / "series.yaml"
+    write_with_arrays(path, {"format": "test"}, series, compress=True)
+    back = read_arrays(path, yaml.safe_load(path.read_text())["arrays"], ("t", "q"))
+    assert np.array_equal(back["q"], series["q"]) and back["q"].flags.f_contiguous

@@ -103,3 +103,13 @@ def test_an_unreachable_scheduler_is_a_clear_error(monkeypatch):
     monkeypatch.setattr(module, "CONNECT_TIMEOUT_S", 1.0)
     with pytest.raises(BackendError, match="cannot reach the Dask scheduler at tcp://127"):
         module.DaskBackend("tcp://127.0.0.1:9")
+
+
+def test_inside_with_the_workers_and_their_states_last_from_one_map_to_the_next():
+    job = Job(name="squares", setup=_setup, run=_run)
+    for workers in (1, 2):
+        with ProcessBackend(workers) as backend:
+            first = list(backend.map(job, range(8)))
+            again = list(backend.map(job, range(8)))
+        assert [r[0] for r in again] == [i * i for i in range(8)]
+        assert {(pid, built) for _, pid, built in again} <= {(pid, built) for _, pid, built in first}

@@ -55,3 +55,17 @@ def test_screened_check_does_not_depend_on_history(scene, small_pool):
     first = [forward.closest_unless_within(q, chain, margin) for q, chain in cases]
     second = [backward.closest_unless_within(q, chain, margin) for q, chain in reversed(cases)][::-1]
     assert first == second
+
+
+def test_collides_asks_coal_only_about_pairs_that_could_be_within_the_margin(scene, hulls, small_pool):
+    """The screened yes/no equals checking every pair, at the planner's margin and a larger one."""
+    verdicts = []
+    for q, chain in configurations(scene, small_pool):
+        for margin in (0.005, 0.05):
+            data = hulls._fresh_data(chain)
+            for request in data.collisionRequests:
+                request.security_margin = margin
+            full = bool(pin.computeCollisions(scene.model, hulls._model_data, hulls.geom, data, q, True))
+            assert hulls.collides(q, chain, margin) == full
+            verdicts.append(full)
+    assert 0 < sum(verdicts) < len(verdicts)  # both answers were exercised

@@ -45,3 +45,18 @@ def test_two_points_and_duplicates():
 def test_hold():
     timed = hold(np.array([0.1, 0.2, 0.3]), 2.0)
     assert list(timed.times) == [0.0, 2.0] and np.all(timed.velocities == 0)
+
+
+def test_per_waypoint_limits_hold_at_every_point_and_positions_agree_with_velocities():
+    """Slow at both ends, fast in the middle: one timing, each point within its own limit."""
+    from posegen.route.timing import consistency_ratio
+
+    points = np.cumsum(np.random.default_rng(1).normal(0, 0.02, (60, 3)), 0)
+    limits = np.tile(V, (60, 1))
+    limits[:15] *= 0.1
+    limits[-15:] *= 0.1
+    timed = parameterize(points, limits, A)
+    assert np.all(np.abs(timed.velocities) <= limits * (1 + 1e-9))
+    assert np.all(np.abs(timed.accelerations) <= A * (1 + 1e-9))
+    assert consistency_ratio(timed, A) <= 1 + 1e-9
+    assert timed.times[-1] > parameterize(points, V, A).times[-1]  # the slow ends cost time

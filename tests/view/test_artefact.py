@@ -5,7 +5,7 @@ import pytest
 import yaml
 
 from posegen.errors import InputError
-from posegen.io import write_yaml
+from posegen.io import write_with_arrays
 from posegen.robot import read_route
 from posegen.view import ArtefactKind, CalibrationArtefact, PlanArtefact, RouteArtefact, open_artefact
 from tests.conftest import EXAMPLE_POOL
@@ -26,14 +26,15 @@ def test_each_kind_is_recognised(selection_file, route_file, calibration_folder)
 
 def test_route_joints_are_put_in_the_scene_order(route_file, tmp_path):
     data = read_route(route_file)
+    arrays = data.pop("point_arrays")
     names = data["trajectory"]["joint_names"]
     order = np.arange(len(names))[::-1]
     data["trajectory"]["joint_names"] = [names[i] for i in order]
-    for point in data["trajectory"]["points"]:
-        for key in ("positions", "velocities", "accelerations"):
-            point[key] = [point[key][i] for i in order]
+    for key in ("positions", "velocities", "accelerations"):
+        arrays[key] = arrays[key][:, order]
+    del data["arrays"]
     shuffled = tmp_path / "route.yaml"
-    write_yaml(shuffled, data)
+    write_with_arrays(shuffled, data, arrays)
     assert np.array_equal(open_artefact(shuffled).positions, open_artefact(route_file).positions)
 
 

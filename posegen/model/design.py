@@ -1,7 +1,8 @@
 """The experiment-design problem: one information matrix per candidate posture.
 
-Built separately from solving it (:mod:`posegen.select.optimal_weights`,
-:mod:`posegen.select.subset_selection`). Each posture's information is I_i = A_i^T A_i with A_i
+Built separately from solving it: the selection stage's optimal weights and subset
+searches solve it, and the route stage's repair consults it when a selected posture
+cannot be reached. Each posture's information is I_i = A_i^T A_i with A_i
 its (3, nb) base regressor: the measurement Jacobian with respect to the base parameters
 of both chains (shared torso once, one table session), rows scaled by the measurement
 noise. The regressors are whitened by the whole pool's information (A_i <- A_i R^-1 with
@@ -17,16 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from posegen.errors import InfeasibleError
-from posegen.model import (
-    DEFAULT_NOISE,
-    NOISE_FLOOR,
-    RANK_TOLERANCE,
-    BaseParameters,
-    ContactModel,
-    Contacts,
-    initial_planes,
-    structural_base,
-)
+from posegen.model.contact_model import ContactModel, Contacts
+from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters
+from posegen.model.planes import initial_planes
+from posegen.model.structural import structural_base
+from posegen.model.weights import DEFAULT_NOISE, NOISE_FLOOR
 from posegen.robot import FloatArray, Scene
 
 SESSION = "plan"
@@ -82,6 +78,23 @@ class Design:
         stacked = np.vstack([self.stacked(rows), np.sqrt(RIDGE) * np.eye(nb)])
         diag = np.abs(np.diag(np.linalg.qr(stacked, mode="r")))
         return float(2.0 * np.sum(np.log(diag)) + self.log_det_pool)
+
+    def gains(self, rows: Sequence[int]) -> FloatArray:
+        """Log det(I + RIDGE) gained by adding each candidate to a set of postures. Shape (n,).
+
+        gain_j = log det(I_3 + A_j M^-1 A_j^T) with M the set's whitened information
+        plus RIDGE; members of the set get -inf.
+        """
+        nb = self.n_params
+        info = RIDGE * np.eye(nb)
+        if len(rows):
+            stacked = self.stacked(rows)
+            info = info + stacked.T @ stacked
+        c = np.linalg.solve(info, self.regressors.reshape(-1, nb).T).T.reshape(self.size, 3, nb)  # A_j M^-1
+        sign, value = np.linalg.slogdet(np.eye(3)[None] + c @ self.regressors.transpose(0, 2, 1))
+        gain = np.where(sign > 0, value, -np.inf)
+        gain[list(rows)] = -np.inf
+        return np.asarray(gain)
 
     def rank(self, rows: Sequence[int]) -> int:
         """Number of base parameters a set of postures identifies."""

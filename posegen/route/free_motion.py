@@ -1,0 +1,190 @@
+"""Free motions between two valid states: a ladder of ever costlier attempts, each checked.
+
+In order, the first that gives a path wins:
+
+1. the straight line in the stance space;
+2. straight lines through via states: the lifts above the two contacts (up, across,
+   down), the start posture, and their combinations (a lift, then the start posture,
+   then the other lift); a straight joint-space line between two high states can dip
+   a hand into the table, and going through the start posture avoids that;
+3. OMPL's RRTConnect with the configured budget of state checks;
+4. RRTConnect again with four times that budget and another random stream.
+
+Every waypoint returned was closed onto the second sole and checked at the fine
+resolution (``waypoint_step_rad``); OMPL only searches at a coarse one.
+
+OMPL seeds its generators from one process-wide seed sequence. Before each call it is
+restarted (``RNG.setSeed`` resets the sequence to the process's first seed, posegen's
+constant ``OMPL_SEED``), and ``stream`` throw-away generators are drawn to choose a
+stream. A call's result therefore depends on its arguments only, not on what ran
+before it in the process: segments may go to any worker in any order.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from posegen.robot import FloatArray, StanceSpace
+from posegen.route.motion import straight, through
+
+LOG = logging.getLogger(__name__)
+
+OMPL_SEED = 1  # OMPL's first seed in every process (0 means "from the clock" to OMPL)
+SEARCH_STEP_RAD = 0.05  # OMPL's validity-checking resolution while searching
+SIMPLIFY_STEPS = 100  # vertex-reduction attempts when shortening OMPL's path
+LARGER_BUDGET = 4  # the last attempt's budget, in multiples of the configured one
+STREAMS = 1 << 12  # random streams a call may choose from
+
+
+class Method(str, enum.Enum):
+    """How a free motion was found."""
+
+    STRAIGHT = "straight"
+    VIA = "via"  # straight lines through via states
+    OMPL = "ompl"  # RRTConnect with the configured budget
+    OMPL_LARGER = "ompl_larger"  # RRTConnect with the larger budget and another stream
+
+
+@dataclass(frozen=True)
+class FreeMotion:
+    """A checked free motion."""
+
+    waypoints: tuple[FloatArray, ...]  # (nj,) each, rad; both ends included
+    method: Method
+    corners: int  # states where the path turns on purpose (vias, OMPL vertices), ends excluded
+
+
+def via_sequences(
+    start_high: FloatArray | None, goal_high: FloatArray | None, home: FloatArray
+) -> list[list[FloatArray]]:
+    """The via-state sequences tried after the straight line, in order of expected length."""
+    highs = [h for h in (start_high, goal_high) if h is not None]
+    candidates = [
+        highs,
+        [home],
+        [*([start_high] if start_high is not None else []), home],
+        [home, *([goal_high] if goal_high is not None else [])],
+        [*([start_high] if start_high is not None else []), home, *([goal_high] if goal_high is not None else [])],
+    ]
+    unique: list[list[FloatArray]] = []
+    for via in candidates:
+        if via and not any(len(via) == len(u) and all(a is b for a, b in zip(via, u, strict=True)) for u in unique):
+            unique.append(via)
+    return unique
+
+
+def plan_free(
+    space: StanceSpace,
+    start: FloatArray,
+    goal: FloatArray,
+    vias: Sequence[Sequence[FloatArray]],
+    stream: int,
+) -> FreeMotion | str:
+    """A checked free motion from ``start`` to ``goal`` (both valid), or why there is none.
+
+    Args:
+        space: The stance space.
+        start: (nj,) rad.
+        goal: (nj,) rad.
+        vias: Via-state sequences to try after the straight line (see :func:`via_sequences`).
+        stream: Chooses OMPL's random streams (derive it from the seed and the segment).
+
+    """
+    path = straight(space, start, goal)
+    if path is not None:
+        return FreeMotion(tuple(path), Method.STRAIGHT, 0)
+    for via in vias:
+        path = through(space, [start, *via, goal])
+        if path is not None:
+            return FreeMotion(tuple(path), Method.VIA, len(via))
+    budget = int(space.scene.route.planning_checks)
+    for method, checks, offset in ((Method.OMPL, budget, 0), (Method.OMPL_LARGER, LARGER_BUDGET * budget, 1)):
+        found = _plan_ompl(space, start, goal, checks, (stream + offset * (STREAMS // 2)) % STREAMS)
+        if found is not None:
+            return FreeMotion(tuple(found[0]), method, found[1])
+    return (
+        f"no free motion: straight line and {len(vias)} via sequences blocked, "
+        f"OMPL found no checked path in {budget} nor {LARGER_BUDGET * budget} state checks"
+    )
+
+
+def stream_of(seed: int, *keys: int) -> int:
+    """A random-stream number for OMPL from a seed and the ids of what is planned."""
+    return int(np.random.default_rng([seed, *(k + 1 for k in keys)]).integers(STREAMS))
+
+
+def _restart_generator(stream: int) -> None:
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LOG_NONE)  # the restart logs "generation already started" from the second call on
+    ou.RNG.setSeed(OMPL_SEED)
+    ou.setLogLevel(ou.LOG_ERROR)
+    if ou.RNG.getSeed() != OMPL_SEED:
+        LOG.warning("OMPL was seeded elsewhere in this process (seed %d): routes are not repeatable", ou.RNG.getSeed())
+    for _ in range(stream):
+        ou.RNG()
+
+
+def _plan_ompl(
+    space: StanceSpace, start: FloatArray, goal: FloatArray, budget: int, stream: int
+) -> tuple[list[FloatArray], int] | None:
+    """RRTConnect in the stance coordinates, then a fine check; (waypoints, corners) or None."""
+    from ompl import base as ob
+    from ompl import geometric as og
+
+    _restart_generator(stream)
+    n = len(space.coordinates)
+    state_space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
+        bounds.setLow(i, float(space.lower[i]))
+        bounds.setHigh(i, float(space.upper[i]))
+    state_space.setBounds(bounds)
+    setup = og.SimpleSetup(state_space)
+    ends = [
+        (space.coordinates_of(start), np.array(start, dtype=float)),
+        (space.coordinates_of(goal), np.array(goal, dtype=float)),
+    ]
+    checks = [0]
+
+    def valid(state: object) -> bool:
+        checks[0] += 1
+        x = np.array([state[i] for i in range(n)])  # type: ignore[index]
+        warm = min(ends, key=lambda end: float(np.max(np.abs(end[0] - x))))[1]  # close the leg from the nearer end
+        joints = space.joints_of(x, warm)
+        return joints is not None and space.is_valid(joints, None)
+
+    setup.setStateValidityChecker(valid)
+    info = setup.getSpaceInformation()
+    info.setStateValidityCheckingResolution(  # coarse while searching: the result is re-checked finely
+        SEARCH_STEP_RAD / max(state_space.getMaximumExtent(), 1e-9)
+    )
+    s0, s1 = state_space.allocState(), state_space.allocState()
+    for i, (u, v) in enumerate(zip(ends[0][0], ends[1][0], strict=True)):
+        s0[i], s1[i] = float(u), float(v)
+    setup.setStartAndGoalStates(s0, s1)
+    setup.setPlanner(og.RRTConnect(info))
+    # a budget of state checks, not of seconds: the same seed gives the same path on any machine
+    solved = setup.solve(ob.PlannerTerminationCondition(lambda: checks[0] >= budget))
+    if not solved or not setup.haveExactSolutionPath():
+        LOG.info("OMPL found no path in %d state checks", budget)
+        return None
+    solution = setup.getSolutionPath()
+    simplifier = og.PathSimplifier(info)
+    simplifier.reduceVertices(solution, SIMPLIFY_STEPS, SIMPLIFY_STEPS // 4)
+    simplifier.ropeShortcutPath(solution)
+    vertices = [np.array([solution.getState(k)[i] for i in range(n)]) for k in range(solution.getStateCount())]
+    path = [np.array(start, dtype=float)]
+    for k, vertex in enumerate(vertices[1:], start=1):
+        target = goal if k == len(vertices) - 1 else space.joints_of(vertex, path[-1])
+        leg = straight(space, path[-1], target) if target is not None else None
+        if leg is None:
+            LOG.info("OMPL's path failed the fine check")
+            return None
+        path.extend(leg[1:])
+    return path, max(len(vertices) - 2, 0)

@@ -1,0 +1,202 @@
+"""``posegen check ROUTE``: each defect a controller would choke on fails with a message that names it."""
+
+import shutil
+
+import numpy as np
+import pytest
+import yaml
+
+from posegen.errors import InputError
+from posegen.io import encode_arrays, read_arrays, write_with_arrays
+from posegen.robot import ROUTE_ARRAYS, SegmentType, read_route
+from posegen.route import PoseInvariant, RouteInvariant, plan_route, route_header, verify_route, write_route
+
+ROWS = [3, 4]
+
+
+@pytest.fixture(scope="module")
+def route_file(scene, example_pool, tmp_path_factory):
+    postures = [example_pool.postures[i] for i in ROWS]
+    route = plan_route(scene, postures, seed=0)
+    entries = {i: example_pool.to_dict()["postures"][r] for i, r in enumerate(ROWS)}
+    path = tmp_path_factory.mktemp("good") / "route.yaml"
+    write_route(path, route, route_header(route, entries, dict(example_pool.provenance), {}))
+    return path
+
+
+def corrupted(route_file, tmp_path, edit_arrays=None, edit_header=None):
+    """A copy of the route with edited arrays and header; the header's hash is updated (a consistent file)."""
+    path = tmp_path / "route.yaml"
+    shutil.copy(route_file, path)
+    header = yaml.safe_load(route_file.read_text())
+    arrays = {k: v.copy() for k, v in read_arrays(route_file, header["arrays"], ROUTE_ARRAYS).items()}
+    if edit_arrays:
+        edit_arrays(arrays, header)
+    if edit_header:
+        edit_header(header)
+    del header["arrays"]
+    write_with_arrays(path, header, arrays, compress=True)
+    return path
+
+
+def verdict(scene, path, **kwargs):
+    result = verify_route(scene, read_route(path), **kwargs)
+    return result, {w.invariant: w for w in result.worst}
+
+
+def a_free_point(header):
+    seg = next(s for s in header["segments"] if s["type"] == SegmentType.FREE.value)
+    return (seg["first_point"] + seg["last_point"]) // 2
+
+
+def test_the_planned_route_passes(scene, route_file):
+    result, _ = verdict(scene, route_file)
+    assert result.ok
+
+
+def test_a_repeated_time(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        k = a_free_point(header)
+        arrays["time_from_start"][k] = arrays["time_from_start"][k - 1]
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert not result.ok and worst[RouteInvariant.TIMES].violations == 1
+    assert "repeats the time of point" in worst[RouteInvariant.TIMES].detail
+
+
+def test_a_step_below_the_minimum(scene, route_file):
+    result, worst = verdict(scene, route_file, min_dt=1.0)
+    assert not result.ok and "minimum 1.000e+00 s" in worst[RouteInvariant.TIMES].detail
+
+
+def test_a_nan_velocity(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        arrays["velocities"][a_free_point(header), 14] = np.nan
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert not result.ok and worst[RouteInvariant.FINITE].violations == 1
+    assert "velocities[14] = nan" in worst[RouteInvariant.FINITE].detail
+    assert worst[RouteInvariant.CONSISTENCY].violations >= 1  # and NaN never passes as "within the limit"
+
+
+def test_a_nan_position_is_caught_as_such(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        arrays["positions"][a_free_point(header), 2] = np.nan
+
+    _, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert "positions[2] = nan" in worst[RouteInvariant.FINITE].detail
+    assert worst[PoseInvariant.SOLE].violations == 0  # the NaN point is not measured as "OK, nan m"
+
+
+def test_an_infinite_velocity(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        arrays["velocities"][a_free_point(header), 20] = np.inf
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert not result.ok and "velocities[20] = inf" in worst[RouteInvariant.FINITE].detail
+    assert worst[RouteInvariant.VELOCITY].violations >= 1
+
+
+def test_a_renamed_joint(scene, route_file, tmp_path):
+    def edit(header):
+        header["trajectory"]["joint_names"][15] = "arm_left_2_joint_renamed"
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit_header=edit))
+    assert not result.ok
+    detail = worst[RouteInvariant.STRUCTURE].detail
+    assert "joint 15 'arm_left_2_joint_renamed' is not a joint of the robot model" in detail
+    assert "'arm_left_2_joint' here" in detail
+    assert not worst[RouteInvariant.TIMES].checked  # nothing else can be trusted
+
+
+def test_a_dropped_point(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        k = a_free_point(header)
+        for name in arrays:
+            arrays[name] = np.delete(arrays[name], k, axis=0)
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert not result.ok
+    assert any("the header declares" in e for e in worst[RouteInvariant.STRUCTURE].examples)
+
+
+def test_positions_jumping_between_two_points(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        k = a_free_point(header)
+        arrays["positions"][k, 16] += 0.05  # one joint, one point: 3 degrees off the path
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert not result.ok
+    consistency = worst[RouteInvariant.CONSISTENCY]
+    assert consistency.violations == 2  # into the point and out of it
+    assert "arm_left_3_joint" in consistency.detail and "mean velocity" in consistency.detail
+
+
+def test_a_sidecar_that_is_not_the_headers(route_file, tmp_path):
+    path = tmp_path / "route.yaml"
+    shutil.copy(route_file, path)
+    arrays = read_arrays(route_file, yaml.safe_load(route_file.read_text())["arrays"], ROUTE_ARRAYS)
+    arrays["positions"][0, 0] += 1e-3
+    path.with_suffix(".npz").write_bytes(encode_arrays(arrays, compress=True))
+    with pytest.raises(InputError, match="sha256"):
+        read_route(path)
+    path.with_suffix(".npz").unlink()
+    with pytest.raises(InputError, match="cannot read its arrays"):
+        read_route(path)
+
+
+def test_a_moving_hold(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        seg = next(s for s in header["segments"] if s["type"] == SegmentType.HOLD.value)
+        arrays["velocities"][seg["last_point"], 18] = 1e-3
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert not result.ok and "must be at rest" in worst[RouteInvariant.REST].detail
+
+
+def test_a_version_1_route_with_inline_points_is_still_read_and_checked(scene, route_file, tmp_path):
+    from posegen.robot import route_arrays, stamp
+
+    data = read_route(route_file)
+    times, positions, velocities, accelerations = route_arrays(data)
+    header = yaml.safe_load(route_file.read_text())
+    header["format_version"] = 1
+    del header["arrays"]
+    header["trajectory"]["points"] = [
+        {
+            "positions": positions[k].tolist(),
+            "velocities": velocities[k].tolist(),
+            "accelerations": accelerations[k].tolist(),
+            "effort": [],
+            "time_from_start": stamp(float(times[k])),
+        }
+        for k in range(len(times))
+    ]
+    old = tmp_path / "old.yaml"
+    old.write_text(yaml.safe_dump(header, sort_keys=False))
+    result = verify_route(scene, read_route(old))
+    assert result.ok and result.checked == len(times)
+
+
+def test_joints_in_another_order_are_checked_in_the_models(scene, route_file, tmp_path):
+    order = None
+
+    def edit(arrays, header):
+        nonlocal order
+        order = list(range(len(header["trajectory"]["joint_names"])))[::-1]
+        header["trajectory"]["joint_names"] = [header["trajectory"]["joint_names"][i] for i in order]
+        for name in ("positions", "velocities", "accelerations"):
+            arrays[name] = arrays[name][:, order]
+
+    result, _ = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert result.ok
+
+
+def test_a_missing_joint(scene, route_file, tmp_path):
+    def edit(arrays, header):
+        del header["trajectory"]["joint_names"][31]
+        for name in ("positions", "velocities", "accelerations"):
+            arrays[name] = arrays[name][:, :31]
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
+    assert not result.ok and "joint 'head_2_joint' is missing" in worst[RouteInvariant.STRUCTURE].detail
