@@ -116,16 +116,3 @@ def test_empty_or_rank_deficient_pool(scene, example_pool):
 def test_k_out_of_range(design):
     with pytest.raises(InfeasibleError, match="choose between"):
         greedy(design, 5)
-
-
-def test_design_built_in_chunks_is_the_same_design(scene, example_pool, design, monkeypatch):
-    """Large pools build their Jacobians and R factor a chunk at a time: nothing a criterion sees changes."""
-    from posegen.select import design as design_module
-
-    monkeypatch.setattr(design_module, "DESIGN_CHUNK", 3 * 7)  # dozens of chunks on the example pool
-    chunked, _ = build_design(scene, example_pool.joints(), [p.chain for p in example_pool.postures])
-    assert chunked.log_det_pool == pytest.approx(design.log_det_pool, rel=1e-12)
-    rows = list(range(0, design.size, 3))
-    assert chunked.log_det(rows) == pytest.approx(design.log_det(rows), rel=1e-9)
-    # whitening is unique up to the signs of R's rows: the same regressors up to column signs
-    assert np.allclose(np.abs(chunked.regressors), np.abs(design.regressors), atol=1e-9)
