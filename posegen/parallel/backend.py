@@ -84,10 +84,15 @@ class Backend(abc.ABC):
         """How many items run at once."""
 
     @abc.abstractmethod
-    def map(self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT]) -> Generator[ResultT, None, None]:
+    def map(
+        self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT], window: int | None = None
+    ) -> Generator[ResultT, None, None]:
         """Run ``job`` on ``items`` lazily, a bounded window ahead; results in item order.
 
         ``items`` may be endless: closing the iterator cancels what is still pending.
+        ``window`` (default: two items per worker slot) is how many items may be in
+        flight; a finite batch of items of very unequal cost runs faster with all of
+        them in flight (``len(items)``), as no worker then waits for the slowest.
         """
 
     def close(self) -> None:  # noqa: B027  (most backends hold nothing to release)
@@ -138,7 +143,9 @@ class ProcessBackend(Backend):
         self._keep = True
         return self
 
-    def map(self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT]) -> Generator[ResultT, None, None]:
+    def map(
+        self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT], window: int | None = None
+    ) -> Generator[ResultT, None, None]:
         """Run ``job`` on ``items``; see :meth:`Backend.map`."""
         iterator = iter(items)
         head = list(itertools.islice(iterator, 2))
@@ -160,7 +167,7 @@ class ProcessBackend(Backend):
             yield from in_order(
                 lambda item: executor.submit(_run_in_process, job.name, job.run, item),
                 items,
-                WINDOW_PER_SLOT * self.workers,
+                max(window or 0, WINDOW_PER_SLOT * self.workers),
             )
         finally:
             if self._keep:

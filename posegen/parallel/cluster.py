@@ -101,7 +101,9 @@ class DaskBackend(Backend):
         """Worker threads of the cluster now."""
         return max(1, sum(self.client.nthreads().values()))
 
-    def map(self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT]) -> Generator[ResultT, None, None]:
+    def map(
+        self, job: Job[StateT, ItemT, ResultT], items: Iterable[ItemT], window: int | None = None
+    ) -> Generator[ResultT, None, None]:
         """Run ``job`` on ``items``; see :meth:`Backend.map`."""
         plugin = f"posegen-{job.name}"
         self.client.register_plugin(JobState(job), name=plugin)
@@ -111,7 +113,7 @@ class DaskBackend(Backend):
             return self.client.submit(_run_task, plugin, __version__, job.run, item, key=key, retries=RETRIES)
 
         try:
-            yield from in_order(submit, items, WINDOW_PER_SLOT * self.slots)
+            yield from in_order(submit, items, max(window or 0, WINDOW_PER_SLOT * self.slots))
         finally:
             self.client.unregister_worker_plugin(plugin)
 

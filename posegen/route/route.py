@@ -27,7 +27,7 @@ from __future__ import annotations
 import functools
 import itertools
 import logging
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -118,13 +118,20 @@ def plan_route(
     order = order_postures(start, joints, velocity, acceleration, seed)
     job = planning_job(scene, seed)
     if isinstance(workers, Backend):
-        run = _Routing(scene, postures, substitutes, start, functools.partial(workers.map, job), progress)
+        run = _Routing(scene, postures, substitutes, start, _all_in_flight(workers, job), progress)
         run.plan(order.sequence)
     else:
         with ProcessBackend(workers) as backend:
-            run = _Routing(scene, postures, substitutes, start, functools.partial(backend.map, job), progress)
+            run = _Routing(scene, postures, substitutes, start, _all_in_flight(backend, job), progress)
             run.plan(order.sequence)
     return run.assemble(order)
+
+
+def _all_in_flight(
+    backend: Backend, job: Job[Planner, tuple[str, Any], Stop | Transfer | str]
+) -> Callable[[Sequence[tuple[str, Any]]], Iterator[Stop | Transfer | str]]:
+    """The backend's map of the planning job with every item of a batch in flight (their costs differ 100-fold)."""
+    return lambda requests: backend.map(job, requests, window=len(requests))
 
 
 def _plan_one(planner: Planner, request: tuple[str, Any]) -> Stop | Transfer | str:
@@ -151,7 +158,7 @@ class _Routing:
         postures: Sequence[Posture],
         substitutes: Substitutes | None,
         start: FloatArray,
-        run: Callable[[Iterable[tuple[str, Any]]], Iterator[Stop | Transfer | str]],
+        run: Callable[[Sequence[tuple[str, Any]]], Iterator[Stop | Transfer | str]],
         progress: ProgressCallback,
     ) -> None:
         self.scene = scene
