@@ -4,6 +4,7 @@ import dataclasses
 import os
 import signal
 
+import numpy as np
 import pytest
 
 from posegen.errors import BackendError
@@ -68,6 +69,20 @@ def test_dask_cluster_gives_the_same_pool_and_check(cluster, small_chunks, refer
         pool = generate_pool(small_chunks, n=6, seed=7, workers=backend)
         assert pool.to_dict() == reference.to_dict()
         assert verify_postures(scene, pool.postures, workers=backend) == verify_postures(scene, reference.postures)
+
+
+def test_dask_cluster_gives_the_same_route(cluster, scene, example_pool):
+    """Stops and transfers on the cluster: the same route, point for point and segment for segment."""
+    from posegen.parallel.cluster import DaskBackend
+    from posegen.route import plan_route, route_arrays_of
+
+    postures = [example_pool.postures[i] for i in (3, 4)]
+    local = plan_route(scene, postures, seed=0)
+    with DaskBackend(cluster.scheduler_address) as backend:
+        remote = plan_route(scene, postures, seed=0, workers=backend)
+    pairs = zip(route_arrays_of(local).values(), route_arrays_of(remote).values(), strict=True)
+    assert all(np.array_equal(a, b) for a, b in pairs)
+    assert remote.segments == local.segments
 
 
 def test_a_worker_killed_mid_run_changes_nothing(cluster, small_chunks, reference):
