@@ -256,7 +256,7 @@ class _Routing:
                 break
             for a, b in failed:
                 if b == START:
-                    LOG.warning("no free motion back to the start posture: the route ends above the last contact")
+                    LOG.info("no free motion back to the start posture: the route ends above the last contact")
                     self.closed = False
                 elif b in self.sequence:
                     self.sequence.remove(b)
@@ -267,7 +267,7 @@ class _Routing:
         for node in sorted(lost):
             if not self.substitute(node, str(lost[node])):
                 self.skipped.append((node, str(lost[node])))
-                LOG.warning("posture %d skipped: %s", node, lost[node])
+                LOG.info("posture %d skipped: %s", node, lost[node])
         if not self.sequence:
             raise InfeasibleError(f"no posture could be reached ({len(self.skipped)} skipped)")
 
@@ -300,7 +300,7 @@ class _Routing:
                 row = node - len(self.postures)
                 record = substitution(self.substitutes, lost, reason, row, [*routed, row])
                 self.substitutions.append(record)
-                LOG.warning(
+                LOG.info(
                     "posture %d replaced by pool posture %d (O1 %.2f -> %.2f): %s",
                     lost,
                     row,
