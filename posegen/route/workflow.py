@@ -11,10 +11,10 @@ from pathlib import Path
 from typing import Any
 
 from posegen.errors import InputError
+from posegen.io import SegmentRow, write_trajectory_bag
 from posegen.model import Design, build_design
 from posegen.parallel import Backend
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.io import SegmentRow, write_trajectory_bag
 from posegen.robot import Pool, Scene, SegmentType, Verification, load_plan, read_route, route_arrays, scene_for
 from posegen.route.check import MIN_DT_S, verify_route
 from posegen.route.export import route_header, write_route
