@@ -16,9 +16,10 @@ from numpy.typing import NDArray
 
 from posegen.model.kinematics import (
     ChainModel,
+    element_derivatives,
+    joint_derivative,
     offset_matrix,
     placement_derivatives,
-    placement_matrix,
     tilt_measurement,
     tilt_measurement_jacobian,
 )
@@ -131,18 +132,26 @@ class ContactModel:
 
     def residuals(self, theta: FloatArray, contacts: Contacts) -> FloatArray:
         """Height (m), roll, pitch (rad) of each contact frame in its plane frame. Shape (n, 3)."""
-        return self._evaluate(theta, contacts, jacobian=False)[0]
+        return self._evaluate(theta, contacts, jacobian=False, joints=False)[0]
 
     def jacobian(self, theta: FloatArray, contacts: Contacts) -> tuple[FloatArray, FloatArray]:
         """Residuals (n, 3) and their derivatives with respect to every parameter (n, 3, p)."""
-        res, jac = self._evaluate(theta, contacts, jacobian=True)
-        assert jac is not None
+        res, jac, _ = self._evaluate(theta, contacts, jacobian=True, joints=False)
         return res, jac
 
-    def _evaluate(self, theta: FloatArray, contacts: Contacts, jacobian: bool) -> tuple[FloatArray, FloatArray | None]:
+    def derivatives(self, theta: FloatArray, contacts: Contacts) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Residuals (n, 3), derivatives w.r.t. the parameters (n, 3, p) and the joint angles (n, 3, nj)."""
+        res, jac, d_joints = self._evaluate(theta, contacts, jacobian=True, joints=True)
+        assert d_joints is not None
+        return res, jac, d_joints
+
+    def _evaluate(
+        self, theta: FloatArray, contacts: Contacts, jacobian: bool, joints: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray | None]:
         n = len(contacts)
         res = np.zeros((n, 3))
-        jac = np.zeros((n, 3, self.size)) if jacobian else None
+        jac = np.zeros((n, 3, self.size if jacobian else 0))
+        d_joints = np.zeros((n, 3, contacts.joints.shape[1])) if joints else None
         chains = np.array(contacts.chains)
         sessions = np.array(contacts.sessions)
         for name, model in self.chains.items():
@@ -150,18 +159,20 @@ class ContactModel:
                 rows = np.flatnonzero((chains == name) & (sessions == session))
                 if len(rows) == 0:
                     continue
-                out = self._evaluate_block(theta, model, session, contacts.joints[rows], jacobian)
+                out = self._evaluate_block(theta, model, session, contacts.joints[rows], jacobian, joints)
                 res[rows] = out[0]
-                if jac is not None:
+                if jacobian:
                     jac[rows] = out[1]
+                if d_joints is not None:
+                    d_joints[rows] = out[2]
         unknown = set(contacts.chains) - set(self.chains) or set(contacts.sessions) - set(self.sessions)
         if unknown:
             raise ValueError(f"contacts of chains/sessions the model does not have: {sorted(unknown)}")
-        return res, jac
+        return res, jac, d_joints
 
     def _evaluate_block(
-        self, theta: FloatArray, model: ChainModel, session: str, joints: FloatArray, jacobian: bool
-    ) -> tuple[FloatArray, FloatArray]:
+        self, theta: FloatArray, model: ChainModel, session: str, joints: FloatArray, jacobian: bool, by_joint: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
         placements = self._placements(theta, model)
         contact = theta[self.contact_columns(model.contact_frame)]
         elements, tip = model.transforms(joints, placements, contact)
@@ -174,28 +185,21 @@ class ContactModel:
         sole_to_contact = prefixes[-1] @ tip  # (n, 4, 4)
         frames = plane_inv @ sole_to_contact
         res = tilt_measurement(frames)
-        jac = np.zeros((n, 3, self.size))
         if not jacobian:
-            return res, jac
+            return res, np.zeros((n, 3, 0)), np.zeros((n, 3, 0))
+        jac = np.zeros((n, 3, self.size))
+        d_joints = np.zeros((n, 3, joints.shape[1])) if by_joint else None
         w = plane_inv[2]  # (4,) third row: the measurement only reads row 2 of the frame
         suffix = np.broadcast_to(tip, (n, 4, 4))
         for k in range(len(elements) - 1, -1, -1):
             element = model.elements[k]
             u = w @ prefixes[k]  # (n, 4)
-            m = placement_matrix(placements[element.name])
-            d_m = placement_derivatives(placements[element.name])  # (6, 4, 4)
-            if element.axis is None:
-                if element.reverse:
-                    m_inv = np.linalg.inv(m)
-                    d_e = np.broadcast_to(-m_inv @ d_m @ m_inv, (n, 6, 4, 4))
-                else:
-                    d_e = np.broadcast_to(d_m, (n, 6, 4, 4))
-            elif element.reverse:  # E = (M R)^-1 -> dE = -E dM M^-1
-                d_e = -elements[k][:, None] @ (d_m @ np.linalg.inv(m))[None]
-            else:  # E = M R -> dE = dM R, with R = M^-1 E
-                d_e = d_m[None] @ (np.linalg.inv(m) @ elements[k])[:, None]
+            d_e = element_derivatives(element, elements[k], placements[element.name])  # (n, 6, 4, 4)
             d_row = np.einsum("ni,npij,njk->npk", u, d_e, suffix)  # (n, 6, 4)
             jac[:, :, self.placement_columns(element.name)] += tilt_measurement_jacobian(frames[:, 2], d_row)
+            if d_joints is not None and element.joint is not None:
+                d_row = np.einsum("ni,nij,njk->nk", u, joint_derivative(element, elements[k]), suffix)[:, None]
+                d_joints[:, :, element.joint] += tilt_measurement_jacobian(frames[:, 2], d_row)[:, :, 0]
             suffix = elements[k] @ suffix
         # contact offsets: tip = C_nom Off(z, roll, pitch)
         offset = _offset_derivatives(contact)  # (3, 4, 4)
@@ -206,7 +210,7 @@ class ContactModel:
         d_plane = _offset_derivatives(theta[self.plane_columns(session)])
         d_row = -np.einsum("i,pij,njk->npk", w, d_plane, frames)
         jac[:, :, self.plane_columns(session)] += tilt_measurement_jacobian(frames[:, 2], d_row)
-        return res, jac
+        return res, jac, (d_joints if d_joints is not None else np.zeros((n, 3, 0)))
 
 
 def _offset_derivatives(offset: FloatArray) -> FloatArray:

@@ -172,6 +172,43 @@ class ChainModel:
         return {e.name: e.nominal.copy() for e in self.elements}
 
 
+def element_derivatives(element: Element, transforms: FloatArray, params: FloatArray) -> FloatArray:
+    """Derivatives of an element's transforms w.r.t. its six placement parameters.
+
+    Args:
+        element: The element.
+        transforms: (n, 4, 4) its transforms at ``params`` (from :meth:`ChainModel.transforms`).
+        params: (6,) its placement parameters.
+
+    Returns:
+        (n, 6, 4, 4) derivatives.
+
+    """
+    n = transforms.shape[0]
+    m = placement_matrix(params)
+    d_m = placement_derivatives(params)  # (6, 4, 4)
+    if element.axis is None:
+        if element.reverse:  # E = M^-1 -> dE = -M^-1 dM M^-1
+            m_inv = np.linalg.inv(m)
+            return np.broadcast_to(-m_inv @ d_m @ m_inv, (n, 6, 4, 4))
+        return np.broadcast_to(d_m, (n, 6, 4, 4))
+    if element.reverse:  # E = (M R)^-1 -> dE = -E dM M^-1
+        return np.asarray(-transforms[:, None] @ (d_m @ np.linalg.inv(m))[None])
+    return np.asarray(d_m[None] @ (np.linalg.inv(m) @ transforms)[:, None])  # E = M R -> dE = dM R
+
+
+def joint_derivative(element: Element, transforms: FloatArray) -> FloatArray:
+    """Derivative of a joint element's transforms w.r.t. its joint angle. Shape (n, 4, 4).
+
+    E = M R(q) gives dE/dq = E K; traversed in reverse, E = R(-q) M^-1 gives -K E, with K
+    the (4, 4) generator of rotations about the joint axis.
+    """
+    assert element.axis is not None, "a fixed placement has no joint angle"
+    generator = np.zeros((4, 4))
+    generator[:3, :3] = pin.skew(element.axis)
+    return np.asarray(-generator @ transforms if element.reverse else transforms @ generator)
+
+
 def _rotations(axis: FloatArray, angles: FloatArray) -> FloatArray:
     """Homogeneous rotations about ``axis`` by each angle. Shape (n, 4, 4)."""
     k = np.asarray(pin.skew(axis))

@@ -38,3 +38,21 @@ def test_plane_offsets_shift_the_measurement(scene, model):
     theta[model.index["plane@a.z"]] += 0.01
     after = model.residuals(theta, contacts)
     assert after[0, 0] == pytest.approx(before[0, 0] - 0.01)
+
+
+def test_joint_derivatives_against_finite_differences(scene, model):
+    rng = np.random.default_rng(1)
+    joints = rng.uniform(scene.lower, scene.upper, size=(4, len(scene.joint_names)))
+    contacts = Contacts(joints, ("left", "right", "left", "right"), ("a", "a", "b", "b"), tuple("abcd"))
+    theta = model.nominal() + rng.normal(0.0, 0.01, model.size)
+    res, jac, d_joints = model.derivatives(theta, contacts)
+    assert res == pytest.approx(model.residuals(theta, contacts))
+    assert jac == pytest.approx(model.jacobian(theta, contacts)[1])
+    h = 1e-6
+    for j in range(len(scene.joint_names)):
+        step = np.zeros_like(joints)
+        step[:, j] = h
+        plus = Contacts(joints + step, contacts.chains, contacts.sessions, contacts.labels)
+        minus = Contacts(joints - step, contacts.chains, contacts.sessions, contacts.labels)
+        fd = (model.residuals(theta, plus) - model.residuals(theta, minus)) / (2 * h)
+        assert d_joints[:, :, j] == pytest.approx(fd, abs=1e-7), scene.joint_names[j]

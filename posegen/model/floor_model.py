@@ -1,0 +1,121 @@
+"""The floor closure of a standing posture: where the second sole is, seen from the first.
+
+Both soles of every recorded posture are flat on one floor and do not move within a
+table session. The pose of the second sole in the first sole's frame, computed up the
+first leg to the root and down the second, therefore has zero height, roll and pitch,
+and x, y, yaw that are constants of the session: six equations per posture that tie the
+two legs' parameters together (a second measurement kind, beside the contacts).
+
+The legs are those of the contact model's chains whose soles are the stance's two sole
+frames; both must be present.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from posegen.errors import InfeasibleError
+from posegen.model.contact_model import ContactModel
+from posegen.model.kinematics import (
+    ChainModel,
+    Element,
+    element_derivatives,
+    joint_derivative,
+    tilt_measurement,
+    tilt_measurement_jacobian,
+)
+from posegen.robot import FloatArray
+
+FLOOR_FIELDS = ("x", "y", "z", "roll", "pitch", "yaw")  # m, m, m, rad, rad, rad
+SESSION_FIELDS = ("x", "y", "yaw")  # constants of a session; height, roll and pitch are zero
+
+
+class FloorModel:
+    """Pose of the second sole in the first sole's frame, over a contact model's parameters."""
+
+    def __init__(self, contacts: ContactModel) -> None:
+        """Take the two legs from the chains of ``contacts`` whose soles are the stance's sole frames.
+
+        Raises:
+            InfeasibleError: The model's chains do not include both soles.
+
+        """
+        self.contacts = contacts
+        by_sole = {chain.elements[0].name: chain for chain in contacts.chains.values()}
+        soles = contacts.scene.stance.sole_frames
+        missing = [s for s in soles if s not in by_sole]
+        if missing:
+            raise InfeasibleError(
+                f"the floor equations need a chain from each sole; no chain starts at {', '.join(missing)}"
+            )
+        self.legs: tuple[ChainModel, ChainModel] = (by_sole[soles[0]], by_sole[soles[1]])
+
+    def _leg(
+        self, chain: ChainModel, theta: FloatArray, joints: FloatArray
+    ) -> tuple[list[tuple[Element, FloatArray, FloatArray]], list[FloatArray], list[FloatArray]]:
+        """The leg's elements with their transforms and parameters, prefix and suffix products."""
+        placements = {e.name: theta[self.contacts.placement_columns(e.name)] for e in chain.elements}
+        transforms, _ = chain.transforms(joints, placements, np.zeros(3))
+        items = [(e, t, placements[e.name]) for e, t in zip(chain.elements, transforms, strict=True) if e.reverse]
+        n = joints.shape[0]
+        prefixes: list[FloatArray] = [np.broadcast_to(np.eye(4), (n, 4, 4))]
+        for _, t, _ in items:
+            prefixes.append(prefixes[-1] @ t)
+        suffixes: list[FloatArray] = [np.broadcast_to(np.eye(4), (n, 4, 4))]
+        for _, t, _ in reversed(items):
+            suffixes.append(t @ suffixes[-1])
+        return items, prefixes, suffixes[::-1]  # suffixes[k]: product of items k..end
+
+    def measure(self, theta: FloatArray, joints: FloatArray) -> FloatArray:
+        """x, y, z (m), roll, pitch, yaw (rad) of the second sole in the first sole's frame. Shape (n, 6)."""
+        return self._evaluate(theta, joints, jacobian=False)[0]
+
+    def derivatives(self, theta: FloatArray, joints: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The measurement (n, 6), its derivatives w.r.t. the parameters (n, 6, p) and the joints (n, 6, nj)."""
+        return self._evaluate(theta, joints, jacobian=True)
+
+    def _evaluate(
+        self, theta: FloatArray, joints: FloatArray, jacobian: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        first, second = (self._leg(chain, theta, joints) for chain in self.legs)
+        up, down = first[1][-1], second[1][-1]  # root in each sole frame
+        down_inv = np.linalg.inv(down)
+        frames = up @ down_inv  # (n, 4, 4) second sole in the first
+        meas = _pose_measurement(frames)
+        n = joints.shape[0]
+        if not jacobian:
+            return meas, np.zeros((n, 6, 0)), np.zeros((n, 6, 0))
+        p, nj = self.contacts.size, joints.shape[1]
+        d_frames = np.zeros((n, p, 4, 4))
+        d_joint_frames = np.zeros((n, nj, 4, 4))
+        # F = U D^-1: an element of the first leg gives dF = P dE S D^-1, one of the second -F P dE S D^-1
+        for (items, prefixes, suffixes), first_leg in ((first, True), (second, False)):
+            for k, (element, transform, params) in enumerate(items):
+                left = prefixes[k] if first_leg else frames @ prefixes[k]
+                sign = 1.0 if first_leg else -1.0
+                right = suffixes[k + 1] @ down_inv
+                d_e = element_derivatives(element, transform, params)  # (n, 6, 4, 4)
+                cols = self.contacts.placement_columns(element.name)
+                d_frames[:, cols] += sign * (left[:, None] @ d_e @ right[:, None])
+                if element.joint is not None:
+                    d_joint_frames[:, element.joint] += sign * (left @ joint_derivative(element, transform) @ right)
+        return meas, _pose_measurement_jacobian(frames, d_frames), _pose_measurement_jacobian(frames, d_joint_frames)
+
+
+def _pose_measurement(frames: FloatArray) -> FloatArray:
+    """x, y (m), then height, roll, pitch (tilt measurement), then yaw (rad). Shape (n, 6)."""
+    tilt = tilt_measurement(frames)
+    yaw = np.arctan2(frames[:, 1, 0], frames[:, 0, 0])
+    return np.column_stack([frames[:, 0, 3], frames[:, 1, 3], tilt, yaw])
+
+
+def _pose_measurement_jacobian(frames: FloatArray, d_frames: FloatArray) -> FloatArray:
+    """Derivatives of :func:`_pose_measurement` given (n, q, 4, 4) frame derivatives. Shape (n, 6, q)."""
+    n, q = d_frames.shape[:2]
+    out = np.zeros((n, 6, q))
+    out[:, 0] = d_frames[:, :, 0, 3]
+    out[:, 1] = d_frames[:, :, 1, 3]
+    out[:, 2:5] = tilt_measurement_jacobian(frames[:, 2], d_frames[:, :, 2, :])
+    r00, r10 = frames[:, 0, 0][:, None], frames[:, 1, 0][:, None]
+    out[:, 5] = (r00 * d_frames[:, :, 1, 0] - r10 * d_frames[:, :, 0, 0]) / (r00**2 + r10**2)
+    return out

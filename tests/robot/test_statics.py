@@ -1,0 +1,54 @@
+"""Gravity torques of standing postures, against statics computed another way."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from posegen.robot.statics import gravity_torques
+
+
+@pytest.fixture(scope="module")
+def postures(scene):
+    rng = np.random.default_rng(3)
+    joints = np.tile(scene.reference, (3, 1))
+    for name in ("arm_left_1_joint", "arm_left_2_joint", "arm_right_4_joint", "torso_2_joint"):
+        j = scene.joint_index(name)
+        joints[:, j] = rng.uniform(scene.lower[j], scene.upper[j], 3)
+    return joints
+
+
+def test_arm_torque_is_the_moment_of_the_weight_it_carries(scene, postures):
+    """Above the legs the robot is a tree: a joint holds the weight of its subtree, m g x (c - p) about its axis."""
+    model, data = scene.model, scene.model.createData()
+    tau = gravity_torques(scene, postures)
+    gravity = np.array([0.0, 0.0, -9.81])
+    for posture, torque in zip(postures, tau, strict=True):
+        q = scene.configuration(posture)
+        pin.forwardKinematics(model, data, q)
+        pin.centerOfMass(model, data, q, True)  # data.com[j], data.mass[j]: subtree of joint j, in its frame
+        for name in ("arm_left_1_joint", "arm_left_2_joint", "arm_right_4_joint", "torso_2_joint"):
+            jid = model.getJointId(name)
+            placement = data.oMi[jid]
+            axis = placement.rotation @ np.eye(3)["XYZ".index(model.joints[jid].shortname()[-1])]
+            moment = np.cross(placement.act(data.com[jid]) - placement.translation, data.mass[jid] * gravity)
+            assert torque[scene.joint_index(name)] == pytest.approx(-axis @ moment, abs=1e-6), name
+
+
+def test_the_floor_carries_the_whole_weight(scene, postures):
+    """The torques are those of sole wrenches whose vertical forces add up to m g."""
+    model, data = scene.model, scene.model.createData()
+    tau = gravity_torques(scene, postures)
+    mass = pin.computeTotalMass(model)
+    for posture, torque in zip(postures, tau, strict=True):
+        q = scene.configuration(posture)
+        gravity = pin.computeGeneralizedGravity(model, data, q)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        soles = [scene.frame_id(f) for f in scene.stance.sole_frames]
+        contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in soles])
+        full = np.zeros(model.nv)
+        full[scene.velocity_indices()] = torque
+        wrench = np.linalg.lstsq(contact.T, gravity - full, rcond=None)[0]
+        assert contact.T @ wrench == pytest.approx(gravity - full, abs=1e-7)  # torques and wrenches balance
+        vertical = sum((data.oMf[f].rotation @ wrench[6 * k : 6 * k + 3])[2] for k, f in enumerate(soles))
+        assert vertical == pytest.approx(mass * 9.81, rel=1e-6)
