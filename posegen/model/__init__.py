@@ -8,9 +8,12 @@ experiment design (one information matrix per candidate posture) that selection 
 and the route's repair consults.
 """
 
+from posegen.model.calibration_model import CalibrationModel, Evaluation, Observations, body_parts
 from posegen.model.contact_model import ContactModel, Contacts
 from posegen.model.design import RIDGE, SINGULAR, Design, build_design
+from posegen.model.floor_model import FLOOR_FIELDS, SESSION_FIELDS, FloorModel
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
+from posegen.model.kinds import Direction, Kind, Part, kind_basis
 from posegen.model.kinematics import ChainModel, offset_matrix, placement_derivatives, placement_matrix, rpy_matrix
 from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter, Unit
 from posegen.model.planes import initial_planes, level_planes
@@ -28,27 +31,38 @@ from posegen.model.weights import (
 
 __all__ = [
     "DEFAULT_NOISE",
+    "FLOOR_FIELDS",
     "NOISE_FLOOR",
     "OFFSET_FIELDS",
     "PLACEMENT_FIELDS",
     "RANK_TOLERANCE",
     "RIDGE",
+    "SESSION_FIELDS",
     "SINGULAR",
     "STRUCTURAL_POSTURES",
     "UNIT_PRIOR_ANGLE_RAD",
     "UNIT_PRIOR_LENGTH_M",
     "BaseParameters",
+    "CalibrationModel",
     "ChainModel",
     "ContactModel",
     "Contacts",
     "Design",
+    "Direction",
+    "Evaluation",
+    "FloorModel",
     "Group",
+    "Kind",
+    "Observations",
     "Parameter",
+    "Part",
     "Unit",
     "Weights",
     "base_parameters",
+    "body_parts",
     "build_design",
     "initial_planes",
+    "kind_basis",
     "level_planes",
     "level_postures",
     "observability_o1",

@@ -74,6 +74,7 @@ from posegen.robot.verification import EXAMPLES, Verification, Worst, WorstSoFar
 __all__ = [
     "ACCELERATION_STEP",
     "EXAMPLES",
+    "MOMENT_ARM_M",
     "POOL_FORMAT",
     "POOL_VERSION",
     "POSITION_DTYPE",
@@ -118,6 +119,7 @@ __all__ = [
     "contact_placement",
     "convex_hull_clockwise",
     "flatten_on_floor",
+    "gravity_torques",
     "is_route_file",
     "kinematic_urdf",
     "load_config",
