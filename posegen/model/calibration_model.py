@@ -10,8 +10,9 @@ compliance per group of joints (rad/N m), then the second sole's x, y (m) and ya
 * floors: the second sole's pose in the first sole's frame, less (x, y, 0, 0, 0, yaw)
   of its session, zero when both soles are flat on one floor.
 
-Both are evaluated at the deflected joints q + c tau(q): each compliant joint gives
-way by its group's compliance times its gravity torque (:mod:`posegen.robot.statics`).
+Both are evaluated at the deflected joints q - c tau(q): each compliant joint gives way
+under gravity by its group's compliance (rad/N m, positive) times the torque that holds
+the posture (:mod:`posegen.robot.statics`), in the direction gravity pulls.
 """
 
 from __future__ import annotations
@@ -96,12 +97,21 @@ class CalibrationModel:
             self.contact, body_parts(scene, self.contact), list(self.compliance), self.sessions
         )
         self.size = self.basis.shape[0]
+        self._basis_inverse = np.linalg.inv(self.basis)
         self._compliance_start = self.contact.size
         self._floor_start = self.contact.size + len(self.compliance)
 
     def nominal(self) -> FloatArray:
         """The URDF, no compliance, floor constants zero. Shape (nx,)."""
         return np.concatenate([self.contact.nominal(), np.zeros(self.size - self.contact.size)])
+
+    def x_of(self, delta: FloatArray) -> FloatArray:
+        """Parameters at deviations ``delta`` along the directions. Shape (nx,)."""
+        return np.asarray(self.nominal() + self.basis @ delta)
+
+    def delta_of(self, x: FloatArray) -> FloatArray:
+        """Deviations along the directions of parameters ``x`` (first order for rotations). Shape (nx,)."""
+        return np.asarray(self._basis_inverse @ (x - self.nominal()))
 
     def theta(self, x: FloatArray) -> FloatArray:
         """The contact model's parameters within x (a copy). Shape (p,)."""
@@ -127,37 +137,40 @@ class CalibrationModel:
         return Observations(contacts, gravity_torques(self.scene, contacts.joints))
 
     def deflected(self, x: FloatArray, observations: Observations) -> FloatArray:
-        """Joint angles under gravity, q + c tau. Shape (n, nj)."""
+        """Joint angles under gravity, q - c tau. Shape (n, nj)."""
         joints = observations.contacts.joints.copy()
         for k, indices in enumerate(self.compliance.values()):
-            joints[:, indices] += x[self._compliance_start + k] * observations.torques[:, indices]
+            joints[:, indices] -= x[self._compliance_start + k] * observations.torques[:, indices]
         return joints
 
-    def evaluate(self, x: FloatArray, observations: Observations, jacobian: bool = False) -> Evaluation:
-        """Residuals of the contacts and floors, and their derivatives w.r.t. x if ``jacobian``."""
+    def evaluate(
+        self, x: FloatArray, observations: Observations, jacobian: bool = False, floor: bool = True
+    ) -> Evaluation:
+        """Residuals of the contacts and (if ``floor``) the floors, and their derivatives w.r.t. x if ``jacobian``."""
         contacts = observations.contacts
         n = len(contacts)
         bent = Contacts(self.deflected(x, observations), contacts.chains, contacts.sessions, contacts.labels)
         theta = self.theta(x)
         floor_offset = np.zeros((n, 6))
         sessions = np.array(contacts.sessions)
-        if self.floor is not None:
+        model = self.floor if floor else None
+        if model is not None:
             for session in set(contacts.sessions):
                 x0, y0, yaw0 = x[self.floor_columns(session)]
                 floor_offset[sessions == session] = (x0, y0, 0.0, 0.0, 0.0, yaw0)
         if not jacobian:
             contact = self.contact.residuals(theta, bent)
-            if self.floor is None:
+            if model is None:
                 return Evaluation(contact, np.zeros((n, 0)), np.zeros((n, 3, 0)), np.zeros((n, 6, 0)))
-            floor = self.floor.measure(theta, bent.joints) - floor_offset
-            return Evaluation(contact, floor, np.zeros((n, 3, 0)), np.zeros((n, 6, 0)))
+            measured = model.measure(theta, bent.joints) - floor_offset
+            return Evaluation(contact, measured, np.zeros((n, 3, 0)), np.zeros((n, 6, 0)))
         contact, d_theta, d_joints = self.contact.derivatives(theta, bent)
         contact_jac = np.zeros((n, 3, self.size))
         contact_jac[:, :, : self.contact.size] = d_theta
         self._compliance_columns(contact_jac, d_joints, observations)
-        if self.floor is None:
+        if model is None:
             return Evaluation(contact, np.zeros((n, 0)), contact_jac, np.zeros((n, 6, 0)))
-        pose, f_theta, f_joints = self.floor.derivatives(theta, bent.joints)
+        pose, f_theta, f_joints = model.derivatives(theta, bent.joints)
         floor_jac = np.zeros((n, 6, self.size))
         floor_jac[:, :, : self.contact.size] = f_theta
         self._compliance_columns(floor_jac, f_joints, observations)
@@ -168,7 +181,7 @@ class CalibrationModel:
         return Evaluation(contact, pose - floor_offset, contact_jac, floor_jac)
 
     def _compliance_columns(self, jac: FloatArray, d_joints: FloatArray, observations: Observations) -> None:
-        """Add d residual / d compliance = sum over the group's joints of d residual / d q_j * tau_j."""
+        """Add d residual / d compliance = -sum over the group's joints of d residual / d q_j * tau_j."""
         for k, indices in enumerate(self.compliance.values()):
             torques = observations.torques[:, indices]  # (n, g)
-            jac[:, :, self._compliance_start + k] = np.einsum("nmj,nj->nm", d_joints[:, :, indices], torques)
+            jac[:, :, self._compliance_start + k] = -np.einsum("nmj,nj->nm", d_joints[:, :, indices], torques)

@@ -20,6 +20,7 @@ from posegen.model.kinematics import (
     joint_derivative,
     offset_matrix,
     placement_derivatives,
+    rigid_inverse,
     tilt_measurement,
     tilt_measurement_jacobian,
 )
@@ -177,7 +178,7 @@ class ContactModel:
         contact = theta[self.contact_columns(model.contact_frame)]
         elements, tip = model.transforms(joints, placements, contact)
         plane = offset_matrix(*theta[self.plane_columns(session)])
-        plane_inv = np.linalg.inv(plane)
+        plane_inv = rigid_inverse(plane)
         n = joints.shape[0]
         prefixes = [np.broadcast_to(np.eye(4), (n, 4, 4))]
         for t in elements:

@@ -21,6 +21,7 @@ from posegen.model.kinematics import (
     Element,
     element_derivatives,
     joint_derivative,
+    rigid_inverse,
     tilt_measurement,
     tilt_measurement_jacobian,
 )
@@ -54,9 +55,9 @@ class FloorModel:
         self, chain: ChainModel, theta: FloatArray, joints: FloatArray
     ) -> tuple[list[tuple[Element, FloatArray, FloatArray]], list[FloatArray], list[FloatArray]]:
         """The leg's elements with their transforms and parameters, prefix and suffix products."""
-        placements = {e.name: theta[self.contacts.placement_columns(e.name)] for e in chain.elements}
-        transforms, _ = chain.transforms(joints, placements, np.zeros(3))
-        items = [(e, t, placements[e.name]) for e, t in zip(chain.elements, transforms, strict=True) if e.reverse]
+        placements = {e.name: theta[self.contacts.placement_columns(e.name)] for e in chain.elements if e.reverse}
+        transforms, _ = chain.transforms(joints, placements, np.zeros(3), legs_only=True)
+        items = [(e, t, placements[e.name]) for e, t in zip(chain.elements, transforms, strict=False)]
         n = joints.shape[0]
         prefixes: list[FloatArray] = [np.broadcast_to(np.eye(4), (n, 4, 4))]
         for _, t, _ in items:
@@ -79,7 +80,7 @@ class FloorModel:
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         first, second = (self._leg(chain, theta, joints) for chain in self.legs)
         up, down = first[1][-1], second[1][-1]  # root in each sole frame
-        down_inv = np.linalg.inv(down)
+        down_inv = rigid_inverse(down)
         frames = up @ down_inv  # (n, 4, 4) second sole in the first
         meas = _pose_measurement(frames)
         n = joints.shape[0]

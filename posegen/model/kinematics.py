@@ -134,7 +134,7 @@ class ChainModel:
         return [e.joint for e in self.elements if e.joint is not None]
 
     def transforms(
-        self, joints: FloatArray, placements: dict[str, FloatArray], contact: FloatArray
+        self, joints: FloatArray, placements: dict[str, FloatArray], contact: FloatArray, legs_only: bool = False
     ) -> tuple[list[FloatArray], FloatArray]:
         """Per-element transforms and the contact offset.
 
@@ -142,6 +142,7 @@ class ChainModel:
             joints: (n, nj) joint angles, rad.
             placements: Placement name -> (6,) parameters.
             contact: (3,) contact offsets (z m, roll rad, pitch rad).
+            legs_only: Only the elements from the sole up to the root (traversed in reverse).
 
         Returns:
             A list of (n, 4, 4) element transforms and the (4, 4) gripper-to-contact transform.
@@ -150,12 +151,14 @@ class ChainModel:
         n = joints.shape[0]
         out = []
         for e in self.elements:
+            if legs_only and not e.reverse:
+                break
             m = placement_matrix(placements[e.name])
             if e.axis is None:
-                t = np.broadcast_to(np.linalg.inv(m) if e.reverse else m, (n, 4, 4))
+                t = np.broadcast_to(rigid_inverse(m) if e.reverse else m, (n, 4, 4))
             else:
                 rot = _rotations(e.axis, joints[:, e.joint])  # (n, 4, 4)
-                t = np.linalg.inv(m @ rot) if e.reverse else m @ rot
+                t = rigid_inverse(m @ rot) if e.reverse else m @ rot
             out.append(t)
         return out, self.contact_nominal @ offset_matrix(*contact)
 
@@ -170,6 +173,16 @@ class ChainModel:
     def nominal_placements(self) -> dict[str, FloatArray]:
         """Placement name -> nominal (6,) parameters (copies)."""
         return {e.name: e.nominal.copy() for e in self.elements}
+
+
+def rigid_inverse(transforms: FloatArray) -> FloatArray:
+    """Inverse of rigid transforms (..., 4, 4): [R p]^-1 = [R^T -R^T p]."""
+    out = np.zeros_like(transforms)
+    rot_t = np.swapaxes(transforms[..., :3, :3], -1, -2)
+    out[..., :3, :3] = rot_t
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", rot_t, transforms[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
 
 
 def element_derivatives(element: Element, transforms: FloatArray, params: FloatArray) -> FloatArray:
@@ -189,12 +202,12 @@ def element_derivatives(element: Element, transforms: FloatArray, params: FloatA
     d_m = placement_derivatives(params)  # (6, 4, 4)
     if element.axis is None:
         if element.reverse:  # E = M^-1 -> dE = -M^-1 dM M^-1
-            m_inv = np.linalg.inv(m)
+            m_inv = rigid_inverse(m)
             return np.broadcast_to(-m_inv @ d_m @ m_inv, (n, 6, 4, 4))
         return np.broadcast_to(d_m, (n, 6, 4, 4))
     if element.reverse:  # E = (M R)^-1 -> dE = -E dM M^-1
-        return np.asarray(-transforms[:, None] @ (d_m @ np.linalg.inv(m))[None])
-    return np.asarray(d_m[None] @ (np.linalg.inv(m) @ transforms)[:, None])  # E = M R -> dE = dM R
+        return np.asarray(-transforms[:, None] @ (d_m @ rigid_inverse(m))[None])
+    return np.asarray(d_m[None] @ (rigid_inverse(m) @ transforms)[:, None])  # E = M R -> dE = dM R
 
 
 def joint_derivative(element: Element, transforms: FloatArray) -> FloatArray:

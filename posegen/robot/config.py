@@ -15,6 +15,7 @@ from typing import Any, TypeVar
 
 from posegen.errors import ConfigError
 from posegen.io import load_yaml_file
+from posegen.robot.calibration_config import CalibrationConfig, calibration_to_dict, parse_calibration
 
 
 @dataclass(frozen=True)
@@ -127,6 +128,7 @@ class Config:
     sampling: SamplingConfig
     route: RouteConfig = RouteConfig()
     recording: RecordingConfig = RecordingConfig()
+    calibration: CalibrationConfig = dataclasses.field(default_factory=CalibrationConfig)
     source_path: str = ""
 
     def chain(self, name: str) -> ChainConfig:
@@ -163,6 +165,7 @@ class Config:
             "sampling": dataclasses.asdict(self.sampling),
             "route": dataclasses.asdict(self.route),
             "recording": dataclasses.asdict(self.recording),
+            "calibration": calibration_to_dict(self.calibration),
         }
         return dict(_plain(data))
 
@@ -349,6 +352,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         sampling=sampling,
         route=route,
         recording=recording,
+        calibration=parse_calibration(top.raw("calibration", None)),
         source_path=source_path,
     )
 

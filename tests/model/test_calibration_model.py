@@ -67,7 +67,7 @@ def test_compliance_bends_the_joints_by_their_gravity_torque(scene, model, obser
     x[model.columns([Kind.COMPLIANCE])] = (1e-4, 0.0)
     bent = model.deflected(x, observations)
     hip = scene.joint_index("leg_right_3_joint")
-    assert bent[:, hip] - observations.contacts.joints[:, hip] == pytest.approx(1e-4 * observations.torques[:, hip])
+    assert bent[:, hip] - observations.contacts.joints[:, hip] == pytest.approx(-1e-4 * observations.torques[:, hip])
     others = np.setdiff1d(np.arange(len(scene.joint_names)), [scene.joint_index(j) for j in COMPLIANCE["hip_pitch"]])
     assert np.array_equal(bent[:, others], observations.contacts.joints[:, others])
 

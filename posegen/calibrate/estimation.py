@@ -1,0 +1,278 @@
+"""Maximum a posteriori estimation of a calibration model, and of its measurement noise.
+
+The estimate minimises, over the free directions delta of the kind basis
+(x = x_nominal + B delta; held directions stay at the URDF)::
+
+    sum_i w_i [ sum_c (r_ic / sigma_c)^2 + sum_f (s_if / tau_f)^2 ] + sum_k (delta_k / s_k)^2
+
+with r the contact residuals (height, roll, pitch), s the floor residuals (used only
+when the spec says so), sigma and tau their noise per component, s_k the prior sigma
+of each free direction (none on planes and floor constants) and w_i a weight per
+posture, 1 except while screening for bad rows.
+
+The noise of each component is the residual RMS corrected for the degrees of freedom
+the fit used (RSS / (m - trace of the hat matrix over that component's rows)): an
+unbiased estimate of the measurement noise even when the fit is close to interpolating,
+which the training RMS is not.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from posegen.calibrate.identification import levenberg_marquardt
+from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, initial_planes
+from posegen.robot import FloatArray
+
+FLOOR_NOISE_FLOOR = (1e-5, 1e-5, 1e-5, float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)))
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Measurement noise (sigma) per component of each measurement kind."""
+
+    contact: tuple[float, float, float]  # height m, roll rad, pitch rad
+    floor: tuple[float, float, float, float, float, float]  # x, y, z m; roll, pitch, yaw rad
+
+    @classmethod
+    def of(cls, contact: FloatArray, floor: FloatArray) -> Noise:
+        """From arrays, bounded below by what no measurement is known better than."""
+        c = np.maximum(contact, NOISE_FLOOR)
+        f = np.maximum(floor, FLOOR_NOISE_FLOOR)
+        return cls((float(c[0]), float(c[1]), float(c[2])), tuple(float(v) for v in f))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What a fit estimates: free directions, their prior, and whether the floor equations count."""
+
+    free: tuple[int, ...]  # indices of the model's directions that are estimated
+    prior_sd: FloatArray  # (nx,) prior sigma of each direction; inf: no prior
+    floor: bool
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A fitted calibration model."""
+
+    x: FloatArray  # (nx,) parameters
+    delta: FloatArray  # (nx,) deviations along the directions
+    noise: Noise
+    iterations: int
+    std: FloatArray  # (nx,) posterior sigma along each direction, 0 when held
+
+
+def start_point(model: CalibrationModel, observations: Observations) -> FloatArray:
+    """The URDF with each session's plane level at its contacts' mean height, floor constants as measured."""
+    contacts = observations.contacts
+    x = model.nominal()
+    x[: model.contact.size] = initial_planes(model.contact, contacts, model.theta(x))
+    if model.floor is not None:
+        pose = model.floor.measure(model.theta(x), contacts.joints)
+        sessions = np.array(contacts.sessions)
+        for session in set(contacts.sessions):
+            x[model.floor_columns(session)] = pose[sessions == session][:, [0, 1, 5]].mean(axis=0)
+    return x
+
+
+def _problem(
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    fixed: FloatArray,
+    weights: FloatArray,
+) -> tuple[Callable[[FloatArray], FloatArray], Callable[[FloatArray], FloatArray]]:
+    """Whitened residual and Jacobian of the free deviations (data rows, then prior rows)."""
+    free = np.array(spec.free, dtype=int)
+    sd = spec.prior_sd[free]
+    prior = np.isfinite(sd)
+    sigma_c = np.array(noise.contact)
+    sigma_f = np.array(noise.floor)
+    root = np.sqrt(weights)[:, None]  # (n, 1)
+    basis = model.basis[:, free]
+
+    def x_of(values: FloatArray) -> FloatArray:
+        delta = fixed.copy()
+        delta[free] = values
+        return model.x_of(delta)
+
+    def stack(contact: FloatArray, floor: FloatArray, values: FloatArray) -> FloatArray:
+        parts = [(contact / sigma_c * root).ravel()]
+        if spec.floor:
+            parts.append((floor / sigma_f * root).ravel())
+        parts.append(values[prior] / sd[prior])
+        return np.concatenate(parts)
+
+    def fun(values: FloatArray) -> FloatArray:
+        out = model.evaluate(x_of(values), observations, floor=spec.floor)
+        return stack(out.contact, out.floor, values)
+
+    def jac(values: FloatArray) -> FloatArray:
+        out = model.evaluate(x_of(values), observations, jacobian=True, floor=spec.floor)
+        rows = [((out.contact_jacobian / sigma_c[None, :, None]) * root[:, :, None]).reshape(-1, model.size) @ basis]
+        if spec.floor:
+            whitened = (out.floor_jacobian / sigma_f[None, :, None]) * root[:, :, None]
+            rows.append(whitened.reshape(-1, model.size) @ basis)
+        rows.append(np.diag(1.0 / sd)[prior])
+        return np.vstack(rows)
+
+    return fun, jac
+
+
+def fit(
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    start: FloatArray,
+    max_iterations: int = 50,
+    weights: FloatArray | None = None,
+) -> tuple[FloatArray, int]:
+    """Deviations (nx,) of the MAP estimate at a given noise, and the Jacobian evaluations used.
+
+    Args:
+        model: Calibration model.
+        observations: The postures fitted.
+        spec: Free directions, prior, floor equations or not.
+        noise: Measurement noise.
+        start: (nx,) starting parameters; directions that are not free keep their values.
+        max_iterations: Cap on Levenberg-Marquardt iterations.
+        weights: (n,) weight of each posture (robust screening); None: all 1.
+
+    """
+    free = np.array(spec.free, dtype=int)
+    fixed = model.delta_of(start)
+    w = np.ones(len(observations)) if weights is None else weights
+    fun, jac = _problem(model, observations, spec, noise, fixed, w)
+    values, iterations = levenberg_marquardt(fun, jac, fixed[free], max_iterations)
+    delta = fixed.copy()
+    delta[free] = values
+    return delta, iterations
+
+
+def frozen_jacobian(
+    model: CalibrationModel, observations: Observations, spec: Spec, noise: Noise, x: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Whitened Jacobian of the free deviations at ``x``: per posture (n, 3 or 9, f), and the prior rows (q, f)."""
+    free = list(spec.free)
+    out = model.evaluate(x, observations, jacobian=True, floor=spec.floor)
+    basis = model.basis[:, free]
+    blocks = [out.contact_jacobian / np.array(noise.contact)[None, :, None]]
+    if spec.floor:
+        blocks.append(out.floor_jacobian / np.array(noise.floor)[None, :, None])
+    per_posture = np.einsum("nmx,xf->nmf", np.concatenate(blocks, axis=1), basis)
+    sd = spec.prior_sd[free]
+    prior = np.isfinite(sd)
+    return per_posture, np.diag(1.0 / np.where(prior, sd, 1.0))[prior]
+
+
+def refit_frozen(
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    start: FloatArray,
+    jacobian: tuple[FloatArray, FloatArray],
+    iterations: int,
+) -> FloatArray:
+    """Deviations (nx,) of the MAP fit by Gauss-Newton steps with a frozen Jacobian (chord method).
+
+    Each step uses the true residuals of ``observations`` and the Jacobian of another fit
+    close by (the fit on all rows, for a fold of it): one factorisation, then one
+    residual evaluation per step. ``jacobian`` holds these postures' rows and the prior rows.
+    """
+    per_posture, prior_rows = jacobian
+    matrix = np.vstack([per_posture.reshape(-1, per_posture.shape[2]), prior_rows])
+    factor = scipy.linalg.cho_factor(matrix.T @ matrix)
+    free = np.array(spec.free, dtype=int)
+    fixed = model.delta_of(start)
+    fun, _ = _problem(model, observations, spec, noise, fixed, np.ones(len(observations)))
+    values = fixed[free]
+    for _ in range(iterations):
+        values = values - scipy.linalg.cho_solve(factor, matrix.T @ fun(values))
+    delta = fixed.copy()
+    delta[free] = values
+    return delta
+
+
+def held_at_urdf(model: CalibrationModel, spec: Spec, x: FloatArray) -> FloatArray:
+    """``x`` with every direction the spec does not free, except planes and floor constants, at the URDF."""
+    delta = model.delta_of(x)
+    held = np.ones(model.size, dtype=bool)
+    held[list(spec.free)] = False
+    held[model.columns([Kind.PLANE, Kind.FLOOR])] = False
+    delta[held] = 0.0
+    return model.x_of(delta)
+
+
+def _hat_terms(
+    model: CalibrationModel, observations: Observations, spec: Spec, noise: Noise, delta: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Whitened data Jacobian (m, f), residuals, leverage of each data row (m,), posterior covariance (f, f)."""
+    free = np.array(spec.free, dtype=int)
+    fun, jac = _problem(model, observations, spec, noise, delta, np.ones(len(observations)))
+    values = delta[free]
+    full = jac(values)
+    n_data = len(observations) * (9 if spec.floor else 3)
+    data = full[:n_data]
+    information = full.T @ full
+    covariance = np.linalg.pinv(information)
+    leverage = np.einsum("ij,jk,ik->i", data, covariance, data)
+    return data, fun(values)[:n_data], leverage, covariance
+
+
+def estimate_noise(
+    model: CalibrationModel, observations: Observations, spec: Spec, noise: Noise, delta: FloatArray
+) -> Noise:
+    """Noise per component: residual RMS corrected for the fitted degrees of freedom."""
+    _, whitened, leverage, _ = _hat_terms(model, observations, spec, noise, delta)
+    n = len(observations)
+    contact = whitened[: 3 * n].reshape(n, 3) * np.array(noise.contact)
+    dof = leverage[: 3 * n].reshape(n, 3).sum(axis=0)
+    sigma_c = np.sqrt(np.sum(contact**2, axis=0) / np.maximum(n - dof, 1.0))
+    sigma_f = np.array(noise.floor)
+    if spec.floor:
+        floor = whitened[3 * n :].reshape(n, 6) * sigma_f
+        dof_f = leverage[3 * n :].reshape(n, 6).sum(axis=0)
+        sigma_f = np.sqrt(np.sum(floor**2, axis=0) / np.maximum(n - dof_f, 1.0))
+    return Noise.of(sigma_c, sigma_f)
+
+
+def estimate(
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    start: FloatArray,
+    rounds: int = 3,
+    max_iterations: int = 50,
+) -> Estimate:
+    """MAP estimate with the noise re-estimated from its own residuals ``rounds`` times."""
+    x = start
+    delta = model.delta_of(start)
+    iterations = 0
+    for _ in range(rounds):
+        delta, used = fit(model, observations, spec, noise, x, max_iterations)
+        iterations += used
+        x = model.x_of(delta)
+        noise = estimate_noise(model, observations, spec, noise, delta)
+    delta, used = fit(model, observations, spec, noise, x, max_iterations)
+    _, _, _, covariance = _hat_terms(model, observations, spec, noise, delta)
+    std = np.zeros(model.size)
+    std[list(spec.free)] = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    return Estimate(model.x_of(delta), delta, noise, iterations + used, std)
+
+
+def plane_spec(model: CalibrationModel, sessions: set[str] | None = None) -> Spec:
+    """Only the planes (of ``sessions``, or all) free, no prior: kinematics frozen."""
+    free = tuple(
+        i
+        for i, d in enumerate(model.directions)
+        if d.kind == Kind.PLANE and (sessions is None or d.owner in sessions)
+    )
+    return Spec(free, np.full(model.size, np.inf), floor=False)

@@ -1,0 +1,191 @@
+"""Typed ``calibration`` section of a scene config: priors, compliance, candidate models.
+
+What is robot-specific in a calibration lives here, read from ``configs/*.yaml``: the
+prior size of each parameter kind (from manufacturing tolerances), which joints give
+way under gravity (compliance groups), the candidate models that cross-validation
+chooses among, the prior scales it tries, its folds, and the error the user aims at.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+from posegen.errors import ConfigError
+
+PARTS = ("leg", "torso", "arm", "*")
+KINDS = ("joint_offset", "axis_tilt", "link_translation", "frame_rotation", "*")
+
+
+@dataclass(frozen=True)
+class PriorConfig:
+    """Prior sigma of each parameter kind's deviation from the URDF, at prior scale 1."""
+
+    joint_offset_deg: float = 0.1  # encoder zero
+    axis_tilt_deg: float = 0.1  # joint axis vs its housing
+    link_translation_mm: float = 1.0  # a placement's origin
+    frame_rotation_deg: float = 0.1  # a fixed frame (sole, gripper mount)
+    contact_height_mm: float = 1.0  # contact frame along the gripper normal
+    contact_tilt_deg: float = 0.1  # contact frame roll and pitch
+    compliance_rad_per_knm: float = 0.1  # joint deflection per kN m of gravity torque
+
+
+@dataclass(frozen=True)
+class CandidateConfig:
+    """A candidate model: which parameter kinds are fitted, and which effects are modelled.
+
+    Contact offsets and table planes are always fitted. ``fit`` holds ``part.kind``
+    patterns, part one of leg, torso, arm or *, kind one of joint_offset, axis_tilt,
+    link_translation, frame_rotation or *; every other kind is held at the URDF.
+    """
+
+    name: str
+    fit: tuple[str, ...]
+    floor: bool = False  # use the floor equations (both soles flat on one floor)
+    compliance: bool = False  # fit the compliance groups
+
+    def fits(self, part: str, kind: str) -> bool:
+        """Whether this candidate fits parameters of this part and kind."""
+        return any(p in (part, "*") and k in (kind, "*") for p, k in (s.split(".") for s in self.fit))
+
+
+DEFAULT_CANDIDATES = (
+    CandidateConfig("full", ("*.*",)),
+    CandidateConfig(
+        "arm_translations_held", ("leg.*", "torso.*", "arm.joint_offset", "arm.axis_tilt", "arm.frame_rotation")
+    ),
+    CandidateConfig("offsets_legs", ("*.joint_offset", "leg.*")),
+    CandidateConfig("offsets", ("*.joint_offset",)),
+)
+
+
+@dataclass(frozen=True)
+class CalibrationConfig:
+    """How ``posegen calibrate`` models the robot and chooses among models."""
+
+    prior: PriorConfig = PriorConfig()
+    prior_scales: tuple[float, ...] = (0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0)  # tried, x the prior sigmas
+    compliance: dict[str, tuple[str, ...]] = field(default_factory=dict)  # group -> joints sharing one compliance
+    candidates: tuple[CandidateConfig, ...] = DEFAULT_CANDIDATES
+    folds: int = 5  # regions of the table per chain (or sessions, when a chain has several)
+    fold_seeds: int = 5  # repetitions of the grouped cross-validation
+    fold_iterations: int = 3  # Levenberg-Marquardt iterations of a fold's fit, started from the full fit
+    target_error_mm: float = 4.0  # warn when a chain's predicted held-out height error is above
+    outlier_false_alarm: float = 0.01  # chance of flagging any row of a clean data set (Bonferroni)
+
+
+def parse_candidate(name: str, data: Any, where: str) -> CandidateConfig:
+    """One entry of ``calibration.candidates``.
+
+    Raises:
+        ConfigError: Unknown keys, parts or kinds.
+
+    """
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where}: expected a mapping with fit, floor, compliance")
+    unknown = set(data) - {"fit", "floor", "compliance"}
+    if unknown:
+        raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: fit, floor, compliance")
+    patterns = data.get("fit")
+    if not isinstance(patterns, list) or not all(isinstance(p, str) for p in patterns):
+        raise ConfigError(f"{where}.fit: expected a list of part.kind patterns")
+    for pattern in patterns:
+        part, _, kind = pattern.partition(".")
+        if part not in PARTS or kind not in KINDS:
+            raise ConfigError(
+                f"{where}.fit: '{pattern}' is not part.kind; parts: {', '.join(PARTS)}; kinds: {', '.join(KINDS)}"
+            )
+    flags = {}
+    for key in ("floor", "compliance"):
+        value = data.get(key, False)
+        if not isinstance(value, bool):
+            raise ConfigError(f"{where}.{key}: expected true or false, got {value!r}")
+        flags[key] = value
+    return CandidateConfig(name, tuple(patterns), flags["floor"], flags["compliance"])
+
+
+def _number(data: dict[str, Any], key: str, default: float, where: str, positive: bool = True) -> float:
+    value = data.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and value <= 0):
+        raise ConfigError(f"{where}.{key}: expected a {'positive ' if positive else ''}number, got {value!r}")
+    return float(value)
+
+
+def _integer(data: dict[str, Any], key: str, default: int, where: str, minimum: int) -> int:
+    value = data.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise ConfigError(f"{where}.{key}: expected an integer >= {minimum}, got {value!r}")
+    return value
+
+
+def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfig:
+    """The ``calibration`` section (every key optional; defaults in :class:`CalibrationConfig`).
+
+    Raises:
+        ConfigError: A key is unknown, of the wrong type or out of range.
+
+    """
+    if data is None:
+        return CalibrationConfig()
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where}: expected a mapping")
+    defaults = CalibrationConfig()
+    valid = [f.name for f in dataclasses.fields(CalibrationConfig)]
+    unknown = set(data) - set(valid)
+    if unknown:
+        raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: {', '.join(valid)}")
+    prior_data = data.get("prior", {})
+    if not isinstance(prior_data, dict):
+        raise ConfigError(f"{where}.prior: expected a mapping kind -> sigma")
+    prior_fields = [f.name for f in dataclasses.fields(PriorConfig)]
+    unknown = set(prior_data) - set(prior_fields)
+    if unknown:
+        raise ConfigError(f"{where}.prior: unknown keys {sorted(unknown)}; valid keys: {', '.join(prior_fields)}")
+    prior = PriorConfig(
+        **{k: _number(prior_data, k, getattr(defaults.prior, k), f"{where}.prior") for k in prior_fields}
+    )
+    scales = data.get("prior_scales", list(defaults.prior_scales))
+    if not isinstance(scales, list) or len(scales) < 1 or not all(
+        isinstance(s, (int, float)) and not isinstance(s, bool) and s > 0 for s in scales
+    ):
+        raise ConfigError(f"{where}.prior_scales: expected a list of positive numbers, got {scales!r}")
+    groups = data.get("compliance", {})
+    if not isinstance(groups, dict) or not all(
+        isinstance(v, list) and v and all(isinstance(j, str) for j in v) for v in groups.values()
+    ):
+        raise ConfigError(f"{where}.compliance: expected a mapping group -> list of joint names")
+    candidates_data = data.get("candidates")
+    if candidates_data is None:
+        candidates = defaults.candidates
+    elif isinstance(candidates_data, dict) and candidates_data:
+        candidates = tuple(
+            parse_candidate(str(n), c, f"{where}.candidates.{n}") for n, c in candidates_data.items()
+        )
+    else:
+        raise ConfigError(f"{where}.candidates: expected a mapping name -> {{fit, floor, compliance}}")
+    for candidate in candidates:
+        if candidate.compliance and not groups:
+            raise ConfigError(f"{where}.candidates.{candidate.name}: compliance needs {where}.compliance groups")
+    return CalibrationConfig(
+        prior=prior,
+        prior_scales=tuple(float(s) for s in sorted(scales)),
+        compliance={str(g): tuple(v) for g, v in groups.items()},
+        candidates=candidates,
+        folds=_integer(data, "folds", defaults.folds, where, 2),
+        fold_seeds=_integer(data, "fold_seeds", defaults.fold_seeds, where, 1),
+        fold_iterations=_integer(data, "fold_iterations", defaults.fold_iterations, where, 1),
+        target_error_mm=_number(data, "target_error_mm", defaults.target_error_mm, where),
+        outlier_false_alarm=_number(data, "outlier_false_alarm", defaults.outlier_false_alarm, where),
+    )
+
+
+def calibration_to_dict(config: CalibrationConfig) -> dict[str, Any]:
+    """Plain-data form, as in the YAML file (re-loadable by :func:`parse_calibration`)."""
+    out = dataclasses.asdict(config)
+    out["prior_scales"] = list(config.prior_scales)
+    out["compliance"] = {g: list(j) for g, j in config.compliance.items()}
+    out["candidates"] = {
+        c.name: {"fit": list(c.fit), "floor": c.floor, "compliance": c.compliance} for c in config.candidates
+    }
+    return out
