@@ -47,7 +47,7 @@ def free_directions(model: CalibrationModel, candidate: CandidateConfig) -> tupl
         if d.kind in ROBOT_KINDS:
             keep = candidate.fits(d.part.value, d.kind.value)
         elif d.kind == Kind.COMPLIANCE:
-            keep = candidate.compliance
+            keep = d.owner in candidate.compliance
         elif d.kind == Kind.FLOOR:
             keep = candidate.floor and model.floor is not None
         else:  # contact offsets, planes

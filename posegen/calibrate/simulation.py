@@ -1,20 +1,36 @@
 """Simulated contacts on a perturbed "true" robot (``posegen simulate``).
 
 The true robot is the nominal model with seeded random errors on every placement
-parameter, on the contact offsets and on the table plane. For each planned posture the
-force-controlled contact moves the chain's joints by the smallest amount that makes the
-true contact frame flush with the true plane (Gauss-Newton, minimum-norm steps); the
-encoders then read those angles plus noise.
+parameter, on the contact offsets and on the table plane, and (if asked) joint
+compliance: every compliance group of the config gives way under gravity. At each
+planned posture the real experiment's physics is reproduced:
+
+* both soles stay flat on the floor where the reference posture puts them: the second
+  leg's joints take whatever angles close the true chain (the floor, not the nominal
+  model, holds the feet);
+* the force-controlled contact moves the chain's own arm and torso joints by the
+  smallest amount that makes the true contact frame flush with the true plane;
+
+both under the true robot's deflection by gravity (Gauss-Newton, minimum-norm steps,
+the gravity torques recomputed until the angles stop moving). The encoders then read
+those angles plus noise.
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
-from posegen.model import ContactModel, Contacts, Group, Parameter, Unit, settle_contacts
+from posegen.errors import InfeasibleError
+from posegen.model import CalibrationModel, Contacts, Group, Kind, Parameter, Unit
 from posegen.robot import FloatArray, Scene
+
+LOG = logging.getLogger(__name__)
+CONTACT_TOLERANCE = 1e-11  # m or rad: the true contact and floor closure are exact to this
+MAX_STEPS = 60
 
 
 @dataclass(frozen=True)
@@ -27,19 +43,21 @@ class Perturbation:
     plane_height_m: float | None = None  # true table height above the soles; None: the scene's table
     plane_tilt_rad: float = float(np.deg2rad(0.5))  # sigma of the table's roll and pitch
     encoder_noise_rad: float = 0.0  # sigma of the encoder readings' noise
+    compliance_rad_per_nm: float = 0.0  # true compliance of every compliance group of the config
 
 
-def true_parameters(model: ContactModel, perturbation: Perturbation, seed: int) -> FloatArray:
-    """Nominal parameters plus seeded random errors. Shape (p,)."""
+def true_parameters(model: CalibrationModel, perturbation: Perturbation, seed: int) -> FloatArray:
+    """Nominal parameters plus seeded random errors; floor constants those of the reference stance. Shape (nx,)."""
     rng = np.random.default_rng(seed)
-    theta = model.nominal()
-    for i, p in enumerate(model.parameters):
+    contact = model.contact
+    x = model.nominal()
+    for i, p in enumerate(contact.parameters):
         if p.group == Group.PLANE:
             continue
         if p.unit == Unit.LENGTH:
-            theta[i] += rng.normal(0.0, perturbation.length_m)
+            x[i] += rng.normal(0.0, perturbation.length_m)
         else:
-            theta[i] += float(
+            x[i] += float(
                 np.clip(
                     rng.normal(0.0, perturbation.angle_rad), -perturbation.max_angle_rad, perturbation.max_angle_rad
                 )
@@ -48,31 +66,111 @@ def true_parameters(model: ContactModel, perturbation: Perturbation, seed: int) 
     if height is None:
         height = float(model.scene.table_pose[2, 3])
     for session in model.sessions:
-        theta[model.column(Parameter.plane(session, "z"))] = height
+        x[contact.column(Parameter.plane(session, "z"))] = height
         for field in ("roll", "pitch"):
-            theta[model.column(Parameter.plane(session, field))] = rng.normal(0.0, perturbation.plane_tilt_rad)
-    return theta
+            x[contact.column(Parameter.plane(session, field))] = rng.normal(0.0, perturbation.plane_tilt_rad)
+    x[model.columns([Kind.COMPLIANCE])] = perturbation.compliance_rad_per_nm
+    scene = model.scene
+    relative = np.linalg.inv(scene.sole_poses[scene.anchor_sole]) @ scene.sole_poses[scene.second_sole]
+    for session in model.sessions:
+        x[model.floor_columns(session)] = (relative[0, 3], relative[1, 3], np.arctan2(relative[1, 0], relative[0, 0]))
+    return x
+
+
+def settle_true(model: CalibrationModel, x: FloatArray, planned: Contacts) -> tuple[Contacts, NDArray[np.bool_]]:
+    """Joint angles at which each planned posture stands and touches under parameters ``x``.
+
+    Returns:
+        The settled postures and which of them converged (n,): a posture whose second
+        sole or contact is out of reach of the true robot (a stretched knee) does not.
+
+    """
+    scene = model.scene
+    legs = set(scene.stance_leg_joints())
+    second_leg = scene.leg_joints(scene.second_sole) if model.floor is not None else []
+    own = {name: sorted(set(chain.joint_indices) - legs) + second_leg for name, chain in model.contact.chains.items()}
+    joints = planned.joints.copy()
+    sessions = np.array(planned.sessions)
+    target = np.zeros((len(planned), 6))  # floor: x, y, yaw of the session
+    for session in set(planned.sessions):
+        target[np.ix_(sessions == session, [0, 1, 5])] = x[model.floor_columns(session)]
+    def residuals(values: FloatArray, jacobian: bool) -> tuple[FloatArray, FloatArray]:
+        """Contact and floor residuals (n, 3 or 9) and, held gravity torques, their joint derivatives."""
+        observations = model.observations(Contacts(values, planned.chains, planned.sessions, planned.labels))
+        bent = Contacts(model.deflected(x, observations), planned.chains, planned.sessions, planned.labels)
+        theta = model.theta(x)
+        if not jacobian:
+            out = model.evaluate(x, observations)
+            blocks = [out.contact] + ([out.floor] if model.floor is not None else [])  # floor: less its session's
+            return np.concatenate(blocks, axis=1), np.zeros(0)
+        res, _, d_joints = model.contact.derivatives(theta, bent)
+        blocks, jacs = [res], [d_joints]
+        if model.floor is not None:
+            pose, _, f_joints = model.floor.derivatives(theta, bent.joints)
+            blocks.append(pose - target)
+            jacs.append(f_joints)
+        return np.concatenate(blocks, axis=1), np.concatenate(jacs, axis=1)
+
+    residual, jacobian = residuals(joints, True)
+    damping = np.full(len(planned), 1e-6)  # per posture: Levenberg-Marquardt on the joints
+    for _ in range(MAX_STEPS):
+        if np.max(np.abs(residual)) < CONTACT_TOLERANCE:
+            break
+        norm = np.linalg.norm(residual, axis=1)
+        pending = np.abs(residual).max(axis=1) >= CONTACT_TOLERANCE
+        trial = joints.copy()
+        for _attempt in range(12):
+            for i in np.flatnonzero(pending):
+                cols = own[planned.chains[i]]
+                a = jacobian[i][:, cols]
+                trial[i, cols] = joints[i, cols] - a.T @ np.linalg.solve(
+                    a @ a.T + damping[i] * np.eye(a.shape[0]), residual[i]
+                )
+            new, _ = residuals(trial, False)
+            better = np.linalg.norm(new, axis=1) < norm
+            damping[pending & better] = np.maximum(damping[pending & better] / 3.0, 1e-12)
+            damping[pending & ~better] = np.minimum(damping[pending & ~better] * 4.0, 1e6)
+            trial[pending & ~better] = joints[pending & ~better]
+            pending &= ~better
+            if not np.any(pending):
+                break
+        joints = trial
+        residual, jacobian = residuals(joints, True)
+    converged = np.abs(residual).max(axis=1) < 1e-9
+    return Contacts(joints, planned.chains, planned.sessions, planned.labels), converged
 
 
 def simulate(
     scene: Scene, planned: Contacts, perturbation: Perturbation, seed: int
-) -> tuple[Contacts, ContactModel, FloatArray]:
+) -> tuple[Contacts, CalibrationModel, FloatArray]:
     """Recorded contacts of a perturbed robot at planned postures.
 
     Args:
-        scene: Scene of the nominal robot.
-        planned: Planned postures (chains, sessions, joints).
+        scene: Scene of the nominal robot (its compliance groups give way if the
+            perturbation has a compliance).
+        planned: Planned postures (chains, sessions, joints), standing on both soles.
         perturbation: Error sizes.
         seed: Seed of the errors and of the encoder noise.
 
     Returns:
-        The recorded contacts (settled joints plus encoder noise), the model and the
-        true parameter vector (p,).
+        The recorded contacts (settled joints plus encoder noise; postures the
+        perturbed robot cannot reach are left out and logged), the model and the true
+        parameter vector (nx,).
+
+    Raises:
+        InfeasibleError: No posture can be reached.
 
     """
-    model = ContactModel(scene, sorted(set(planned.chains)), sorted(set(planned.sessions)))
-    theta = true_parameters(model, perturbation, seed)
-    settled = settle_contacts(model, theta, planned)
+    groups = scene.calibration.compliance if perturbation.compliance_rad_per_nm else {}
+    model = CalibrationModel(scene, sorted(set(planned.chains)), sorted(set(planned.sessions)), groups)
+    x = true_parameters(model, perturbation, seed)
+    settled, converged = settle_true(model, x, planned)
+    if not np.any(converged):
+        raise InfeasibleError("no planned posture stands and touches the table on the perturbed robot")
+    for i in np.flatnonzero(~converged):
+        LOG.warning("planned posture %d (%s) is out of reach of the perturbed robot: left out", i, planned.labels[i])
+    settled = settled.subset(np.flatnonzero(converged))
     rng = np.random.default_rng([seed, 1])
     noisy = settled.joints + rng.normal(0.0, perturbation.encoder_noise_rad, settled.joints.shape)
-    return Contacts(noisy, settled.chains, settled.sessions, settled.labels), model, theta
+    return Contacts(noisy, settled.chains, settled.sessions, settled.labels), model, x
+

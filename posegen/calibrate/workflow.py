@@ -14,7 +14,7 @@ from posegen.calibrate.measurements import read_measurements, write_measurements
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.io import write_yaml
-from posegen.model import ContactModel, Contacts
+from posegen.model import CalibrationModel, Contacts
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene, load_config, load_plan
 
@@ -48,6 +48,7 @@ def simulate_plan_file(
     error_deg: float,
     noise_deg: float,
     session: str,
+    compliance_rad_per_knm: float = 0.0,
 ) -> Simulated:
     """Contacts of a perturbed robot at the postures of a pool or selection file.
 
@@ -60,6 +61,7 @@ def simulate_plan_file(
         error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
         noise_deg: Sigma of the encoder noise (deg).
         session: Table session of every contact.
+        compliance_rad_per_knm: True compliance of each of the config's compliance groups.
 
     Raises:
         PosegenError: Bad config or plan, or a contact that does not settle.
@@ -70,44 +72,45 @@ def simulate_plan_file(
     plan.check_joints(scene.joint_names, plan_path)
     chains = tuple(p.chain for p in plan.postures)
     planned = Contacts(plan.joints(), chains, (session,) * len(chains), tuple(p.spot for p in plan.postures))
-    recorded, model, theta = simulate(scene, planned, perturbation_of(error_mm, error_deg, noise_deg), seed)
+    perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
+    recorded, model, x = simulate(scene, planned, perturbation, seed)
     prov = scene.provenance(seed)
     prov["simulation"] = {
         "postures": plan_path,
         "error_mm": error_mm,
         "error_deg": error_deg,
         "encoder_noise_deg": noise_deg,
+        "compliance_rad_per_knm": compliance_rad_per_knm,
     }
     measurements = Path(output)
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
-    write_truth(truth, model, theta, prov)
+    write_truth(truth, model, x, prov)
     write_measurements(measurements, scene, recorded, prov)
     return Simulated(contacts=len(recorded), measurements=measurements, truth=truth)
 
 
-def perturbation_of(error_mm: float, error_deg: float, noise_deg: float) -> Perturbation:
-    """The perturbation of the command line's units: placement errors in mm and deg, encoder noise in deg."""
+def perturbation_of(
+    error_mm: float, error_deg: float, noise_deg: float, compliance_rad_per_knm: float = 0.0
+) -> Perturbation:
+    """The perturbation of the command line's units: placement errors in mm and deg, encoder noise in deg,
+    compliance in rad/kN m."""
     return Perturbation(
         length_m=error_mm * 1e-3,
         angle_rad=float(np.deg2rad(error_deg)),
         encoder_noise_rad=float(np.deg2rad(noise_deg)),
+        compliance_rad_per_nm=compliance_rad_per_knm * 1e-3,
     )
 
 
-def write_truth(path: Path, model: ContactModel, theta: FloatArray, provenance: dict[str, Any]) -> None:
+def write_truth(path: Path, model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> None:
     """Write the true parameters of a simulated robot beside what it recorded (``posegen-truth``)."""
     nominal = model.nominal()
-    write_yaml(
-        path,
-        {
-            "format": TRUTH_FORMAT,
-            "format_version": 1,
-            "provenance": provenance,
-            "parameters": {
-                p.name: {"true": float(theta[i]), "nominal": float(nominal[i])} for i, p in enumerate(model.parameters)
-            },
-        },
-    )
+    parameters = {
+        p.name: {"true": float(x[i]), "nominal": float(nominal[i])} for i, p in enumerate(model.contact.parameters)
+    }
+    for group, value in model.compliances(x).items():
+        parameters[f"compliance@{group}"] = {"true": value, "nominal": 0.0}
+    write_yaml(path, {"format": TRUTH_FORMAT, "format_version": 1, "provenance": provenance, "parameters": parameters})
 
 
 def read_contacts(items: Sequence[str], scene: Scene, rejected: list[str]) -> Contacts:

@@ -22,6 +22,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--noise-deg", type=float, default=0.005, help="encoder noise sigma (default 0.005 deg)")
     parser.add_argument("--session", default="sim", help="table session name (default sim)")
+    parser.add_argument(
+        "--compliance",
+        type=float,
+        default=0.0,
+        help="true compliance of each calibration.compliance group of the config, rad/kN m (default 0: rigid)",
+    )
     parser.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
     bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR.truth.yaml")
@@ -42,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
         "error_deg": args.error_deg,
         "noise_deg": args.noise_deg,
         "session": args.session,
+        "compliance_rad_per_knm": args.compliance,
     }
     if args.bag:
         recorded = simulate_route_bag(args.postures, args.bag, rate_hz=args.rate, joint_topic=args.joint_topic, **robot)

@@ -10,9 +10,14 @@ compliance per group of joints (rad/N m), then the second sole's x, y (m) and ya
 * floors: the second sole's pose in the first sole's frame, less (x, y, 0, 0, 0, yaw)
   of its session, zero when both soles are flat on one floor.
 
-Both are evaluated at the deflected joints q - c tau(q): each compliant joint gives way
-under gravity by its group's compliance (rad/N m, positive) times the torque that holds
-the posture (:mod:`posegen.robot.statics`), in the direction gravity pulls.
+Both are evaluated at the deflected joints q - c tau(q): the joints of a compliance group
+give way together under gravity, by the group's compliance (rad/N m, positive) times
+the mean of their holding torques (:mod:`posegen.robot.statics`), in the direction
+gravity pulls. A group of one joint is a joint spring; a group of joints on one axis
+line is springs in parallel: both hip pitch joints of a robot standing on its two feet
+share their axis, and the pelvis pitching on them under the upper body's weight keeps
+both soles flat (a deflection the floor equations allow), whatever the split of the
+weight between the feet.
 """
 
 from __future__ import annotations
@@ -137,10 +142,11 @@ class CalibrationModel:
         return Observations(contacts, gravity_torques(self.scene, contacts.joints))
 
     def deflected(self, x: FloatArray, observations: Observations) -> FloatArray:
-        """Joint angles under gravity, q - c tau. Shape (n, nj)."""
+        """Joint angles under gravity, q - c mean(tau) per group. Shape (n, nj)."""
         joints = observations.contacts.joints.copy()
         for k, indices in enumerate(self.compliance.values()):
-            joints[:, indices] -= x[self._compliance_start + k] * observations.torques[:, indices]
+            load = observations.torques[:, indices].mean(axis=1, keepdims=True)  # (n, 1) N m
+            joints[:, indices] -= x[self._compliance_start + k] * load
         return joints
 
     def evaluate(
@@ -181,7 +187,7 @@ class CalibrationModel:
         return Evaluation(contact, pose - floor_offset, contact_jac, floor_jac)
 
     def _compliance_columns(self, jac: FloatArray, d_joints: FloatArray, observations: Observations) -> None:
-        """Add d residual / d compliance = -sum over the group's joints of d residual / d q_j * tau_j."""
+        """Add d residual / d compliance = -(sum over the group's joints of d residual / d q_j) * mean tau."""
         for k, indices in enumerate(self.compliance.values()):
-            torques = observations.torques[:, indices]  # (n, g)
-            jac[:, :, self._compliance_start + k] = -np.einsum("nmj,nj->nm", d_joints[:, :, indices], torques)
+            load = observations.torques[:, indices].mean(axis=1)  # (n,) N m
+            jac[:, :, self._compliance_start + k] = -d_joints[:, :, indices].sum(axis=2) * load[:, None]

@@ -43,7 +43,7 @@ class CandidateConfig:
     name: str
     fit: tuple[str, ...]
     floor: bool = False  # use the floor equations (both soles flat on one floor)
-    compliance: bool = False  # fit the compliance groups
+    compliance: tuple[str, ...] = ()  # compliance groups fitted (the others stay rigid)
 
     def fits(self, part: str, kind: str) -> bool:
         """Whether this candidate fits parameters of this part and kind."""
@@ -75,8 +75,8 @@ class CalibrationConfig:
     outlier_false_alarm: float = 0.01  # chance of flagging any row of a clean data set (Bonferroni)
 
 
-def parse_candidate(name: str, data: Any, where: str) -> CandidateConfig:
-    """One entry of ``calibration.candidates``.
+def parse_candidate(name: str, data: Any, where: str, groups: dict[str, Any]) -> CandidateConfig:
+    """One entry of ``calibration.candidates``; ``compliance`` is true (every group), false, or group names.
 
     Raises:
         ConfigError: Unknown keys, parts or kinds.
@@ -96,13 +96,23 @@ def parse_candidate(name: str, data: Any, where: str) -> CandidateConfig:
             raise ConfigError(
                 f"{where}.fit: '{pattern}' is not part.kind; parts: {', '.join(PARTS)}; kinds: {', '.join(KINDS)}"
             )
-    flags = {}
-    for key in ("floor", "compliance"):
-        value = data.get(key, False)
-        if not isinstance(value, bool):
-            raise ConfigError(f"{where}.{key}: expected true or false, got {value!r}")
-        flags[key] = value
-    return CandidateConfig(name, tuple(patterns), flags["floor"], flags["compliance"])
+    floor = data.get("floor", False)
+    if not isinstance(floor, bool):
+        raise ConfigError(f"{where}.floor: expected true or false, got {floor!r}")
+    compliance = data.get("compliance", False)
+    if compliance is True:
+        compliance = list(groups)
+    elif compliance is False:
+        compliance = []
+    if not isinstance(compliance, list) or not all(isinstance(g, str) for g in compliance):
+        raise ConfigError(f"{where}.compliance: expected true, false or a list of compliance groups")
+    missing = [g for g in compliance if g not in groups]
+    if missing or (data.get("compliance") is True and not groups):
+        raise ConfigError(
+            f"{where}.compliance: unknown groups {missing or 'all'}; calibration.compliance defines: "
+            f"{', '.join(groups) or 'none'}"
+        )
+    return CandidateConfig(name, tuple(patterns), floor, tuple(compliance))
 
 
 def _number(data: dict[str, Any], key: str, default: float, where: str, positive: bool = True) -> float:
@@ -160,13 +170,10 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         candidates = defaults.candidates
     elif isinstance(candidates_data, dict) and candidates_data:
         candidates = tuple(
-            parse_candidate(str(n), c, f"{where}.candidates.{n}") for n, c in candidates_data.items()
+            parse_candidate(str(n), c, f"{where}.candidates.{n}", groups) for n, c in candidates_data.items()
         )
     else:
         raise ConfigError(f"{where}.candidates: expected a mapping name -> {{fit, floor, compliance}}")
-    for candidate in candidates:
-        if candidate.compliance and not groups:
-            raise ConfigError(f"{where}.candidates.{candidate.name}: compliance needs {where}.compliance groups")
     return CalibrationConfig(
         prior=prior,
         prior_scales=tuple(float(s) for s in sorted(scales)),
@@ -186,6 +193,6 @@ def calibration_to_dict(config: CalibrationConfig) -> dict[str, Any]:
     out["prior_scales"] = list(config.prior_scales)
     out["compliance"] = {g: list(j) for g, j in config.compliance.items()}
     out["candidates"] = {
-        c.name: {"fit": list(c.fit), "floor": c.floor, "compliance": c.compliance} for c in config.candidates
+        c.name: {"fit": list(c.fit), "floor": c.floor, "compliance": list(c.compliance)} for c in config.candidates
     }
     return out

@@ -34,7 +34,7 @@ class Scene:
 
     Attributes:
         config: The validated configuration (saved with every artefact).
-        stance, chains, table, margins, sampling, route: Its typed sub-configs, which
+        stance, chains, table, margins, sampling, route, calibration: Its typed sub-configs, which
             the stages read.
         files: The robot description files.
         urdf_xml: The augmented URDF (with contact frames).
@@ -58,6 +58,7 @@ class Scene:
         self.margins = config.margins
         self.sampling = config.sampling
         self.route = config.route
+        self.calibration = config.calibration
         self.files = resolve_robot_files(config)
         nominal_text = self.files.urdf.read_text()
         try:

@@ -1,0 +1,92 @@
+"""Screening the training rows: feet off the floor, and contacts the model cannot explain.
+
+* **Feet.** Every posture stands on both soles. A row whose second sole, under the
+  URDF, is further than the config's tolerance from the session's typical pose (height,
+  roll, pitch from zero; x, y, yaw from the session median) did not stand: it is left
+  out before anything is fitted.
+* **Bad rows.** A robust fit (a Cauchy loss on each posture's normalised residual,
+  by iteratively reweighted least squares) cannot be pulled far by one bad row, so that
+  row keeps a large residual. Each row's residual is studentised (divided by the noise
+  and by sqrt(1 - leverage) of the weighted fit) and flagged above the chi (3 dof)
+  bound at which a clean set of n rows shows any with probability ``false_alarm``
+  (Bonferroni). The caller drops flagged rows, re-estimates the noise and re-selects
+  the model without them, and screens again, until nothing more is flagged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.stats
+
+from posegen.calibrate.estimation import Noise, Spec, fit, frozen_jacobian
+from posegen.model import CalibrationModel, Observations
+from posegen.robot import FloatArray
+
+CAUCHY_SCALE = 2.385  # Cauchy constant of 95 % efficiency, per degree of freedom of a row
+ROBUST_ITERATIONS = 8
+
+
+@dataclass(frozen=True)
+class Flag:
+    """A training row left out, and why."""
+
+    row: int  # index in the rows read
+    label: str  # file:line:spot
+    reason: str  # "feet" or "residual"
+    value: float  # normalised residual (chi) or the sole's offset (mm / deg, the larger)
+    round: int  # screening round that flagged it (0: feet, before any fit)
+
+
+def chi_threshold(n: int, false_alarm: float, dof: int = 3) -> float:
+    """Normalised residual above which one of n rows is flagged (Bonferroni over n rows)."""
+    return float(np.sqrt(scipy.stats.chi2.ppf(1.0 - false_alarm / max(n, 1), dof)))
+
+
+def feet_offsets(model: CalibrationModel, observations: Observations) -> FloatArray:
+    """Second sole's offset from where it should be, under the URDF: (n, 2) mm and deg (largest component)."""
+    assert model.floor is not None
+    contacts = observations.contacts
+    pose = model.floor.measure(model.contact.nominal(), contacts.joints)  # (n, 6)
+    sessions = np.array(contacts.sessions)
+    offset = pose.copy()
+    for session in set(contacts.sessions):
+        rows = sessions == session
+        offset[np.ix_(rows, [0, 1, 5])] -= np.median(pose[rows][:, [0, 1, 5]], axis=0)
+    lengths = np.abs(offset[:, :3]).max(axis=1) * 1e3
+    angles = np.degrees(np.abs(offset[:, 3:]).max(axis=1))
+    return np.column_stack([lengths, angles])
+
+
+def robust_residuals(
+    model: CalibrationModel, observations: Observations, spec: Spec, noise: Noise, start: FloatArray
+) -> tuple[FloatArray, FloatArray, Noise]:
+    """Studentised residual of each row under a Cauchy-weighted fit (n,), the fit's parameters, its noise.
+
+    A row's residual has 3 degrees of freedom (its contact), 9 with the floor equations.
+    """
+    n = len(observations)
+    weights = np.ones(n)
+    x = start
+    comps = 9 if spec.floor else 3
+    studentised = np.zeros(n)
+    for _ in range(ROBUST_ITERATIONS):
+        delta, _ = fit(model, observations, spec, noise, x, weights=weights)
+        x = model.x_of(delta)
+        out = model.evaluate(x, observations, floor=spec.floor)
+        raw = np.hstack([out.contact, out.floor]) if spec.floor else out.contact  # (n, comps)
+        sigma = np.array(noise.contact + noise.floor)[:comps]
+        per_posture, prior_rows = frozen_jacobian(model, observations, spec, noise, x)
+        weighted = per_posture * np.sqrt(weights)[:, None, None]
+        flat = weighted.reshape(-1, weighted.shape[2])
+        information = flat.T @ flat + prior_rows.T @ prior_rows
+        leverage = np.einsum("ij,jk,ik->i", flat, np.linalg.pinv(information), flat).reshape(n, comps)
+        scaled = (raw / sigma) ** 2 / np.clip(1.0 - leverage, 0.05, 1.0)  # (n, comps)
+        studentised = np.sqrt(scaled.sum(axis=1))
+        # noise of the well-fitting rows: weighted, leverage-corrected mean square
+        mean_square = (weights[:, None] * raw**2 / np.clip(1.0 - leverage, 0.05, 1.0)).sum(axis=0) / weights.sum()
+        rms = np.sqrt(mean_square)
+        noise = Noise.of(rms[:3], rms[3:] if spec.floor else np.array(noise.floor))
+        weights = 1.0 / (1.0 + studentised**2 / (comps * CAUCHY_SCALE**2))
+    return studentised, x, noise
