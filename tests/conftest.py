@@ -20,7 +20,10 @@ from posegen.select import select_pool_file
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "talos_table.yaml"
-REAL_DATA = ROOT.parent / "shared" / "data" / "talos_real"
+REAL_DATA = next(  # beside the checkout (shared/data/talos_real), or beside a folder holding it
+    (p / "shared" / "data" / "talos_real" for p in ROOT.parents if (p / "shared" / "data" / "talos_real").is_dir()),
+    ROOT.parent / "shared" / "data" / "talos_real",
+)
 EXAMPLE_POOL = ROOT / "plans" / "talos" / "pool.yaml"
 
 

@@ -1,23 +1,18 @@
 """Stage 4: identification from recorded contacts, and its rehearsal on a simulated robot.
 
-Measurements (posegen YAML and recorded CSV), Levenberg-Marquardt identification of
-the base parameters, the whole calibration (prior and noise by cross-validation,
-outliers, before/after, held-out protocols), simulated contacts of a perturbed robot,
-the calibrated URDF, the report and the folder read back (:func:`read_calibration`).
+Measurements (posegen YAML and recorded CSV), maximum a posteriori estimation under a
+physical prior per parameter kind, grouped cross-validation folds, the choice of the
+model by repeated CV and the one-standard-error rule, robust screening of bad rows,
+the whole calibration (before/after, held-out protocols), simulated contacts of a
+perturbed robot, the calibrated URDF, the report and the folder read back
+(:func:`read_calibration`).
 """
 
 from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
-from posegen.calibrate.calibration import (
-    Calibration,
-    CvPoint,
-    Settings,
-    calibrate,
-    cross_validate,
-    held_out_residuals,
-    held_out_theta,
-    outlier_threshold,
-)
-from posegen.calibrate.identification import Fit, identify, levenberg_marquardt, refit_planes
+from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
+from posegen.calibrate.candidates import candidate_spec, kind_sigmas, prior_sigmas
+from posegen.calibrate.estimation import Estimate, Noise, Spec, estimate, fit, levenberg_marquardt, start_point
+from posegen.calibrate.folds import Fold, repeated_folds, spot_of
 from posegen.calibrate.measurements import (
     Recording,
     measurements_to_dict,
@@ -25,6 +20,7 @@ from posegen.calibrate.measurements import (
     read_measurements,
     write_measurements,
 )
+from posegen.calibrate.model_selection import RULE, CvResult, ModelSelection, select_model
 from posegen.calibrate.record import (
     CALIBRATION_FILE,
     CALIBRATION_FORMAT,
@@ -40,6 +36,7 @@ from posegen.calibrate.record import (
     write_record,
 )
 from posegen.calibrate.report import format_table, residual_stats, write_calibration
+from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
@@ -49,43 +46,54 @@ __all__ = [
     "CALIBRATION_FORMAT",
     "COMPONENTS",
     "DISPLAY",
+    "RULE",
     "Calibrated",
     "Calibration",
     "CalibrationRecord",
     "ContactResidual",
     "ContactSet",
-    "CvPoint",
-    "Fit",
+    "CvResult",
+    "Estimate",
+    "Flag",
+    "Fold",
     "Measured",
+    "ModelSelection",
+    "Noise",
     "Perturbation",
     "Posterior",
     "Recording",
     "Settings",
     "Simulated",
     "SimulatedSession",
+    "Spec",
     "calibrate",
     "calibrate_files",
     "calibrated_urdf",
+    "candidate_spec",
     "contact_residuals",
-    "cross_validate",
+    "estimate",
+    "fit",
     "format_table",
     "held_out_residuals",
-    "held_out_theta",
-    "identify",
+    "held_out_x",
+    "kind_sigmas",
     "levenberg_marquardt",
     "measure_bag",
     "measurements_to_dict",
-    "outlier_threshold",
     "posterior_of",
+    "prior_sigmas",
     "read_calibration",
     "read_contacts",
     "read_csv",
     "read_measurements",
-    "refit_planes",
+    "repeated_folds",
     "residual_stats",
+    "select_model",
     "simulate",
     "simulate_plan_file",
     "simulate_route_bag",
+    "spot_of",
+    "start_point",
     "true_parameters",
     "write_calibration",
     "write_measurements",

@@ -1,125 +1,131 @@
-"""Whole calibration from contacts: base parameters, before/after fits, prior by CV, outliers.
+"""The whole calibration: screening, model selection, the final fit, before/after, held-out protocols.
 
-* Base parameters are structural: QR of the regressor at the nominal model over seeded
-  random postures of every (chain, session) pair the training set has.
-* "Before": nominal kinematics, only plane and contact parameters fitted.
-* "After": every base parameter, MAP with a prior of size ``kappa`` x (1 mm, 0.1 deg);
-  ``kappa`` and the measurement noise per component are chosen by K-fold
-  cross-validation on the training contacts only.
-* Outliers: training contacts whose cross-validated residual, scaled by the noise,
-  exceeds a chi (3 dof) bound (Bonferroni: 1 % chance of any false alarm in a clean
-  data set) are reported and left out of the final fit.
+1. Rows that cannot be used are left out and reported: a table session with a single
+   row (its plane would be fitted to it alone), a row whose feet were not on the floor.
+2. Bad rows are screened with a robust fit (:mod:`posegen.calibrate.screening`), the
+   model (candidate and prior scale) is chosen by repeated, grouped cross-validation
+   without them (:mod:`posegen.calibrate.model_selection`), and the rows are screened
+   again with the chosen model, until nothing more is flagged. A flagged row shapes
+   nothing: not the noise, not the model choice, not the base parameters.
+3. "After" is the chosen candidate fitted on every kept row; "before" is the URDF with
+   only the contact offsets and planes fitted. Base parameters (QR) are computed for
+   identifiability and reporting only: the fit itself regularises every parameter by
+   its physical prior.
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.stats
-from numpy.typing import NDArray
 
-from posegen.calibrate.identification import Fit, identify, refit_planes
-from posegen.errors import InfeasibleError
+from posegen.calibrate.candidates import candidate_spec, spec_for_rows
+from posegen.calibrate.estimation import Estimate, Noise, Spec, estimate, fit, held_at_urdf, plane_spec, start_point
+from posegen.calibrate.folds import repeated_folds, spot_of
+from posegen.calibrate.model_selection import ModelSelection, select_model
+from posegen.calibrate.screening import Flag, chi_threshold, feet_offsets, robust_residuals
+from posegen.errors import InfeasibleError, InputError
 from posegen.model import (
     DEFAULT_NOISE,
-    NOISE_FLOOR,
     STRUCTURAL_POSTURES,
     BaseParameters,
-    ContactModel,
+    CalibrationModel,
     Contacts,
-    Group,
-    Weights,
-    initial_planes,
+    Kind,
+    Observations,
     structural_base,
-    weights_for,
 )
-from posegen.progress import ProgressCallback, Steps, ignore_progress
-from posegen.robot import FloatArray, Indices, Scene
+from posegen.progress import ProgressCallback, ignore_progress
+from posegen.robot import FloatArray, Scene
+from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig
 
 LOG = logging.getLogger(__name__)
+FLOOR_NOISE = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))
+MAX_ROUNDS = 6  # screening rounds (each re-selects the model) before giving up dropping rows
 
 
 @dataclass(frozen=True)
 class Settings:
-    """How a calibration is run."""
+    """How a calibration is run; what is robot-specific comes from the config's ``calibration``."""
 
-    kappas: tuple[float, ...] = (1.0, 2.0, 3.0, 5.0, 10.0)  # prior sizes tried, x (1 mm, 0.1 deg)
-    kappa: float | None = None  # fixed prior size: skips cross-validation
-    noise: tuple[float, float, float] = DEFAULT_NOISE  # initial sigma
-    folds: int = 5
-    outlier_false_alarm: float = 0.01  # chance of flagging any contact of a clean data set (Bonferroni)
+    prior_scale: float | None = None  # fix the prior scale (candidates are still compared by CV)
+    candidates: tuple[str, ...] = ()  # only these of the config's candidates; empty: all
+    fold_seeds: int | None = None  # repetitions of the CV; None: the config's
     drop_outliers: bool = True
-    structural_postures: int = STRUCTURAL_POSTURES  # per (chain, session) pair
-    seed: int = 0
-
-
-@dataclass(frozen=True)
-class CvPoint:
-    """Cross-validated score of one prior size."""
-
-    kappa: float
-    score: float  # mean normalised squared prediction error per contact
-    mean_abs: tuple[float, float, float]  # m, rad, rad
+    seed: int = 0  # the first fold seed
+    structural_postures: int = STRUCTURAL_POSTURES  # per (chain, session) pair, for the base parameters
 
 
 @dataclass(frozen=True)
 class Calibration:
     """Result of a calibration."""
 
-    model: ContactModel
+    model: CalibrationModel
+    config: CalibrationConfig  # as used (overrides applied)
+    train: Contacts  # every row read
+    kept: tuple[int, ...]  # rows of ``train`` that the final fit used
+    flags: tuple[Flag, ...]  # rows left out (or, with drop_outliers off, flagged and kept)
+    selection: ModelSelection
+    candidate: CandidateConfig
+    spec: Spec
+    before: Estimate
+    after: Estimate
     base: BaseParameters
-    train: Contacts
-    before: Fit
-    after: Fit
-    weights: Weights
-    cv: tuple[CvPoint, ...]
-    outliers: tuple[int, ...]  # indices in ``train`` left out of the final fit
-    outlier_scores: tuple[float, ...]  # their normalised CV residual
-    kept: tuple[int, ...] = field(default=())  # indices in ``train`` used by the final fit
 
 
-def outlier_threshold(n: int, false_alarm: float) -> float:
-    """Normalised residual above which one of n contacts is an outlier.
+def _settings(scene: Scene, settings: Settings) -> tuple[CalibrationConfig, list[CandidateConfig]]:
+    config = scene.calibration
+    if settings.prior_scale is not None:
+        config = replace(config, prior_scales=(settings.prior_scale,))
+    if settings.fold_seeds is not None:
+        config = replace(config, fold_seeds=settings.fold_seeds)
+    names = [c.name for c in config.candidates]
+    unknown = [n for n in settings.candidates if n not in names]
+    if unknown:
+        raise InputError(f"unknown candidate models {unknown}; the config has: {', '.join(names)}")
+    chosen = [c for c in config.candidates if not settings.candidates or c.name in settings.candidates]
+    return replace(config, candidates=tuple(chosen)), chosen
 
-    sqrt of the chi-square (3 dof) quantile at 1 - false_alarm / n: a clean data set of n
-    contacts has a chance ``false_alarm`` of showing any.
+
+def unusable_rows(model: CalibrationModel, observations: Observations, config: CalibrationConfig) -> list[Flag]:
+    """Rows of a session that has no other row, and rows whose feet were not on the floor."""
+    contacts = observations.contacts
+    flags = []
+    for session in set(contacts.sessions):
+        rows = [i for i, s in enumerate(contacts.sessions) if s == session]
+        if len(rows) == 1:
+            flags.append(Flag(rows[0], contacts.labels[rows[0]], "alone in its session", 1.0, 0))
+    if model.floor is not None:
+        offsets = feet_offsets(model, observations)
+        for i, (mm, deg) in enumerate(offsets):
+            if mm > config.feet_tolerance_mm or deg > config.feet_tolerance_deg:
+                flags.append(Flag(i, contacts.labels[i], "feet off the floor", float(max(mm, deg)), 0))
+    for flag in flags:
+        LOG.warning("row left out: %s: %s", flag.label, flag.reason)
+    return sorted(flags, key=lambda f: f.row)
+
+
+def check_enough(model: CalibrationModel, contacts: Contacts, config: CalibrationConfig) -> None:
+    """Enough rows to fit the planes and to hold out regions of every chain.
+
+    Raises:
+        InputError: Fewer contact equations than parameters without a prior, or a chain
+            with fewer than two spots (nothing to hold out).
+
     """
-    return float(np.sqrt(scipy.stats.chi2.ppf(1.0 - false_alarm / max(n, 1), 3)))
-
-
-def _folds(contacts: Contacts, k: int, seed: int) -> NDArray[np.int_]:
-    """Fold index per contact, stratified by session. Shape (n,)."""
-    rng = np.random.default_rng(seed)
-    fold = np.zeros(len(contacts), dtype=int)
-    sessions = np.array(contacts.sessions)
-    for session in sorted(set(contacts.sessions)):
-        rows = np.flatnonzero(sessions == session)
-        fold[rng.permutation(rows)] = np.arange(len(rows)) % k
-    return fold
-
-
-def cross_validate(
-    model: ContactModel,
-    contacts: Contacts,
-    free: Indices,
-    weights: Weights,
-    theta0: FloatArray,
-    k: int,
-    seed: int,
-) -> FloatArray:
-    """Residual of each contact predicted by a fit on the other folds. Shape (n, 3)."""
-    fold = _folds(contacts, k, seed)
-    out = np.zeros((len(contacts), 3))
-    for f in range(k):
-        test = np.flatnonzero(fold == f)
-        if len(test) == 0:
-            continue
-        fit = identify(model, contacts.subset(np.flatnonzero(fold != f)), free, weights, theta0)
-        out[test] = model.residuals(fit.theta, contacts.subset(test))
-    return out
+    planes = 3 * len(set(contacts.sessions))
+    if 3 * len(contacts) <= planes:
+        raise InputError(
+            f"{len(contacts)} usable rows give {3 * len(contacts)} equations for the {planes} plane parameters "
+            "that have no prior: record more contacts"
+        )
+    for chain in model.contact.chains:
+        rows = zip(contacts.chains, contacts.sessions, contacts.labels, strict=True)
+        spots = {(s, spot_of(label)) for c, s, label in rows if c == chain}
+        if len(spots) < 2:
+            raise InputError(f"chain '{chain}' has {len(spots)} usable spot(s): cross-validation needs at least 2")
 
 
 def calibrate(
@@ -128,92 +134,107 @@ def calibrate(
     sessions: Sequence[str],
     settings: Settings | None = None,
     progress: ProgressCallback = ignore_progress,
-    base: BaseParameters | None = None,
 ) -> Calibration:
     """Calibrate the chains seen in ``train``.
 
     Args:
-        scene: Scene (robot model and config).
-        train: Training contacts.
+        scene: Scene (robot model and config, with its calibration section).
+        train: Training rows.
         sessions: Every session the model must know (training and held-out).
         settings: How to run; defaults if None.
-        progress: Told when each step starts.
-        base: Base parameters to use (of a model of the same chains and sessions);
-            None: found by :func:`structural_base`.
+        progress: Told when each cross-validation step starts.
 
     Raises:
-        InfeasibleError: Too few contacts to cross-validate or to fit.
+        InputError: Unknown candidate names, or too few usable rows.
+        InfeasibleError: Screening does not settle.
 
     """
     settings = settings or Settings()
-    if len(train) < 2 * settings.folds:
-        raise InfeasibleError(f"{len(train)} training contacts: at least {2 * settings.folds} are needed")
-    kappas = (settings.kappa,) if settings.kappa is not None else settings.kappas
-    rounds = 2 if len(kappas) > 1 else 1  # the second with the noise re-estimated by the first
-    say = Steps(3 + rounds * len(kappas), progress)
-    model = ContactModel(scene, sorted(set(train.chains)), sessions)
-    say("base parameters")
-    if base is None:
-        base = structural_base(model, train, settings.noise, settings.structural_postures, settings.seed)
-    start = initial_planes(model, train, model.nominal())
-    side = np.array([i for i in base.columns if model.parameters[i].group in (Group.PLANE, Group.CONTACT)], dtype=int)
-    say("before: plane and contact parameters")
-    before = identify(model, train, side, weights_for(1e6, settings.noise), start)
-
-    noise = np.array(settings.noise)
-    cv_points: list[CvPoint] = []
-    cv_res: FloatArray = np.zeros((len(train), 3))
-    kappa = kappas[0]
-    for _round in range(rounds):
-        cv_points = []
-        best = np.inf
-        for candidate in kappas:
-            say(f"cross-validation, prior x{candidate:g}")
-            res = cross_validate(
-                model, train, base.columns, weights_for(candidate, noise), before.theta, settings.folds, settings.seed
-            )
-            score = float(np.mean(np.sum((res / noise) ** 2, axis=1)))
-            mean_abs = np.mean(np.abs(res), axis=0)
-            cv_points.append(CvPoint(candidate, score, (float(mean_abs[0]), float(mean_abs[1]), float(mean_abs[2]))))
-            if score < best:
-                best, kappa, cv_res = score, candidate, res
-        noise = np.maximum(np.sqrt(np.mean(cv_res**2, axis=0)), NOISE_FLOOR)  # re-estimated from CV
-    weights = weights_for(kappa, noise)
-    scores = np.sqrt(np.sum((cv_res / noise) ** 2, axis=1))
-    threshold = outlier_threshold(len(train), settings.outlier_false_alarm)
-    outliers = np.flatnonzero(scores > threshold) if settings.drop_outliers else np.array([], dtype=int)
-    kept = np.setdiff1d(np.arange(len(train)), outliers)
-    for i in outliers:
-        LOG.warning("outlier contact %s: normalised CV residual %.1f", train.labels[i], scores[i])
-    say("after: all base parameters")
-    after = identify(model, train.subset(kept), base.columns, weights, before.theta)
+    config, candidates = _settings(scene, settings)
+    model = CalibrationModel(scene, sorted(set(train.chains)), sessions, config.compliance)
+    everything = model.observations(train)
+    flags = unusable_rows(model, everything, config)
+    kept = [i for i in range(len(train)) if i not in {f.row for f in flags}]
+    check_enough(model, train.subset(kept), config)
+    usable = list(kept)
+    noise = Noise(DEFAULT_NOISE, FLOOR_NOISE)
+    seeds = range(settings.seed, settings.seed + config.fold_seeds)
+    middle = config.prior_scales[len(config.prior_scales) // 2]
+    sessions_in = set(train.subset(usable).sessions)
+    spec = spec_for_rows(model, candidate_spec(model, candidates[0], config.prior, middle), sessions_in)
+    start = held_at_urdf(model, spec, start_point(model, everything.subset(usable)))
+    selection: ModelSelection | None = None
+    screened: list[Flag] = []
+    for round_ in range(1, MAX_ROUNDS + 1):
+        # every usable row is screened again with the current model: a row flagged by a poorer model comes back
+        studentised, _, _ = robust_residuals(model, everything.subset(usable), spec, noise, start)
+        bound = chi_threshold(len(usable), config.outlier_false_alarm, 9 if spec.floor else 3)
+        screened = [
+            Flag(row, train.labels[row], "residual", float(value), round_)
+            for row, value in zip(usable, studentised, strict=True)
+            if value > bound
+        ]
+        flagged = {f.row for f in screened} if settings.drop_outliers else set()
+        now = [i for i in usable if i not in flagged]
+        if selection is not None and now == kept:
+            break
+        kept = now
+        check_enough(model, train.subset(kept), config)
+        observations = everything.subset(kept)
+        folds = repeated_folds(model.contact, observations.contacts, config.folds, seeds)
+        selection = select_model(model, observations, config, folds, noise, candidates, progress)
+        chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
+        spec = spec_for_rows(
+            model, candidate_spec(model, chosen, config.prior, selection.chosen.prior_scale), sessions_in
+        )
+        best = selection.estimates[chosen.name, selection.chosen.prior_scale]
+        start = best.x
+        noise = best.noise
+    else:
+        raise InfeasibleError(
+            f"screening still changes the rows after {MAX_ROUNDS} rounds: the data are not consistent"
+        )
+    for flag in screened:
+        LOG.warning("bad row %s: studentised residual %.1f", flag.label, flag.value)
+    flags.extend(screened)
+    assert selection is not None
+    chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
+    observations = everything.subset(kept)
+    after = selection.estimates[chosen.name, selection.chosen.prior_scale]
+    sides = tuple(model.columns([Kind.CONTACT_HEIGHT, Kind.CONTACT_TILT, Kind.PLANE]))
+    before_spec = spec_for_rows(model, Spec(sides, np.full(model.size, np.inf), floor=False), sessions_in)
+    before = estimate(model, observations, before_spec, after.noise, start_point(model, observations), rounds=1)
+    base = structural_base(
+        model.contact, observations.contacts, DEFAULT_NOISE, settings.structural_postures, settings.seed
+    )
     return Calibration(
         model=model,
-        base=base,
+        config=config,
         train=train,
+        kept=tuple(kept),
+        flags=tuple(flags),
+        selection=selection,
+        candidate=chosen,
+        spec=spec,
         before=before,
         after=after,
-        weights=weights,
-        cv=tuple(cv_points),
-        outliers=tuple(int(i) for i in outliers),
-        outlier_scores=tuple(float(scores[i]) for i in outliers),
-        kept=tuple(int(i) for i in kept),
+        base=base,
     )
 
 
-def held_out_theta(calibration: Calibration, fit: Fit, contacts: Contacts) -> FloatArray:
-    """Protocol 1: the held-out sessions take the plane fitted with the same chain in training.
+def held_out_x(calibration: Calibration, x: FloatArray, contacts: Contacts) -> FloatArray:
+    """Protocol 1: a held-out session takes the plane fitted with the same chain in training.
 
     A session also present in training keeps its own plane. Another session takes the
-    plane of the training session with the most contacts of the held-out chain: the
+    plane of the training session with the most kept rows of the held-out chain: the
     plane's height is only known relative to the chain it was fitted with.
     """
-    model = calibration.model
-    theta = fit.theta.copy()
-    train = calibration.train
+    plane = calibration.model.contact.plane_columns
+    out = x.copy()
+    train = calibration.train.subset(list(calibration.kept))
     for session in sorted(set(contacts.sessions) - set(train.sessions)):
         chains = [c for c, s in zip(contacts.chains, contacts.sessions, strict=True) if s == session]
-        chain = max(set(chains), key=chains.count)
+        chain = max(sorted(set(chains)), key=chains.count)
         counts = {
             s: sum(1 for c, t in zip(train.chains, train.sessions, strict=True) if c == chain and t == s)
             for s in set(train.sessions)
@@ -221,17 +242,19 @@ def held_out_theta(calibration: Calibration, fit: Fit, contacts: Contacts) -> Fl
         source = max(sorted(counts), key=lambda s: counts[s])
         if counts[source] == 0:
             raise InfeasibleError(f"chain '{chain}' of held-out session '{session}' has no training contact")
-        theta[model.plane_columns(session)] = theta[model.plane_columns(source)]
-    return theta
+        out[plane(session)] = x[plane(source)]
+    return out
 
 
 def held_out_residuals(calibration: Calibration, contacts: Contacts) -> dict[str, dict[str, FloatArray]]:
     """Held-out residuals (n, 3) per protocol ("training_plane", "refitted_plane") and model."""
     model = calibration.model
+    observations = model.observations(contacts)
     out: dict[str, dict[str, FloatArray]] = {"training_plane": {}, "refitted_plane": {}}
-    for name, fit in (("before", calibration.before), ("after", calibration.after)):
-        theta = held_out_theta(calibration, fit, contacts)
-        out["training_plane"][name] = model.residuals(theta, contacts)
-        refit = refit_planes(model, contacts, theta, calibration.weights)
-        out["refitted_plane"][name] = model.residuals(refit, contacts)
+    for name, fitted in (("before", calibration.before), ("after", calibration.after)):
+        x = held_out_x(calibration, fitted.x, contacts)
+        out["training_plane"][name] = model.evaluate(x, observations, floor=False).contact
+        planes = plane_spec(model, set(contacts.sessions))
+        refit = model.x_of(fit(model, observations, planes, fitted.noise, x)[0])
+        out["refitted_plane"][name] = model.evaluate(refit, observations, floor=False).contact
     return out

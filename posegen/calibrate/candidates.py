@@ -64,3 +64,14 @@ def candidate_spec(model: CalibrationModel, candidate: CandidateConfig, prior: P
         prior_sd=prior_sigmas(model, prior, scale),
         floor=candidate.floor and model.floor is not None,
     )
+
+
+def spec_for_rows(model: CalibrationModel, spec: Spec, sessions: set[str]) -> Spec:
+    """``spec`` without the planes and floor constants of sessions that have no row."""
+    keep = tuple(
+        i
+        for i in spec.free
+        if model.directions[i].kind not in (Kind.PLANE, Kind.FLOOR)
+        or model.directions[i].owner.removeprefix("floor@") in sessions
+    )
+    return Spec(keep, spec.prior_sd, spec.floor)

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from posegen.calibrate.identification import levenberg_marquardt
 from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, initial_planes
 from posegen.robot import FloatArray
 
@@ -64,6 +63,61 @@ class Estimate:
     noise: Noise
     iterations: int
     std: FloatArray  # (nx,) posterior sigma along each direction, 0 when held
+
+
+def levenberg_marquardt(
+    fun: Callable[[FloatArray], FloatArray],
+    jac: Callable[[FloatArray], FloatArray],
+    x0: FloatArray,
+    max_iterations: int,
+    step_tolerance: float = 1e-12,
+) -> tuple[FloatArray, int]:
+    """Minimise ||fun(x)||^2 by Levenberg-Marquardt (Marquardt's diagonal scaling).
+
+    Stops when a step changes x by less than ``step_tolerance`` (relative) or lowers the
+    cost (a dimensionless chi-square here) by less than 1e-7 (1 + cost): a thousandth of a unit of
+    chi-square per thousand, far below what changes a prediction.
+
+    Returns:
+        The minimiser and the number of Jacobian evaluations.
+
+    """
+    x = x0.copy()
+    r = fun(x)
+    cost = float(r @ r)
+    damping = 1e-4
+    iterations = 0
+    while iterations < max_iterations:
+        j = jac(x)
+        iterations += 1
+        jtj = j.T @ j
+        grad = j.T @ r
+        diag = np.maximum(np.diag(jtj), 1e-30)
+        improved = False
+        while damping < 1e12:
+            try:
+                step = np.linalg.solve(jtj + damping * np.diag(diag), -grad)
+            except np.linalg.LinAlgError:
+                damping *= 10.0
+                continue
+            r_new = fun(x + step)
+            cost_new = float(r_new @ r_new)
+            if cost_new < cost:
+                improved = True
+                break
+            damping *= 10.0
+        if not improved:
+            break
+        x = x + step
+        r = r_new
+        gain = cost - cost_new
+        cost = cost_new
+        damping = max(damping / 10.0, 1e-12)
+        if np.linalg.norm(step) <= step_tolerance * (np.linalg.norm(x) + step_tolerance) or gain <= 1e-7 * (
+            1.0 + cost
+        ):
+            break
+    return x, iterations
 
 
 def start_point(model: CalibrationModel, observations: Observations) -> FloatArray:
@@ -249,7 +303,7 @@ def estimate(
     spec: Spec,
     noise: Noise,
     start: FloatArray,
-    rounds: int = 3,
+    rounds: int = 2,
     max_iterations: int = 50,
 ) -> Estimate:
     """MAP estimate with the noise re-estimated from its own residuals ``rounds`` times."""
@@ -271,8 +325,6 @@ def estimate(
 def plane_spec(model: CalibrationModel, sessions: set[str] | None = None) -> Spec:
     """Only the planes (of ``sessions``, or all) free, no prior: kinematics frozen."""
     free = tuple(
-        i
-        for i, d in enumerate(model.directions)
-        if d.kind == Kind.PLANE and (sessions is None or d.owner in sessions)
+        i for i, d in enumerate(model.directions) if d.kind == Kind.PLANE and (sessions is None or d.owner in sessions)
     )
     return Spec(free, np.full(model.size, np.inf), floor=False)

@@ -39,9 +39,9 @@ class Fold:
 
 
 def spot_of(label: str) -> str:
-    """The target spot a row's label names (``file:line:spot``), or the label itself."""
+    """The target spot a row's label names (``file:line:spot``), or the label itself (a spot of its own)."""
     spot = label.rsplit(":", 1)[-1]
-    return spot if spot and spot != "row" and label.count(":") == 2 else label
+    return spot if spot and spot != "row" else label
 
 
 def contact_positions(model: ContactModel, contacts: Contacts) -> FloatArray:

@@ -130,7 +130,7 @@ def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TO
             continue
         joints.append(values)
         chains.append(chain)
-        labels.append(f"{path.stem}:{line}:{spot or 'row'}")
+        labels.append(f"{path.name}:{line}:{spot or 'row'}")
     if not joints:
         first = f": {rejected[0]}" if rejected else ""
         raise InputError(f"{path}: no usable data row ({len(rejected)} rejected){first}")
@@ -190,7 +190,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         joints.append(_full_joints(scene, names, values))
         chains.append(chain)
         sessions.append(session or str(item.get("session", path.stem)))
-        labels.append(str(item.get("label", f"{path.stem}:{i}")))
+        labels.append(f"{path.name}:{i}:{item.get('label', 'row')}")
     return Recording(Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels)), ())
 
 

@@ -16,6 +16,14 @@ chain, combined over the chains and averaged over the seeds.
 of the best, take the candidate with the fewest free parameters, then its strongest
 prior (smallest scale) within that bound. Stability: the same rule applied to each
 seed's folds alone; the share of seeds that pick the same pair.
+
+**Plausibility.** Every measurement is zero, so a model whose contact height does not
+depend on the posture at all fits, and "predicts", every height exactly: with a weak
+prior a flexible model finds such solutions (a leg 380 mm longer, a sole and the table
+tilted 27 deg), and cross-validation scores them well on the height. A pair whose fit
+on all rows moves any length by more than ``plausible_mm`` or any angle by more than
+``plausible_deg`` from the URDF is not a calibration of this robot: it is reported and
+left out of the rule (and not cross-validated).
 """
 
 from __future__ import annotations
@@ -26,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posegen.calibrate.candidates import candidate_spec
+from posegen.calibrate.candidates import candidate_spec, spec_for_rows
 from posegen.calibrate.estimation import (
     Estimate,
     Noise,
@@ -40,12 +48,17 @@ from posegen.calibrate.estimation import (
     start_point,
 )
 from posegen.calibrate.folds import Fold
+from posegen.errors import InfeasibleError
 from posegen.model import DEFAULT_NOISE, CalibrationModel, Kind, Observations
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import FloatArray
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig
 
 LOG = logging.getLogger(__name__)
+RULE = (
+    "among the (candidate, prior scale) pairs scoring within one standard error of the best, the candidate with "
+    "the fewest free parameters, then its strongest prior (smallest scale) within that bound"
+)
 SCORE_UNITS = np.array(DEFAULT_NOISE)  # (1 mm, 0.1 deg, 0.1 deg): how the score weighs the components
 
 
@@ -71,6 +84,8 @@ class CvResult:
     seed_se: tuple[float, ...]
     chains: dict[str, ChainError]
     noise: Noise  # estimated on all training rows
+    largest: tuple[float, float]  # largest deviation of the fit on all rows from the URDF: mm, deg
+    plausible: bool = True  # within the config's plausible deviations (else not cross-validated)
 
 
 @dataclass(frozen=True)
@@ -88,17 +103,6 @@ class ModelSelection:
         """Share of the seeds whose own pick is the chosen pair."""
         key = (self.chosen.candidate, self.chosen.prior_scale)
         return sum(p == key for p in self.seed_picks) / max(len(self.seed_picks), 1)
-
-
-def spec_for_rows(model: CalibrationModel, spec: Spec, sessions: set[str]) -> Spec:
-    """``spec`` without the planes and floor constants of sessions that have no row."""
-    keep = tuple(
-        i
-        for i in spec.free
-        if model.directions[i].kind not in (Kind.PLANE, Kind.FLOOR)
-        or model.directions[i].owner.removeprefix("floor@") in sessions
-    )
-    return Spec(keep, spec.prior_sd, spec.floor)
 
 
 def cross_validate(
@@ -144,8 +148,25 @@ def start_point_planes(model: CalibrationModel, observations: Observations, x: F
     return out
 
 
+LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT)
+ANGLE_KINDS = (Kind.JOINT_OFFSET, Kind.AXIS_TILT, Kind.FRAME_ROTATION, Kind.CONTACT_TILT)
+
+
+def largest_deviations(model: CalibrationModel, delta: FloatArray) -> tuple[float, float]:
+    """Largest deviation from the URDF of any length (mm) and any angle (deg)."""
+    lengths = np.abs(delta[model.columns(LENGTH_KINDS)])
+    angles = np.abs(delta[model.columns(ANGLE_KINDS)])
+    return float(lengths.max(initial=0.0) * 1e3), float(np.degrees(angles.max(initial=0.0)))
+
+
 def score_folds(
-    candidate: str, scale: float, free: int, folds: Sequence[Fold], predicted: Sequence[FloatArray], noise: Noise
+    candidate: str,
+    scale: float,
+    free: int,
+    folds: Sequence[Fold],
+    predicted: Sequence[FloatArray],
+    noise: Noise,
+    largest: tuple[float, float],
 ) -> CvResult:
     """Score, standard error, per-seed and per-chain figures of one pair's fold predictions."""
     seeds = sorted({f.seed for f in folds})
@@ -183,14 +204,27 @@ def score_folds(
         seed_se=tuple(seed_se),
         chains=per_chain,
         noise=noise,
+        largest=largest,
     )
 
 
+def implausible(
+    candidate: str, scale: float, free: int, noise: Noise, largest: tuple[float, float], folds: Sequence[Fold]
+) -> CvResult:
+    """A pair left out of the rule: no score (inf)."""
+    seeds = len({f.seed for f in folds})
+    nan3 = (float("nan"),) * 3
+    chains = {f.chain: ChainError(nan3, nan3, float("inf")) for f in folds}
+    inf = float("inf")
+    return CvResult(candidate, scale, free, inf, inf, (inf,) * seeds, (inf,) * seeds, chains, noise, largest, False)
+
+
 def one_standard_error(results: Sequence[CvResult], scores: FloatArray, errors: FloatArray) -> int:
-    """Index of the pair the rule picks, given each pair's score and standard error."""
-    best = int(np.argmin(scores))
+    """Index of the pair the rule picks among the plausible ones, given each pair's score and standard error."""
+    plausible = [i for i, r in enumerate(results) if r.plausible]
+    best = min(plausible, key=lambda i: scores[i])
     bound = scores[best] + errors[best]
-    eligible = [i for i in range(len(results)) if scores[i] <= bound]
+    eligible = [i for i in plausible if scores[i] <= bound]
     fewest = min(results[i].free for i in eligible)
     simplest = [i for i in eligible if results[i].free == fewest]
     return min(simplest, key=lambda i: (results[i].prior_scale, results[i].candidate))
@@ -225,16 +259,26 @@ def select_model(
     results: list[CvResult] = []
     estimates: dict[tuple[str, float], Estimate] = {}
     start = start_point(model, observations)
+    sessions = set(observations.contacts.sessions)
     for candidate in usable:
         x = start
         for scale in settings.prior_scales:
             say(f"cross-validation: {candidate.name}, prior x{scale:g}")
-            spec = candidate_spec(model, candidate, settings.prior, scale)
+            spec = spec_for_rows(model, candidate_spec(model, candidate, settings.prior, scale), sessions)
             full = estimate(model, observations, spec, noise, held_at_urdf(model, spec, x))
+            largest = largest_deviations(model, full.delta)
+            estimates[candidate.name, scale] = full
+            if largest[0] > settings.plausible_mm or largest[1] > settings.plausible_deg:
+                LOG.info(
+                    "%s at prior x%g: %.0f mm, %.1f deg from the URDF: implausible", candidate.name, scale, *largest
+                )
+                results.append(implausible(candidate.name, scale, len(spec.free), full.noise, largest, folds))
+                continue
             x = full.x  # warm start of the next scale
             predicted = cross_validate(model, observations, spec, full, folds, settings.fold_iterations)
-            results.append(score_folds(candidate.name, scale, len(spec.free), folds, predicted, full.noise))
-            estimates[candidate.name, scale] = full
+            results.append(score_folds(candidate.name, scale, len(spec.free), folds, predicted, full.noise, largest))
+    if not any(r.plausible for r in results):
+        raise InfeasibleError("every candidate's fit is implausible (see calibration.plausible_mm, plausible_deg)")
     scores = np.array([r.score for r in results])
     errors = np.array([r.se for r in results])
     chosen = one_standard_error(results, scores, errors)
@@ -246,7 +290,7 @@ def select_model(
         picks.append((pick.candidate, pick.prior_scale))
     return ModelSelection(
         results=tuple(results),
-        best=results[int(np.argmin(scores))],
+        best=results[min((i for i, r in enumerate(results) if r.plausible), key=lambda i: scores[i])],
         chosen=results[chosen],
         seed_picks=tuple(picks),
         estimates=estimates,

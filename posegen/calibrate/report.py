@@ -2,13 +2,12 @@
 
 Output folder::
 
-    calibration.yaml     parameters, base parameters, weights, CV, outliers, residual tables, provenance
-    residuals.csv        every contact's residuals before and after, and its joint angles
-    posterior.npz        posterior covariance of the base parameters, conditioning of their regressor
-    calibrated.urdf      same links and joints, calibrated origins
+    calibration.yaml     model selection, predicted error, rows left out, noise, parameters, residuals, provenance
+    calibrated.urdf      same links and joints, calibrated origins (compliance is not a URDF quantity)
     calibrated.yaml      a scene config that uses calibrated.urdf
-    parameters.png       identified deviations per placement (mm, deg)
+    parameters.png       fitted deviations (mm, deg)
     residuals.png        held-out residuals before/after (or training ones without held-out data)
+    cross_validation.png CV score of every candidate over the prior scale
 """
 
 from __future__ import annotations
@@ -20,34 +19,39 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
-from posegen.calibrate.record import CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
+from posegen.calibrate.candidates import kind_sigmas
+from posegen.calibrate.model_selection import RULE, CvResult
+from posegen.calibrate.plots import DISPLAY, plot_cross_validation, plot_parameters, plot_residuals
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
-from posegen.model import OFFSET_FIELDS, Contacts, Group, Parameter, Unit
+from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter
 from posegen.robot import FloatArray
+
+COMPONENTS = ("z_mm", "roll_deg", "pitch_deg")
+LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT)
+
+
+def _shown(values: Sequence[float] | FloatArray, digits: int = 4) -> dict[str, float]:
+    return {c: round(float(v), digits) for c, v in zip(COMPONENTS, np.asarray(values) * DISPLAY, strict=True)}
 
 
 def residual_stats(residuals: FloatArray) -> dict[str, dict[str, float]]:
     """RMS and mean absolute of (n, 3) residuals, in mm and deg."""
-    shown = residuals * DISPLAY
     return {
-        "mean_abs": {c: round(float(v), 4) for c, v in zip(COMPONENTS, np.mean(np.abs(shown), axis=0), strict=True)},
-        "rms": {c: round(float(v), 4) for c, v in zip(COMPONENTS, np.sqrt(np.mean(shown**2, axis=0)), strict=True)},
+        "mean_abs": _shown(np.mean(np.abs(residuals), axis=0)),
+        "rms": _shown(np.sqrt(np.mean(residuals**2, axis=0))),
     }
 
 
 def residual_tables(calibration: Calibration, held_out: Contacts | None) -> dict[str, Any]:
     """Training and held-out residual statistics, before and after."""
-    kept = list(calibration.kept)
-    train_before = calibration.model.residuals(calibration.before.theta, calibration.train.subset(kept))
-    train_after = calibration.model.residuals(calibration.after.theta, calibration.train.subset(kept))
-    tables: dict[str, Any] = {
-        "training": {
-            "before": residual_stats(train_before),
-            "after": residual_stats(train_after),
-            "contacts": len(kept),
-        }
+    model = calibration.model
+    observations = model.observations(calibration.train.subset(list(calibration.kept)))
+    training = {
+        name: residual_stats(model.evaluate(fitted.x, observations, floor=False).contact)
+        for name, fitted in (("before", calibration.before), ("after", calibration.after))
     }
+    tables: dict[str, Any] = {"training": {**training, "contacts": len(observations)}}
     if held_out is not None:
         for protocol, by_model in held_out_residuals(calibration, held_out).items():
             tables[f"held_out_{protocol}"] = {k: residual_stats(v) for k, v in by_model.items()}
@@ -55,92 +59,188 @@ def residual_tables(calibration: Calibration, held_out: Contacts | None) -> dict
     return tables
 
 
+def _display(kind: Kind) -> tuple[str, float]:
+    if kind in LENGTH_KINDS:
+        return "mm", 1e3
+    if kind == Kind.COMPLIANCE:
+        return "rad/kNm", 1e3
+    return "deg", float(np.degrees(1.0))
+
+
 def parameter_table(calibration: Calibration) -> list[dict[str, Any]]:
-    """Every base parameter: nominal, identified, deviation and its posterior std (m/rad)."""
-    model = calibration.model
-    nominal = model.nominal()
+    """Every fitted direction but planes and floor constants: deviation and posterior std (mm, deg, rad/kNm)."""
     rows = []
-    for i in calibration.base.columns:
-        p = model.parameters[i]
+    for i in calibration.spec.free:
+        d = calibration.model.directions[i]
+        if d.kind in (Kind.PLANE, Kind.FLOOR):
+            continue
+        unit, scale = _display(d.kind)
         rows.append(
             {
-                "name": p.name,
-                "group": p.group.value,
-                "unit": p.unit.value,
-                "nominal": float(nominal[i]),
-                "identified": float(calibration.after.theta[i]),
-                "deviation": float(calibration.after.theta[i] - nominal[i]),
-                "std": float(calibration.after.std[i]),
+                "name": d.name,
+                "kind": d.kind.value,
+                "part": d.part.value,
+                "unit": unit,
+                "deviation": round(float(calibration.after.delta[i] * scale), 5),
+                "std": round(float(calibration.after.std[i] * scale), 5),
             }
         )
     return rows
 
 
-def base_parameter_summary(calibration: Calibration) -> dict[str, Any]:
-    """Counts of base parameters by group and by chain."""
-    model = calibration.model
-    params = [model.parameters[i] for i in calibration.base.columns]
-    by_group = {g.value: sum(p.group == g for p in params) for g in Group}
-    by_chain = {}
-    for name, chain in model.chains.items():
-        owners = set(chain.placement_names) | {chain.contact_frame}
-        by_chain[name] = sum(p.owner in owners for p in params)
+def _cv_row(result: CvResult) -> dict[str, Any]:
     return {
-        "total": len(params),
-        "parameters": model.size,
-        "by_group": by_group,
-        "robot_parameters_per_chain": by_chain,
-        "note": "robot parameters shared by chains (torso) count in each chain; planes per session",
+        "candidate": result.candidate,
+        "prior_scale": result.prior_scale,
+        "free_parameters": result.free,
+        "score": round(result.score, 2),
+        "se": round(result.se, 2),
+        "chains": {c: _shown(e.mean_abs, 3) for c, e in result.chains.items()},
+        "largest_deviation": {"mm": round(result.largest[0], 2), "deg": round(result.largest[1], 3)},
+        "plausible": result.plausible,
     }
 
 
-def plot_parameters(calibration: Calibration, path: Path) -> None:
-    """Bar chart of identified deviations per placement: lengths (mm) and angles (deg)."""
-    import matplotlib
+def selection_report(calibration: Calibration) -> dict[str, Any]:
+    """The candidates' ranking, every CV point, the chosen pair and how stable it is over the seeds."""
+    selection = calibration.selection
+    by_candidate: dict[str, list[CvResult]] = {}
+    for r in selection.results:
+        by_candidate.setdefault(r.candidate, []).append(r)
+    ranking = sorted((min(rs, key=lambda r: r.score) for rs in by_candidate.values()), key=lambda r: r.score)
+    implausible = [r for r in selection.results if not r.plausible]
+    config = calibration.config
+    return {
+        "rule": RULE,
+        "folds": {"per_chain": config.folds, "seeds": config.fold_seeds, "fold_iterations": config.fold_iterations},
+        "chosen": _cv_row(selection.chosen),
+        "best": _cv_row(selection.best),
+        "stability": {
+            "share_of_seeds": round(selection.stability, 3),
+            "picks": [{"candidate": c, "prior_scale": s} for c, s in selection.seed_picks],
+        },
+        "ranking": [_cv_row(r) for r in ranking],
+        "implausible": [
+            {
+                "candidate": r.candidate,
+                "prior_scale": r.prior_scale,
+                "mm": round(r.largest[0], 1),
+                "deg": round(r.largest[1], 2),
+            }
+            for r in implausible
+        ],
+        "curves": {
+            name: [
+                {"prior_scale": r.prior_scale, "score": round(r.score, 2), "se": round(r.se, 2)}
+                for r in rs
+                if r.plausible
+            ]
+            for name, rs in by_candidate.items()
+        },
+    }
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    rows = [r for r in parameter_table(calibration) if r["group"] != Group.PLANE.value]
-    fig, axes = plt.subplots(2, 1, figsize=(14, 7), sharex=False)
-    for ax, unit, scale, label in (
-        (axes[0], Unit.LENGTH.value, 1e3, "length deviation (mm)"),
-        (axes[1], Unit.ANGLE.value, 180 / np.pi, "angle deviation (deg)"),
-    ):
-        sel = [r for r in rows if r["unit"] == unit]
-        x = np.arange(len(sel))
-        ax.bar(x, [r["deviation"] * scale for r in sel], yerr=[r["std"] * scale for r in sel], color="tab:blue")
-        ax.set_xticks(x, [r["name"].replace("_joint", "") for r in sel], rotation=90, fontsize=6)
-        ax.set_ylabel(label)
-        ax.axhline(0, color="black", lw=0.5)
-        ax.grid(axis="y", alpha=0.3)
-    axes[0].set_title("Identified base parameters (deviation from the URDF, with posterior std)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def predicted_error(calibration: Calibration) -> tuple[dict[str, Any], list[str]]:
+    """The chosen model's CV-predicted held-out error per chain, and warnings above the target."""
+    target = calibration.config.target_error_mm
+    out, warnings = {}, []
+    for chain, error in calibration.selection.chosen.chains.items():
+        z_mm = error.mean_abs[0] * 1e3
+        out[chain] = {"mean_abs": _shown(error.mean_abs, 3), "rms": _shown(error.rms, 3), "above_target": z_mm > target}
+        if z_mm > target:
+            warnings.append(
+                f"chain '{chain}': predicted held-out height error {z_mm:.2f} mm is above the target {target:g} mm; "
+                f"record more contacts of this chain (posegen select POOL --given ...)"
+            )
+    return out, warnings
 
 
-def plot_residuals(before: FloatArray, after: FloatArray, title: str, path: Path) -> None:
-    """Per-contact residuals before and after, for height, roll and pitch."""
-    import matplotlib
+def left_out_rows(calibration: Calibration) -> list[dict[str, Any]]:
+    """Rows left out: file, line, target spot, why, and the residual (studentised) or offset."""
+    out = []
+    for flag in calibration.flags:
+        file, _, rest = flag.label.partition(":")
+        line, _, spot = rest.partition(":")
+        out.append(
+            {
+                "file": file,
+                "line": line,
+                "spot": spot,
+                "reason": flag.reason,
+                "value": round(flag.value, 3),
+                "round": flag.round,
+                "kept": flag.row in calibration.kept,
+            }
+        )
+    return out
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
-    x = np.arange(len(before))
-    for k, (ax, name) in enumerate(zip(axes, ("height (mm)", "roll (deg)", "pitch (deg)"), strict=True)):
-        ax.bar(x - 0.2, before[:, k] * DISPLAY[k], width=0.4, label="before", color="tab:gray")
-        ax.bar(x + 0.2, after[:, k] * DISPLAY[k], width=0.4, label="after", color="tab:green")
-        ax.axhline(0, color="black", lw=0.5)
-        ax.set_xlabel("contact")
-        ax.set_title(name)
-        ax.grid(axis="y", alpha=0.3)
-    axes[0].legend()
-    fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def _noise(calibration: Calibration) -> dict[str, Any]:
+    noise = calibration.after.noise
+    out: dict[str, Any] = {"contact": _shown(noise.contact)}
+    if calibration.spec.floor:
+        scale = np.array([1e3, 1e3, 1e3, *([float(np.degrees(1.0))] * 3)])
+        units = ("x_mm", "y_mm", "z_mm", "roll_deg", "pitch_deg", "yaw_deg")
+        out["floor"] = {u: round(float(v), 5) for u, v in zip(units, np.array(noise.floor) * scale, strict=True)}
+        assert len(units) == len(FLOOR_FIELDS)
+    return out
+
+
+def calibration_report(
+    calibration: Calibration, held_out: Contacts | None, seed: int | None, rejected_rows: Sequence[str]
+) -> dict[str, Any]:
+    """The content of calibration.yaml."""
+    model = calibration.model
+    x = calibration.after.x
+    predicted, warnings = predicted_error(calibration)
+    sigmas = kind_sigmas(calibration.config.prior)
+    scale = calibration.selection.chosen.prior_scale
+    report: dict[str, Any] = {
+        "format": "posegen-calibration",
+        "format_version": 2,
+        "provenance": model.scene.provenance(seed),
+        "chains": sorted(model.contact.chains),
+        "sessions": list(model.sessions),
+        "model": {
+            "candidate": calibration.candidate.name,
+            "fit": list(calibration.candidate.fit),
+            "floor_equations": calibration.spec.floor,
+            "compliance": list(calibration.candidate.compliance),
+            "prior_scale": scale,
+            "prior_sigma": {
+                k.value: round(float(v * scale * _display(k)[1]), 5) for k, v in sigmas.items() if np.isfinite(v)
+            },
+        },
+        "predicted_error": predicted,
+        "warnings": warnings,
+        "model_selection": selection_report(calibration),
+        "noise": _noise(calibration),
+        "left_out": left_out_rows(calibration),
+        "rejected_rows": list(rejected_rows),
+        "base_parameters": {
+            "total": calibration.base.size,
+            "note": "QR of the contact regressor at postures shaped like the training ones (identifiability only)",
+        },
+        "residuals": residual_tables(calibration, held_out),
+        "compliance": {
+            group: {
+                "joints": [model.scene.joint_names[j] for j in model.compliance[group]],
+                "rad_per_knm": round(value * 1e3, 5),
+            }
+            for group, value in model.compliances(x).items()
+            if group in calibration.candidate.compliance
+        },
+        "planes": {
+            s: {f: float(x[model.contact.column(Parameter.plane(s, f))]) for f in OFFSET_FIELDS} for s in model.sessions
+        },
+        "parameters": parameter_table(calibration),
+    }
+    if calibration.spec.floor:
+        report["floor"] = {
+            s: dict(zip(SESSION_FIELDS, (float(v) for v in x[model.floor_columns(s)]), strict=True))
+            for s in sorted(set(calibration.train.subset(list(calibration.kept)).sessions))
+        }
+    return report
 
 
 def write_calibration(
@@ -162,43 +262,9 @@ def write_calibration(
     """
     scene = calibration.model.scene
     out_dir.mkdir(parents=True, exist_ok=True)
-    tables = residual_tables(calibration, held_out)
-    model = calibration.model
-    report = {
-        "format": CALIBRATION_FORMAT,
-        "format_version": 1,
-        "provenance": scene.provenance(seed),
-        "chains": sorted(model.chains),
-        "sessions": list(model.sessions),
-        "weights": {
-            "noise": dict(
-                zip(COMPONENTS, (np.array(calibration.weights.noise) * DISPLAY).round(4).tolist(), strict=True)
-            ),
-            "prior_length_mm": calibration.weights.prior_length_m * 1e3,
-            "prior_angle_deg": float(np.rad2deg(calibration.weights.prior_angle_rad)),
-        },
-        "cross_validation": [
-            {
-                "prior_scale": p.kappa,
-                "score": round(p.score, 4),
-                "mean_abs": dict(zip(COMPONENTS, (np.array(p.mean_abs) * DISPLAY).round(3).tolist(), strict=True)),
-            }
-            for p in calibration.cv
-        ],
-        "rejected_rows": list(rejected_rows),
-        "outliers": [
-            {"contact": calibration.train.labels[i], "normalised_cv_residual": round(s, 2)}
-            for i, s in zip(calibration.outliers, calibration.outlier_scores, strict=True)
-        ],
-        "base_parameters": base_parameter_summary(calibration),
-        "residuals": tables,
-        "planes": {
-            s: {f: float(calibration.after.theta[model.column(Parameter.plane(s, f))]) for f in OFFSET_FIELDS}
-            for s in model.sessions
-        },
-        "parameters": parameter_table(calibration),
-    }
-    urdf = calibrated_urdf(scene.files.urdf.read_text(), model, calibration.after.theta)
+    report = calibration_report(calibration, held_out, seed, rejected_rows)
+    theta = calibration.model.theta(calibration.after.x)
+    urdf = calibrated_urdf(scene.files.urdf.read_text(), calibration.model.contact, theta)
     write_atomic(out_dir / "calibrated.urdf", urdf)
     config = scene.config.to_dict()
     config["robot"]["source"] = {
@@ -207,21 +273,24 @@ def write_calibration(
         "package_dirs": list(scene.files.package_dirs),
     }
     write_atomic(out_dir / "calibrated.yaml", dump_yaml(config))
-    plot_parameters(calibration, out_dir / "parameters.png")
+    plot_parameters([r for r in report["parameters"] if r["unit"] in ("mm", "deg")], out_dir / "parameters.png")
+    chosen = calibration.selection.chosen
+    plot_cross_validation(
+        report["model_selection"]["curves"], (chosen.candidate, chosen.prior_scale), out_dir / "cross_validation.png"
+    )
+    model = calibration.model
     if held_out is not None:
         res = held_out_residuals(calibration, held_out)["training_plane"]
-        plot_residuals(
-            res["before"], res["after"], "Held-out residuals (plane from training)", out_dir / "residuals.png"
-        )
+        title = "Held-out residuals (plane from training)"
+        plot_residuals(res["before"], res["after"], title, out_dir / "residuals.png")
     else:
-        sub = calibration.train.subset(list(calibration.kept))
+        observations = model.observations(calibration.train.subset(list(calibration.kept)))
         plot_residuals(
-            model.residuals(calibration.before.theta, sub),
-            model.residuals(calibration.after.theta, sub),
+            model.evaluate(calibration.before.x, observations, floor=False).contact,
+            model.evaluate(calibration.after.x, observations, floor=False).contact,
             "Training residuals",
             out_dir / "residuals.png",
         )
-    write_record(calibration, held_out, out_dir)
     write_atomic(out_dir / "calibration.yaml", dump_yaml(report))
     return report
 

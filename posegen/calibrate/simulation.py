@@ -94,6 +94,7 @@ def settle_true(model: CalibrationModel, x: FloatArray, planned: Contacts) -> tu
     target = np.zeros((len(planned), 6))  # floor: x, y, yaw of the session
     for session in set(planned.sessions):
         target[np.ix_(sessions == session, [0, 1, 5])] = x[model.floor_columns(session)]
+
     def residuals(values: FloatArray, jacobian: bool) -> tuple[FloatArray, FloatArray]:
         """Contact and floor residuals (n, 3 or 9) and, held gravity torques, their joint derivatives."""
         observations = model.observations(Contacts(values, planned.chains, planned.sessions, planned.labels))
@@ -173,4 +174,3 @@ def simulate(
     rng = np.random.default_rng([seed, 1])
     noisy = settled.joints + rng.normal(0.0, perturbation.encoder_noise_rad, settled.joints.shape)
     return Contacts(noisy, settled.chains, settled.sessions, settled.labels), model, x
-

@@ -21,10 +21,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--prior-scale",
         type=float,
         default=None,
-        help="prior size x (1 mm, 0.1 deg); default: chosen by cross-validation",
+        help="fix the prior scale (x calibration.prior of the config); default: chosen by cross-validation",
     )
-    parser.add_argument("--keep-outliers", action="store_true", help="report outliers but keep them in the fit")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the CV folds (default 0)")
+    parser.add_argument(
+        "--candidates", nargs="+", default=[], help="only these of the config's candidate models (default: all)"
+    )
+    parser.add_argument("--fold-seeds", type=int, default=None, help="repetitions of the CV (default: the config's)")
+    parser.add_argument("--keep-outliers", action="store_true", help="report bad rows but keep them in the fit")
+    parser.add_argument("--seed", type=int, default=0, help="first seed of the CV folds (default 0)")
     parser.add_argument("-o", "--output", default="plans/calibration", help="output folder (default plans/calibration)")
 
 
@@ -33,23 +37,41 @@ def run(args: argparse.Namespace) -> int:
     from posegen.calibrate import Settings, calibrate_files, format_table
     from posegen.view import write_report
 
-    settings = Settings(kappa=args.prior_scale, drop_outliers=not args.keep_outliers, seed=args.seed)
+    settings = Settings(
+        prior_scale=args.prior_scale,
+        candidates=tuple(args.candidates),
+        fold_seeds=args.fold_seeds,
+        drop_outliers=not args.keep_outliers,
+        seed=args.seed,
+    )
     with ProgressBar(args.quiet) as bar:
         calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, args.config, bar)
     report = calibrated.report
-    base = report["base_parameters"]
+    model = report["model"]
+    chosen = report["model_selection"]["chosen"]
+    stability = report["model_selection"]["stability"]["share_of_seeds"]
     print(
-        f"calibrate: {calibrated.training_contacts} training contacts, {base['total']} base parameters "
-        f"(robot per chain: {base['robot_parameters_per_chain']}), prior x{report['weights']['prior_length_mm']:g}"
+        f"calibrate: {calibrated.training_contacts} training contacts; model {model['candidate']} at prior "
+        f"x{model['prior_scale']:g} ({chosen['free_parameters']} free parameters, CV score {chosen['score']} "
+        f"+- {chosen['se']}; picked by {stability:.0%} of the fold seeds)"
     )
+    for chain, error in report["predicted_error"].items():
+        m = error["mean_abs"]
+        print(
+            f"  predicted held-out error, {chain}: {m['z_mm']:.2f} mm, {m['roll_deg']:.2f} deg, "
+            f"{m['pitch_deg']:.2f} deg (mean absolute, grouped CV)"
+        )
     for message in report["rejected_rows"]:
         print(f"  row left out: {message}")
-    for outlier in report["outliers"]:
-        print(f"  outlier left out: {outlier['contact']} (normalised CV residual {outlier['normalised_cv_residual']})")
+    for row in report["left_out"]:
+        action = "flagged, kept" if row["kept"] else "left out"
+        print(f"  row {action}: {row['file']}:{row['line']} ({row['spot']}): {row['reason']} {row['value']}")
+    for warning in report["warnings"]:
+        print(f"  warning: {warning}")
     print(format_table(report))
     report_path = write_report(args.output, args.config)
     print(
         f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, residuals.csv, posterior.npz, "
-        f"parameters.png, residuals.png, {report_path.name})"
+        f"parameters.png, residuals.png, cross_validation.png, {report_path.name})"
     )
     return 0

@@ -73,6 +73,10 @@ class CalibrationConfig:
     fold_iterations: int = 3  # Levenberg-Marquardt iterations of a fold's fit, started from the full fit
     target_error_mm: float = 4.0  # warn when a chain's predicted held-out height error is above
     outlier_false_alarm: float = 0.01  # chance of flagging any row of a clean data set (Bonferroni)
+    feet_tolerance_mm: float = 5.0  # a second sole further than this from its place (URDF) did not stand
+    feet_tolerance_deg: float = 1.0  # ... or tilted more than this
+    plausible_mm: float = 25.0  # a fit moving a length further from the URDF is not this robot (degenerate)
+    plausible_deg: float = 5.0  # ... or an angle
 
 
 def parse_candidate(name: str, data: Any, where: str, groups: dict[str, Any]) -> CandidateConfig:
@@ -156,8 +160,10 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         **{k: _number(prior_data, k, getattr(defaults.prior, k), f"{where}.prior") for k in prior_fields}
     )
     scales = data.get("prior_scales", list(defaults.prior_scales))
-    if not isinstance(scales, list) or len(scales) < 1 or not all(
-        isinstance(s, (int, float)) and not isinstance(s, bool) and s > 0 for s in scales
+    if (
+        not isinstance(scales, list)
+        or len(scales) < 1
+        or not all(isinstance(s, (int, float)) and not isinstance(s, bool) and s > 0 for s in scales)
     ):
         raise ConfigError(f"{where}.prior_scales: expected a list of positive numbers, got {scales!r}")
     groups = data.get("compliance", {})
@@ -184,6 +190,10 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         fold_iterations=_integer(data, "fold_iterations", defaults.fold_iterations, where, 1),
         target_error_mm=_number(data, "target_error_mm", defaults.target_error_mm, where),
         outlier_false_alarm=_number(data, "outlier_false_alarm", defaults.outlier_false_alarm, where),
+        feet_tolerance_mm=_number(data, "feet_tolerance_mm", defaults.feet_tolerance_mm, where),
+        feet_tolerance_deg=_number(data, "feet_tolerance_deg", defaults.feet_tolerance_deg, where),
+        plausible_mm=_number(data, "plausible_mm", defaults.plausible_mm, where),
+        plausible_deg=_number(data, "plausible_deg", defaults.plausible_deg, where),
     )
 
 

@@ -1,94 +1,170 @@
-"""Calibration on simulated contacts (known truth) and on the real TALOS recordings."""
+"""Calibration: recovery of a known robot (with and without the floor equations and compliance),
+a corrupted row, unusable rows, and the real TALOS recordings."""
+
+import dataclasses
 
 import numpy as np
 import pytest
 
-from posegen.calibrate import Perturbation, Settings, calibrate, held_out_residuals, read_measurements, simulate
-from posegen.model import ContactModel, Contacts, Group, settle_contacts, structural_base
+from posegen.calibrate import (
+    Noise,
+    Perturbation,
+    Settings,
+    calibrate,
+    candidate_spec,
+    estimate,
+    held_out_residuals,
+    read_measurements,
+    simulate,
+    start_point,
+    true_parameters,
+)
+from posegen.calibrate.calibration import FLOOR_NOISE, check_enough, unusable_rows
+from posegen.calibrate.estimation import held_at_urdf
+from posegen.calibrate.simulation import settle_true
+from posegen.errors import InputError
+from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, Kind, Part
+from posegen.robot.calibration_config import CandidateConfig, PriorConfig
+from tests.calibrate.conftest import HIP_PITCH
 from tests.conftest import REAL_DATA
 
 TO_DISPLAY = np.array([1e3, 180 / np.pi, 180 / np.pi])  # mm, deg, deg
+COMPLIANCE = 3e-4  # rad/N m: ~1 deg of hip sag under 50 N m
+OFFSETS_LEGS = CandidateConfig("offsets_legs", ("*.joint_offset", "leg.*"))
+OFFSETS_LEGS_HIP = CandidateConfig("offsets_legs_hip", ("*.joint_offset", "leg.*"), compliance=("hip_pitch",))
+
+
+def planned(pool, rows, session="sim"):
+    chains = tuple(pool.postures[i].chain for i in rows)
+    return Contacts(pool.joints()[rows], chains, (session,) * len(rows), tuple(f"sim.yaml:{i}:c{i}" for i in rows))
 
 
 @pytest.fixture(scope="module")
-def noiseless(scene, example_pool):
-    rows = list(range(150))
-    joints = example_pool.joints()[rows]
-    plan = Contacts(joints, tuple(example_pool.postures[i].chain for i in rows), ("sim",) * 150, ("",) * 150)
-    recorded, model, theta = simulate(scene, plan, Perturbation(), seed=5)
-    train, test = recorded.subset(range(100)), recorded.subset(range(100, 150))
-    calibration = calibrate(scene, train, ["sim"], Settings(kappa=1e4))  # a prior too weak to bias
-    return calibration, test, model, theta
+def truth(scene, example_pool):
+    """A compliant robot whose errors lie along joint offsets, leg placements and contact offsets."""
+    model = CalibrationModel(scene, ["left", "right"], ["sim"], HIP_PITCH)
+    rng = np.random.default_rng(21)
+    delta = np.zeros(model.size)
+    for i, d in enumerate(model.directions):
+        if d.kind == Kind.JOINT_OFFSET:
+            delta[i] = np.deg2rad(0.3) * rng.normal()
+        elif d.part == Part.LEG:
+            delta[i] = (1.5e-3 if d.kind == Kind.LINK_TRANSLATION else np.deg2rad(0.2)) * rng.normal()
+        elif d.kind in (Kind.CONTACT_HEIGHT, Kind.CONTACT_TILT):
+            delta[i] = (1e-3 if d.kind == Kind.CONTACT_HEIGHT else np.deg2rad(0.2)) * rng.normal()
+    rigid = Perturbation(length_m=0.0, angle_rad=0.0, compliance_rad_per_nm=COMPLIANCE)
+    x = true_parameters(model, rigid, seed=21) + model.basis @ delta
+    recorded, converged = settle_true(model, x, planned(example_pool, list(range(80))))
+    recorded = recorded.subset(np.flatnonzero(converged))
+    return model, x, recorded.subset(range(60)), recorded.subset(range(60, len(recorded)))
 
 
-def test_noiseless_held_out_residuals_vanish(noiseless):
-    calibration, test, _, _ = noiseless
-    residuals = held_out_residuals(calibration, test)
-    after = np.abs(residuals["training_plane"]["after"]) * TO_DISPLAY
-    assert after[:, 0].max() < 0.01  # mm
-    assert after[:, 1:].max() < 0.001  # deg
-    before = np.abs(residuals["training_plane"]["before"]) * TO_DISPLAY
-    assert before[:, 0].max() > 1.0  # the errors were real
+def fit(model, contacts, candidate, floor):
+    spec = candidate_spec(model, dataclasses.replace(candidate, floor=floor), PriorConfig(), 10.0)
+    observations = model.observations(contacts)
+    start = held_at_urdf(model, spec, start_point(model, observations))
+    return estimate(model, observations, spec, Noise(DEFAULT_NOISE, FLOOR_NOISE), start)
 
 
-def test_known_errors_on_base_parameters_are_recovered(scene, example_pool):
-    """Errors put on base parameters only (dependent ones nominal) come back exactly."""
-    rows = list(range(100))
-    chains = tuple(example_pool.postures[i].chain for i in rows)
-    plan = Contacts(example_pool.joints()[rows], chains, ("sim",) * 100, ("",) * 100)
-    model = ContactModel(scene, sorted(set(chains)), ["sim"])
-    base = structural_base(model, plan)
-    rng = np.random.default_rng(11)
-    theta = model.nominal()
-    robot = [c for c in base.columns if model.parameters[c].group != Group.PLANE]
-    for c in robot:
-        theta[c] += rng.normal(0, 2e-3) if model.parameters[c].unit.value == "m" else rng.normal(0, np.deg2rad(0.5))
-    theta[model.index["plane@sim.z"]] = 0.68
-    theta[model.index["plane@sim.roll"]] = np.deg2rad(0.3)
-    recorded = settle_contacts(model, theta, plan)
-    calibration = calibrate(scene, recorded, ["sim"], Settings(kappa=1e4), base=base)
-    assert calibration.after.theta[robot] == pytest.approx(theta[robot], abs=1e-6)  # m and rad
-    planes = model.columns(Group.PLANE)
-    assert calibration.after.theta[planes] == pytest.approx(theta[planes], abs=1e-6)
+@pytest.fixture(scope="module")
+def fits(truth):
+    model, _, train, _ = truth
+    return {floor: fit(model, train, OFFSETS_LEGS_HIP, floor) for floor in (False, True)}
 
 
-def test_outlier_contact_is_detected_and_left_out(scene, example_pool):
-    rows = list(range(90))
-    plan = Contacts(
-        example_pool.joints()[rows],
-        tuple(example_pool.postures[i].chain for i in rows),
-        ("sim",) * 90,
-        tuple(f"c{i}" for i in rows),
+def test_a_known_robot_is_recovered_with_and_without_the_floor_equations(truth, fits):
+    model, x, _, test = truth
+    observations = model.observations(test)
+    compliance = model.columns([Kind.COMPLIANCE])
+    for floor, estimate_ in fits.items():
+        held_out = model.evaluate(estimate_.x, observations, floor=False).contact * TO_DISPLAY
+        assert np.abs(held_out[:, 0]).max() < 0.05, floor  # mm
+        assert np.abs(held_out[:, 1:]).max() < 0.005, floor  # deg
+        assert estimate_.x[compliance] == pytest.approx(x[compliance], rel=0.03), floor
+
+
+def test_the_floor_equations_recover_the_legs_that_contacts_cannot_see(truth, fits):
+    """Leg errors that only open the stance loop are invisible to contacts; the floor equations pin them."""
+    model, x, _, test = truth
+    legs = [i for i, d in enumerate(model.directions) if d.part == Part.LEG]
+    true_delta = model.delta_of(x)
+    error = {floor: np.linalg.norm(fits[floor].delta[legs] - true_delta[legs]) for floor in fits}
+    assert error[True] < 0.5 * error[False]
+    closure = {floor: model.evaluate(fits[floor].x, model.observations(test)).floor for floor in fits}
+    assert np.abs(closure[True][:, 2]).max() < 5e-5 < np.abs(closure[False][:, 2]).max()  # m, second sole height
+
+
+def test_without_compliance_a_compliant_robot_is_not_recovered(truth, fits):
+    model, _, train, test = truth
+    rigid = fit(model, train, OFFSETS_LEGS, floor=False)
+    observations = model.observations(test)
+    error_rigid = np.abs(model.evaluate(rigid.x, observations, floor=False).contact[:, 0]).mean()
+    error_compliant = np.abs(model.evaluate(fits[False].x, observations, floor=False).contact[:, 0]).mean()
+    assert error_rigid > 10 * error_compliant and error_rigid > 2e-4  # m
+
+
+@pytest.fixture(scope="module")
+def robust(lean_scene, example_pool):
+    """Calibrations of one simulated compliant robot, clean and with one arm joint of one row off by 0.3 rad."""
+    recorded, _, _ = simulate(
+        lean_scene,
+        planned(example_pool, list(range(70))),
+        Perturbation(encoder_noise_rad=np.deg2rad(0.005), compliance_rad_per_nm=COMPLIANCE),
+        seed=6,
     )
-    recorded, _, _ = simulate(scene, plan, Perturbation(encoder_noise_rad=np.deg2rad(0.01)), seed=6)
-    joints = recorded.joints.copy()
-    joints[17, scene.joint_index("arm_left_4_joint" if recorded.chains[17] == "left" else "arm_right_4_joint")] += 0.05
-    bad = Contacts(joints, recorded.chains, recorded.sessions, recorded.labels)
-    calibration = calibrate(scene, bad, ["sim"], Settings(kappas=(2.0, 10.0)))
-    assert 17 in calibration.outliers
-    assert 17 not in calibration.kept and len(calibration.outliers) <= 3
+    train, test = recorded.subset(range(50)), recorded.subset(range(50, len(recorded)))
+    joints = train.joints.copy()
+    bad_row = 7
+    joints[bad_row, lean_scene.joint_index(f"arm_{train.chains[bad_row]}_4_joint")] += 0.3
+    corrupted = Contacts(joints, train.chains, train.sessions, train.labels)
+    return (
+        {name: calibrate(lean_scene, data, ["sim"]) for name, data in (("clean", train), ("bad", corrupted))},
+        test,
+        bad_row,
+    )
 
 
-def test_too_few_contacts(scene, example_pool):
-    from posegen.errors import InfeasibleError
+def test_a_corrupted_row_is_left_out_and_the_held_out_error_stays(robust):
+    calibrations, test, bad_row = robust
+    flagged = [f for f in calibrations["bad"].flags if f.reason == "residual"]
+    assert bad_row in [f.row for f in flagged] and bad_row not in calibrations["bad"].kept
+    error = {
+        name: np.sqrt(np.mean(held_out_residuals(c, test)["training_plane"]["after"][:, 0] ** 2))
+        for name, c in calibrations.items()
+    }
+    assert error["bad"] <= 1.1 * error["clean"], error
 
-    plan = Contacts(example_pool.joints()[:4], ("left",) * 4, ("s",) * 4, ("",) * 4)
-    with pytest.raises(InfeasibleError, match="at least"):
-        calibrate(scene, plan, ["s"])
+
+def test_the_compliant_candidate_is_chosen_for_a_compliant_robot(robust):
+    calibrations, _, _ = robust
+    selection = calibrations["clean"].selection
+    assert selection.chosen.candidate == "offsets_hip_pitch"
+    assert 0.0 <= selection.stability <= 1.0 and len(selection.seed_picks) == 2
 
 
-@pytest.fixture(scope="module")
-def real(scene):
+def test_unusable_rows_are_reported_and_too_few_rows_refused(lean_scene, example_pool):
+    contacts = planned(example_pool, list(range(12)))
+    sessions = ("sim",) * 11 + ("alone",)
+    joints = contacts.joints.copy()
+    joints[3, lean_scene.joint_index("leg_left_4_joint")] += 0.2  # the left knee bends: a sole leaves the floor
+    data = Contacts(joints, contacts.chains, sessions, contacts.labels)
+    model = CalibrationModel(lean_scene, ["left", "right"], ["sim", "alone"], HIP_PITCH)
+    flags = {f.row: f.reason for f in unusable_rows(model, model.observations(data), lean_scene.calibration)}
+    assert flags == {3: "feet off the floor", 11: "alone in its session"}
+    with pytest.raises(InputError, match="plane parameters"):
+        check_enough(model, data.subset([0]), lean_scene.calibration)
+    one_each = [next(i for i in range(11) if data.chains[i] == chain) for chain in ("left", "right")]
+    with pytest.raises(InputError, match="spot"):  # one spot per chain: nothing to hold out
+        check_enough(model, data.subset(one_each), lean_scene.calibration)
+
+
+def test_real_data_beats_before_and_the_published_toolbox(scene):
     train = read_measurements(REAL_DATA / "left_train.csv", scene).contacts.concat(
         read_measurements(REAL_DATA / "right_train.csv", scene).contacts
     )
     held_out = read_measurements(REAL_DATA / "left_validation.csv", scene).contacts
-    sessions = ["left_train", "right_train", "left_validation"]
-    return calibrate(scene, train, sessions), held_out
-
-
-def test_real_data_beats_before_and_the_published_toolbox(real):
-    calibration, held_out = real
+    settings = Settings(candidates=("offsets", "offsets_hip_pitch"), fold_seeds=2)
+    calibration = calibrate(scene, train, ["left_train", "right_train", "left_validation"], settings)
     residuals = held_out_residuals(calibration, held_out)
     for protocol in ("training_plane", "refitted_plane"):
         before = np.mean(np.abs(residuals[protocol]["before"]), axis=0) * TO_DISPLAY

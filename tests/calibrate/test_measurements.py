@@ -18,7 +18,7 @@ def test_real_csv_layouts(scene, name, rows, chain):
     assert len(contacts) == rows and recording.rejected == ()
     assert set(contacts.chains) == {chain}
     assert set(contacts.sessions) == {name}
-    assert contacts.labels[0].startswith(f"{name}:2:table/contact_")
+    assert contacts.labels[0].startswith(f"{name}.csv:2:table/contact_")
     assert np.all(np.abs(contacts.joints) < 3.2)
 
 

@@ -26,7 +26,9 @@ def test_settled_contacts_are_flush_and_stand_on_the_true_robot(scene, example_p
         moving = set(model.contact.chains[chain].joint_indices) | set(second_leg)
         outside = [j for j in range(len(scene.joint_names)) if j not in moving]
         assert np.abs(recorded.joints[i, outside] - plan.joints[i, outside]).max() == 0.0
-    assert 0 < np.abs(recorded.joints - plan.joints).max() < 0.2  # a small correction, as a force-controlled contact makes
+    assert (
+        0 < np.abs(recorded.joints - plan.joints).max() < 0.2
+    )  # a small correction, as a force-controlled contact makes
 
 
 def test_errors_have_the_requested_size(scene, example_pool):
@@ -51,7 +53,9 @@ def test_a_compliant_robot_gives_way_under_gravity(scene, example_pool):
     """With the config's compliance groups soft, the rigid truth no longer explains the recorded angles."""
     config = dataclasses.replace(
         scene.config,
-        calibration=dataclasses.replace(scene.calibration, compliance={"hip_pitch": ("leg_left_3_joint", "leg_right_3_joint")}),
+        calibration=dataclasses.replace(
+            scene.calibration, compliance={"hip_pitch": ("leg_left_3_joint", "leg_right_3_joint")}
+        ),
     )
     soft_scene = type(scene)(config)
     plan = planned(example_pool, list(range(8)))

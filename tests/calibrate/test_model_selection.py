@@ -1,0 +1,46 @@
+"""The one-standard-error rule, plausibility and stability, on made-up scores (no fits)."""
+
+import numpy as np
+
+from posegen.calibrate import CvResult, Noise
+from posegen.calibrate.model_selection import ChainError, one_standard_error
+
+NOISE = Noise((1e-3, 1e-3, 1e-3), (1e-4,) * 6)
+
+
+def result(candidate, scale, free, score, se, plausible=True):
+    error = ChainError((1e-3, 1e-3, 1e-3), (1e-3, 1e-3, 1e-3), score)
+    return CvResult(candidate, scale, free, score, se, (score,), (se,), {"left": error}, NOISE, (1.0, 0.1), plausible)
+
+
+def pick(results):
+    scores = np.array([r.score for r in results])
+    errors = np.array([r.se for r in results])
+    chosen = results[one_standard_error(results, scores, errors)]
+    return chosen.candidate, chosen.prior_scale
+
+
+def test_simplest_within_one_standard_error_then_its_strongest_prior():
+    results = [
+        result("big", 10.0, 200, 50.0, 5.0),  # the best: bound 55
+        result("small", 3.0, 40, 58.0, 4.0),  # outside
+        result("small", 10.0, 40, 54.0, 4.0),  # inside, fewest parameters
+        result("small", 30.0, 40, 52.0, 4.0),  # inside too, weaker prior
+        result("medium", 1.0, 100, 53.0, 4.0),
+    ]
+    assert pick(results) == ("small", 10.0)
+
+
+def test_the_best_is_kept_when_nothing_simpler_is_close():
+    results = [result("big", 10.0, 200, 50.0, 1.0), result("small", 10.0, 40, 60.0, 1.0)]
+    assert pick(results) == ("big", 10.0)
+
+
+def test_implausible_pairs_never_win():
+    """A degenerate fit scoring best is left out, and the bound comes from the best plausible pair."""
+    results = [
+        result("degenerate", 300.0, 200, 5.0, 1.0, plausible=False),
+        result("big", 10.0, 200, 50.0, 2.0),
+        result("small", 10.0, 40, 53.0, 2.0),
+    ]
+    assert pick(results) == ("big", 10.0)
