@@ -25,7 +25,7 @@ from posegen.calibrate.candidates import candidate_spec, spec_for_rows
 from posegen.calibrate.estimation import Estimate, Noise, Spec, estimate, fit, held_at_urdf, plane_spec, start_point
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, select_model
-from posegen.calibrate.screening import Flag, chi_threshold, feet_offsets, robust_residuals
+from posegen.calibrate.screening import Flag, chi_threshold, feet_off_the_floor, feet_offsets, robust_residuals
 from posegen.errors import InfeasibleError, InputError
 from posegen.model import (
     DEFAULT_NOISE,
@@ -99,9 +99,10 @@ def unusable_rows(model: CalibrationModel, observations: Observations, config: C
             flags.append(Flag(rows[0], contacts.labels[rows[0]], "alone in its session", 1.0, 0))
     if model.floor is not None:
         offsets = feet_offsets(model, observations)
-        for i, (mm, deg) in enumerate(offsets):
-            if mm > config.feet_tolerance_mm or deg > config.feet_tolerance_deg:
-                flags.append(Flag(i, contacts.labels[i], "feet off the floor", float(max(mm, deg)), 0))
+        beyond = feet_off_the_floor(offsets, config.feet_tolerance_mm * 1e-3, np.deg2rad(config.feet_tolerance_deg))
+        for i in np.flatnonzero(beyond > 1.0):
+            size = max(np.abs(offsets[i, :3]).max() * 1e3, np.degrees(np.abs(offsets[i, 3:]).max()))
+            flags.append(Flag(int(i), contacts.labels[i], "feet off the floor (mm or deg)", float(size), 0))
     for flag in flags:
         LOG.warning("row left out: %s: %s", flag.label, flag.reason)
     return sorted(flags, key=lambda f: f.row)

@@ -113,9 +113,7 @@ def levenberg_marquardt(
         gain = cost - cost_new
         cost = cost_new
         damping = max(damping / 10.0, 1e-12)
-        if np.linalg.norm(step) <= step_tolerance * (np.linalg.norm(x) + step_tolerance) or gain <= 1e-7 * (
-            1.0 + cost
-        ):
+        if np.linalg.norm(step) <= step_tolerance * (np.linalg.norm(x) + step_tolerance) or gain <= 1e-7 * (1.0 + cost):
             break
     return x, iterations
 

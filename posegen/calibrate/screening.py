@@ -1,9 +1,9 @@
 """Screening the training rows: feet off the floor, and contacts the model cannot explain.
 
 * **Feet.** Every posture stands on both soles. A row whose second sole, under the
-  URDF, is further than the config's tolerance from the session's typical pose (height,
-  roll, pitch from zero; x, y, yaw from the session median) did not stand: it is left
-  out before anything is fitted.
+  URDF, is further from the session's median pose than both the config's tolerance and
+  six robust standard deviations of the rows did not stand: it is left out before
+  anything is fitted.
 * **Bad rows.** A robust fit (a Cauchy loss on each posture's normalised residual,
   by iteratively reweighted least squares) cannot be pulled far by one bad row, so that
   row keeps a large residual. Each row's residual is studentised (divided by the noise
@@ -45,7 +45,7 @@ def chi_threshold(n: int, false_alarm: float, dof: int = 3) -> float:
 
 
 def feet_offsets(model: CalibrationModel, observations: Observations) -> FloatArray:
-    """Second sole's offset from where it should be, under the URDF: (n, 2) mm and deg (largest component)."""
+    """Second sole's pose under the URDF less its session's median: (n, 6) m, m, m, rad, rad, rad."""
     assert model.floor is not None
     contacts = observations.contacts
     pose = model.floor.measure(model.contact.nominal(), contacts.joints)  # (n, 6)
@@ -53,10 +53,21 @@ def feet_offsets(model: CalibrationModel, observations: Observations) -> FloatAr
     offset = pose.copy()
     for session in set(contacts.sessions):
         rows = sessions == session
-        offset[np.ix_(rows, [0, 1, 5])] -= np.median(pose[rows][:, [0, 1, 5]], axis=0)
-    lengths = np.abs(offset[:, :3]).max(axis=1) * 1e3
-    angles = np.degrees(np.abs(offset[:, 3:]).max(axis=1))
-    return np.column_stack([lengths, angles])
+        offset[rows] -= np.median(pose[rows], axis=0)
+    return offset
+
+
+def feet_off_the_floor(offsets: FloatArray, tolerance_m: float, tolerance_rad: float) -> FloatArray:
+    """How far beyond its bound each row's sole offset is (> 1: off the floor). Shape (n,).
+
+    A component's bound is the larger of the tolerance and six robust standard deviations
+    (1.4826 x the median absolute offset) of that component over the rows: far beyond the
+    noise, and beyond what a standing robot does.
+    """
+    spread = 1.4826 * np.median(np.abs(offsets), axis=0)  # (6,)
+    tolerance = np.array([tolerance_m] * 3 + [tolerance_rad] * 3)
+    bound = np.maximum(tolerance, 6.0 * spread)
+    return np.max(np.abs(offsets) / bound, axis=1)
 
 
 def robust_residuals(
