@@ -38,8 +38,7 @@ from posegen.model import (
     structural_base,
 )
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Scene
-from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig
+from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
 FLOOR_NOISE = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))

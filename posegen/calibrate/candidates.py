@@ -13,8 +13,7 @@ import numpy as np
 
 from posegen.calibrate.estimation import Spec
 from posegen.model import CalibrationModel, Kind
-from posegen.robot import FloatArray
-from posegen.robot.calibration_config import CandidateConfig, PriorConfig
+from posegen.robot import CandidateConfig, FloatArray, PriorConfig
 
 ROBOT_KINDS = (Kind.JOINT_OFFSET, Kind.AXIS_TILT, Kind.LINK_TRANSLATION, Kind.FRAME_ROTATION)
 

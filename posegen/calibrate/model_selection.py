@@ -51,8 +51,7 @@ from posegen.calibrate.folds import Fold
 from posegen.errors import InfeasibleError
 from posegen.model import DEFAULT_NOISE, CalibrationModel, Kind, Observations
 from posegen.progress import ProgressCallback, Steps, ignore_progress
-from posegen.robot import FloatArray
-from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig
+from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray
 
 LOG = logging.getLogger(__name__)
 RULE = (

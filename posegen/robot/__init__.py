@@ -7,6 +7,7 @@ postures, and the files that carry postures and trajectories between stages (poo
 selection, route).
 """
 
+from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
 from posegen.robot.config import (
     ChainConfig,
@@ -88,6 +89,8 @@ __all__ = [
     "TIME_DTYPE",
     "VELOCITY_STEP",
     "Assessment",
+    "CalibrationConfig",
+    "CandidateConfig",
     "ChainConfig",
     "CollisionChecker",
     "Config",
@@ -97,6 +100,7 @@ __all__ = [
     "MarginConfig",
     "Pool",
     "Posture",
+    "PriorConfig",
     "Projection",
     "Projector",
     "Proximity",

@@ -4,8 +4,7 @@ import dataclasses
 
 import pytest
 
-from posegen.robot import Scene
-from posegen.robot.calibration_config import CandidateConfig
+from posegen.robot import CandidateConfig, Scene
 
 HIP_PITCH = {"hip_pitch": ("leg_left_3_joint", "leg_right_3_joint")}
 LEAN_CANDIDATES = (

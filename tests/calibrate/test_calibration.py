@@ -24,7 +24,7 @@ from posegen.calibrate.estimation import held_at_urdf
 from posegen.calibrate.simulation import settle_true
 from posegen.errors import InputError
 from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, Kind, Part
-from posegen.robot.calibration_config import CandidateConfig, PriorConfig
+from posegen.robot import CandidateConfig, PriorConfig
 from tests.calibrate.conftest import HIP_PITCH
 from tests.conftest import REAL_DATA
 

@@ -7,18 +7,22 @@ import pinocchio as pin
 import pytest
 
 from posegen.calibrate import Perturbation, Settings, calibrate, simulate, write_calibration
-from posegen.model import ContactModel, Contacts, Group
+from posegen.model import CalibrationModel, Contacts, Kind
 from posegen.robot import Scene, load_config
 
 
 @pytest.fixture(scope="module")
-def calibrated(scene, example_pool, tmp_path_factory):
-    rows = list(range(90))
+def calibrated(lean_scene, example_pool, tmp_path_factory):
+    rows = list(range(60))
     plan = Contacts(
-        example_pool.joints()[rows], tuple(example_pool.postures[i].chain for i in rows), ("sim",) * 90, ("",) * 90
+        example_pool.joints()[rows],
+        tuple(example_pool.postures[i].chain for i in rows),
+        ("sim",) * 60,
+        tuple(f"sim.yaml:{i}:c{i}" for i in rows),
     )
-    recorded, _, _ = simulate(scene, plan, Perturbation(encoder_noise_rad=np.deg2rad(0.005)), seed=9)
-    calibration = calibrate(scene, recorded, ["sim"], Settings(kappa=5.0))
+    perturbation = Perturbation(encoder_noise_rad=np.deg2rad(0.005), compliance_rad_per_nm=3e-4)
+    recorded, _, _ = simulate(lean_scene, plan, perturbation, seed=9)
+    calibration = calibrate(lean_scene, recorded, ["sim"], Settings(prior_scale=3.0, fold_seeds=1))
     out = tmp_path_factory.mktemp("cal")
     write_calibration(calibration, None, out, seed=9)
     return calibration, recorded, out
@@ -35,18 +39,25 @@ def test_same_links_and_joints(scene, calibrated):
 
 
 def test_calibrated_urdf_reproduces_the_calibrated_residuals(calibrated):
+    """The URDF's own values, zero contact offsets, the fitted planes and compliance: the same residuals.
+
+    The gravity torques are the calibration's (the nominal URDF's inertias): compliance is not a URDF quantity.
+    """
     calibration, recorded, out = calibrated
     scene2 = Scene(load_config(out / "calibrated.yaml"))
-    model2 = ContactModel(scene2, sorted(calibration.model.chains), ["sim"])
-    theta = model2.nominal()  # the calibrated URDF's own values, zero contact offsets
-    for i in model2.columns(Group.PLANE):
-        theta[i] = calibration.after.theta[calibration.model.index[model2.parameters[i].name]]
-    expected = calibration.model.residuals(calibration.after.theta, recorded)
-    assert model2.residuals(theta, recorded) == pytest.approx(expected, abs=1e-9)
+    model = calibration.model
+    model2 = CalibrationModel(scene2, sorted(model.contact.chains), ["sim"], scene2.calibration.compliance)
+    x2 = model2.nominal()
+    for kinds in ([Kind.PLANE], [Kind.COMPLIANCE]):
+        x2[model2.columns(kinds)] = calibration.after.x[model.columns(kinds)]
+    observations = model.observations(recorded)
+    expected = model.evaluate(calibration.after.x, observations, floor=False).contact
+    assert model2.evaluate(x2, observations, floor=False).contact == pytest.approx(expected, abs=1e-9)
 
 
 def test_report_and_plots_are_written(calibrated):
     _, _, out = calibrated
-    for name in ("calibration.yaml", "calibrated.urdf", "calibrated.yaml", "parameters.png", "residuals.png"):
+    names = ("calibration.yaml", "calibrated.urdf", "calibrated.yaml", "parameters.png", "residuals.png")
+    for name in (*names, "cross_validation.png"):
         assert (out / name).stat().st_size > 0
     assert (out / "parameters.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -109,10 +109,12 @@ def test_simulate_then_calibrate(tmp_path, capsys):
     code, stdout, _ = run(["simulate", str(EXAMPLE_POOL), "--seed", "2", "-o", str(meas)], capsys)
     assert code == 0 and meas.exists() and (tmp_path / "meas.truth.yaml").exists()
     out = tmp_path / "cal"
-    code, stdout, _ = run(["calibrate", f"{meas}@day1", "--prior-scale", "5", "-q", "-o", str(out)], capsys)
+    argv = ["calibrate", f"{meas}@day1", "--prior-scale", "5", "--candidates", "offsets", "offsets_legs"]
+    code, stdout, _ = run([*argv, "--fold-seeds", "1", "-q", "-o", str(out)], capsys)
     assert code == 0, stdout
     assert "training" in stdout and (out / "calibrated.urdf").exists()
     assert (out / "report.html").exists() and "report.html" in stdout
+    assert "predicted held-out error, left" in stdout and "model offsets" in stdout
 
 
 def test_calibrate_real_csv(tmp_path, capsys):
@@ -126,6 +128,12 @@ def test_calibrate_real_csv(tmp_path, capsys):
             str(REAL_DATA / "right_train.csv"),
             "--validate",
             str(REAL_DATA / "left_validation.csv"),
+            "--candidates",
+            "offsets_hip_pitch",
+            "--prior-scale",
+            "10",
+            "--fold-seeds",
+            "1",
             "-q",
             "-o",
             str(out),
@@ -134,6 +142,16 @@ def test_calibrate_real_csv(tmp_path, capsys):
     )
     assert code == 0
     assert "held_out_training_plane" in stdout and "held_out_refitted_plane" in stdout
+    assert "right_train.csv:4 (table/contact_19): residual" in stdout  # a bad row, with its file and line
+
+
+def test_calibrate_unknown_candidate(tmp_path, capsys):
+    from tests.conftest import REAL_DATA
+
+    out = tmp_path / "out"
+    argv = ["calibrate", str(REAL_DATA / "left_train.csv"), "--candidates", "nonsense", "-q", "-o", str(out)]
+    err = assert_fails_cleanly(argv, out, capsys)
+    assert "nonsense" in err and "offsets_hip_pitch" in err
 
 
 def test_calibrate_bad_file(tmp_path, capsys):
