@@ -10,16 +10,8 @@ perturbed robot, the calibrated URDF, the report and the folder read back
 
 from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
-from posegen.calibrate.candidates import candidate_spec, kind_sigmas, prior_sigmas
-from posegen.calibrate.estimation import Estimate, Noise, Spec, estimate, fit, levenberg_marquardt, start_point
+from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, levenberg_marquardt, start_point
 from posegen.calibrate.folds import Fold, repeated_folds, spot_of
-from posegen.calibrate.measurements import (
-    Recording,
-    measurements_to_dict,
-    read_csv,
-    read_measurements,
-    write_measurements,
-)
 from posegen.calibrate.model_selection import RULE, CvResult, ModelSelection, select_model
 from posegen.calibrate.record import (
     CALIBRATION_FILE,
@@ -61,31 +53,23 @@ __all__ = [
     "Noise",
     "Perturbation",
     "Posterior",
-    "Recording",
     "Settings",
     "Simulated",
     "SimulatedSession",
-    "Spec",
     "calibrate",
     "calibrate_files",
     "calibrated_urdf",
-    "candidate_spec",
     "contact_residuals",
     "estimate",
     "fit",
     "format_table",
     "held_out_residuals",
     "held_out_x",
-    "kind_sigmas",
     "levenberg_marquardt",
     "measure_bag",
-    "measurements_to_dict",
     "posterior_of",
-    "prior_sigmas",
     "read_calibration",
     "read_contacts",
-    "read_csv",
-    "read_measurements",
     "repeated_folds",
     "residual_stats",
     "select_model",
@@ -96,6 +80,5 @@ __all__ = [
     "start_point",
     "true_parameters",
     "write_calibration",
-    "write_measurements",
     "write_record",
 ]

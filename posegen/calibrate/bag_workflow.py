@@ -25,12 +25,11 @@ from posegen.calibrate.contact_windows import (
     match_windows,
     wrist_force,
 )
-from posegen.calibrate.measurements import LIMIT_TOLERANCE_RAD, measurements_to_dict
 from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
 from posegen.calibrate.workflow import perturbation_of, write_truth
 from posegen.errors import InputError, unknown_name
 from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
-from posegen.model import ContactModel, Contacts
+from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measurements_to_dict
 from posegen.robot import FloatArray, Scene, load_config, read_route, scene_for
 
 

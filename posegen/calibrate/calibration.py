@@ -21,8 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from posegen.calibrate.candidates import candidate_spec, spec_for_rows
-from posegen.calibrate.estimation import Estimate, Noise, Spec, estimate, fit, held_at_urdf, plane_spec, start_point
+from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec, start_point
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, select_model
 from posegen.calibrate.screening import Flag, chi_threshold, feet_off_the_floor, feet_offsets, robust_residuals
@@ -35,6 +34,9 @@ from posegen.model import (
     Contacts,
     Kind,
     Observations,
+    Spec,
+    candidate_spec,
+    spec_for_rows,
     structural_base,
 )
 from posegen.progress import ProgressCallback, ignore_progress

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, initial_planes
+from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, Spec, initial_planes
 from posegen.robot import FloatArray
 
 FLOOR_NOISE_FLOOR = (1e-5, 1e-5, 1e-5, float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)))
@@ -43,15 +43,6 @@ class Noise:
         c = np.maximum(contact, NOISE_FLOOR)
         f = np.maximum(floor, FLOOR_NOISE_FLOOR)
         return cls((float(c[0]), float(c[1]), float(c[2])), tuple(float(v) for v in f))  # type: ignore[arg-type]
-
-
-@dataclass(frozen=True)
-class Spec:
-    """What a fit estimates: free directions, their prior, and whether the floor equations count."""
-
-    free: tuple[int, ...]  # indices of the model's directions that are estimated
-    prior_sd: FloatArray  # (nx,) prior sigma of each direction; inf: no prior
-    floor: bool
 
 
 @dataclass(frozen=True)

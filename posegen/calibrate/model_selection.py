@@ -34,11 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posegen.calibrate.candidates import candidate_spec, spec_for_rows
 from posegen.calibrate.estimation import (
     Estimate,
     Noise,
-    Spec,
     estimate,
     fit,
     frozen_jacobian,
@@ -49,7 +47,7 @@ from posegen.calibrate.estimation import (
 )
 from posegen.calibrate.folds import Fold
 from posegen.errors import InfeasibleError
-from posegen.model import DEFAULT_NOISE, CalibrationModel, Kind, Observations
+from posegen.model import DEFAULT_NOISE, CalibrationModel, Kind, Observations, Spec, candidate_spec, spec_for_rows
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray
 

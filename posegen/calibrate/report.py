@@ -19,12 +19,11 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
-from posegen.calibrate.candidates import kind_sigmas
 from posegen.calibrate.model_selection import RULE, CvResult
 from posegen.calibrate.plots import DISPLAY, plot_cross_validation, plot_parameters, plot_residuals
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
-from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter
+from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas
 from posegen.robot import FloatArray
 
 COMPONENTS = ("z_mm", "roll_deg", "pitch_deg")

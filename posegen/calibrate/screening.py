@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats
 
-from posegen.calibrate.estimation import Noise, Spec, fit, frozen_jacobian
-from posegen.model import CalibrationModel, Observations
+from posegen.calibrate.estimation import Noise, fit, frozen_jacobian
+from posegen.model import CalibrationModel, Observations, Spec
 from posegen.robot import FloatArray
 
 CAUCHY_SCALE = 2.385  # Cauchy constant of 95 % efficiency, per degree of freedom of a row

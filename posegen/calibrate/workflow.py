@@ -10,11 +10,10 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Settings, calibrate
-from posegen.calibrate.measurements import read_measurements, write_measurements
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.io import write_yaml
-from posegen.model import CalibrationModel, Contacts
+from posegen.model import CalibrationModel, Contacts, read_measurements, write_measurements
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene, load_config, load_plan
 
@@ -93,7 +92,8 @@ def perturbation_of(
     error_mm: float, error_deg: float, noise_deg: float, compliance_rad_per_knm: float = 0.0
 ) -> Perturbation:
     """The perturbation of the command line's units: placement errors in mm and deg, encoder noise in deg,
-    compliance in rad/kN m."""
+    compliance in rad/kN m.
+    """
     return Perturbation(
         length_m=error_mm * 1e-3,
         angle_rad=float(np.deg2rad(error_deg)),

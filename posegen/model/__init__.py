@@ -15,8 +15,26 @@ from posegen.model.floor_model import FLOOR_FIELDS, SESSION_FIELDS, FloorModel
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
 from posegen.model.kinds import Direction, Kind, Part, kind_basis
 from posegen.model.kinematics import ChainModel, offset_matrix, placement_derivatives, placement_matrix, rpy_matrix
+from posegen.model.measurements import (
+    LIMIT_TOLERANCE_RAD,
+    MEASUREMENT_FORMAT,
+    Recording,
+    measurements_to_dict,
+    read_csv,
+    read_measurements,
+    write_measurements,
+)
 from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter, Unit
 from posegen.model.planes import initial_planes, level_planes
+from posegen.model.prior import (
+    ROBOT_KINDS,
+    Spec,
+    candidate_spec,
+    free_directions,
+    kind_sigmas,
+    prior_sigmas,
+    spec_for_rows,
+)
 from posegen.model.settle import settle, settle_contacts
 from posegen.model.structural import STRUCTURAL_POSTURES, level_postures, structural_base
 from posegen.model.weights import (
@@ -32,11 +50,14 @@ from posegen.model.weights import (
 __all__ = [
     "DEFAULT_NOISE",
     "FLOOR_FIELDS",
+    "LIMIT_TOLERANCE_RAD",
+    "MEASUREMENT_FORMAT",
     "NOISE_FLOOR",
     "OFFSET_FIELDS",
     "PLACEMENT_FIELDS",
     "RANK_TOLERANCE",
     "RIDGE",
+    "ROBOT_KINDS",
     "SESSION_FIELDS",
     "SINGULAR",
     "STRUCTURAL_POSTURES",
@@ -56,23 +77,34 @@ __all__ = [
     "Observations",
     "Parameter",
     "Part",
+    "Recording",
+    "Spec",
     "Unit",
     "Weights",
     "base_parameters",
     "body_parts",
     "build_design",
+    "candidate_spec",
+    "free_directions",
     "initial_planes",
     "kind_basis",
+    "kind_sigmas",
     "level_planes",
     "level_postures",
+    "measurements_to_dict",
     "observability_o1",
     "offset_matrix",
     "placement_derivatives",
     "placement_matrix",
     "prior_scale",
+    "prior_sigmas",
+    "read_csv",
+    "read_measurements",
     "rpy_matrix",
     "settle",
     "settle_contacts",
+    "spec_for_rows",
     "structural_base",
     "weights_for",
+    "write_measurements",
 ]

@@ -11,10 +11,8 @@ from posegen.calibrate import (
     Perturbation,
     Settings,
     calibrate,
-    candidate_spec,
     estimate,
     held_out_residuals,
-    read_measurements,
     simulate,
     start_point,
     true_parameters,
@@ -23,7 +21,7 @@ from posegen.calibrate.calibration import FLOOR_NOISE, check_enough, unusable_ro
 from posegen.calibrate.estimation import held_at_urdf
 from posegen.calibrate.simulation import settle_true
 from posegen.errors import InputError
-from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, Kind, Part
+from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, Kind, Part, candidate_spec, read_measurements
 from posegen.robot import CandidateConfig, PriorConfig
 from tests.calibrate.conftest import HIP_PITCH
 from tests.conftest import REAL_DATA

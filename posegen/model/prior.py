@@ -1,4 +1,4 @@
-"""Candidate models as estimation specs: which directions are free, and their prior.
+"""The prior of a candidate model: which directions are free, and their sigmas.
 
 A candidate (``calibration.candidates`` of the config) names the parameter kinds it
 fits per body part, and whether it models joint compliance and uses the floor
@@ -9,13 +9,24 @@ free, planes and floor constants without a prior.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from posegen.calibrate.estimation import Spec
-from posegen.model import CalibrationModel, Kind
+from posegen.model.calibration_model import CalibrationModel
+from posegen.model.kinds import Kind
 from posegen.robot import CandidateConfig, FloatArray, PriorConfig
 
 ROBOT_KINDS = (Kind.JOINT_OFFSET, Kind.AXIS_TILT, Kind.LINK_TRANSLATION, Kind.FRAME_ROTATION)
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What a fit estimates: free directions, their prior, and whether the floor equations count."""
+
+    free: tuple[int, ...]  # indices of the model's directions that are estimated
+    prior_sd: FloatArray  # (nx,) prior sigma of each direction; inf: no prior
+    floor: bool
 
 
 def kind_sigmas(prior: PriorConfig) -> dict[Kind, float]:

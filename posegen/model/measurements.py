@@ -33,7 +33,7 @@ import numpy as np
 
 from posegen.errors import InputError
 from posegen.io import read_yaml, write_yaml
-from posegen.model import Contacts
+from posegen.model.contact_model import Contacts
 from posegen.robot import Scene
 
 LOG = logging.getLogger(__name__)

@@ -3,8 +3,8 @@ import re
 import numpy as np
 import pytest
 
-from posegen.calibrate import read_measurements, write_measurements
 from posegen.errors import InputError
+from posegen.model import read_measurements, write_measurements
 from tests.conftest import REAL_DATA
 
 
