@@ -1,3 +1,4 @@
+
 """Stage 4: identification from recorded contacts, and its rehearsal on a simulated robot.
 
 Measurements (posegen YAML and recorded CSV), maximum a posteriori estimation under a
@@ -10,7 +11,7 @@ perturbed robot, the calibrated URDF, the report and the folder read back
 
 from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
-from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, levenberg_marquardt, start_point
+from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, levenberg_marquardt
 from posegen.calibrate.folds import Fold, repeated_folds, spot_of
 from posegen.calibrate.model_selection import RULE, CvResult, ModelSelection, select_model
 from posegen.calibrate.record import (
@@ -77,7 +78,6 @@ __all__ = [
     "simulate_plan_file",
     "simulate_route_bag",
     "spot_of",
-    "start_point",
     "true_parameters",
     "write_calibration",
     "write_record",

@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec, start_point
+from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, select_model
 from posegen.calibrate.screening import Flag, chi_threshold, feet_off_the_floor, feet_offsets, robust_residuals
@@ -37,6 +37,7 @@ from posegen.model import (
     Spec,
     candidate_spec,
     spec_for_rows,
+    start_point,
     structural_base,
 )
 from posegen.progress import ProgressCallback, ignore_progress

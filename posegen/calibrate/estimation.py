@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, Spec, initial_planes
+from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, Spec
 from posegen.robot import FloatArray
 
 FLOOR_NOISE_FLOOR = (1e-5, 1e-5, 1e-5, float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)))
@@ -107,19 +107,6 @@ def levenberg_marquardt(
         if np.linalg.norm(step) <= step_tolerance * (np.linalg.norm(x) + step_tolerance) or gain <= 1e-7 * (1.0 + cost):
             break
     return x, iterations
-
-
-def start_point(model: CalibrationModel, observations: Observations) -> FloatArray:
-    """The URDF with each session's plane level at its contacts' mean height, floor constants as measured."""
-    contacts = observations.contacts
-    x = model.nominal()
-    x[: model.contact.size] = initial_planes(model.contact, contacts, model.theta(x))
-    if model.floor is not None:
-        pose = model.floor.measure(model.theta(x), contacts.joints)
-        sessions = np.array(contacts.sessions)
-        for session in set(contacts.sessions):
-            x[model.floor_columns(session)] = pose[sessions == session][:, [0, 1, 5]].mean(axis=0)
-    return x
 
 
 def _problem(

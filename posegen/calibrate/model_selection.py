@@ -43,11 +43,19 @@ from posegen.calibrate.estimation import (
     held_at_urdf,
     plane_spec,
     refit_frozen,
-    start_point,
 )
 from posegen.calibrate.folds import Fold
 from posegen.errors import InfeasibleError
-from posegen.model import DEFAULT_NOISE, CalibrationModel, Kind, Observations, Spec, candidate_spec, spec_for_rows
+from posegen.model import (
+    DEFAULT_NOISE,
+    CalibrationModel,
+    Kind,
+    Observations,
+    Spec,
+    candidate_spec,
+    spec_for_rows,
+    start_point,
+)
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray
 

@@ -6,6 +6,7 @@ import argparse
 
 from posegen.cli.options import fraction, positive
 from posegen.cli.progress import ProgressBar
+from posegen.errors import InputError
 
 NAME = "select"
 HELP = "choose optimal postures from a pool (IROC, DETMAX, exact k)"
@@ -25,6 +26,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=[0.9, 0.95],
         help="report the smallest k reaching these fractions of O1* (default 0.9 0.95)",
     )
+    parser.add_argument(
+        "--given",
+        nargs="+",
+        default=[],
+        help="measurement files already recorded (FILE[@SESSION]): choose the next --k (default 10) postures that "
+        "shrink the predicted error of the weakest chain most",
+    )
+    parser.add_argument(
+        "--calibration", default=None, help="with --given: their calibration.yaml (its model and weakest chain)"
+    )
     parser.add_argument("--config", default=None, help="scene config (default: the one saved in the pool)")
     parser.add_argument(
         "-o", "--output", default="plans/selected.yaml", help="selection file (default plans/selected.yaml)"
@@ -33,8 +44,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Select, write the selection and print its figures."""
-    from posegen.select import SelectionSettings, select_pool_file
+    from posegen.select import SelectionSettings, follow_up_pool_file, select_pool_file
 
+    if args.given:
+        data = follow_up_pool_file(args.pool, args.output, args.given, args.calibration, args.k or 10, args.config)
+        fig = data["figures"]
+        print(
+            f"select: {fig['selected']} of {fig['pool_postures']} postures to follow up {fig['given_contacts']} "
+            f"measured contacts, for chain '{fig['weakest_chain']}' ({fig['weakest_from']}) -> {args.output}"
+        )
+        for chain, sigma in fig["predicted_height_sigma_mm"].items():
+            print(f"  predicted height sigma (model), {chain}: {sigma['before']:.2f} -> {sigma['after']:.2f} mm")
+        return 0
+    if args.calibration:
+        raise InputError("--calibration goes with --given (the measurements it calibrated)")
     settings = SelectionSettings(k=args.k, runs=args.runs, seed=args.seed, fractions=tuple(args.fraction))
     with ProgressBar(args.quiet) as bar:
         data = select_pool_file(args.pool, args.output, settings, args.config, bar)

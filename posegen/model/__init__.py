@@ -8,7 +8,7 @@ experiment design (one information matrix per candidate posture) that selection 
 and the route's repair consults.
 """
 
-from posegen.model.calibration_model import CalibrationModel, Evaluation, Observations, body_parts
+from posegen.model.calibration_model import CalibrationModel, Evaluation, Observations, body_parts, start_point
 from posegen.model.contact_model import ContactModel, Contacts
 from posegen.model.design import RIDGE, SINGULAR, Design, build_design
 from posegen.model.floor_model import FLOOR_FIELDS, SESSION_FIELDS, FloorModel
@@ -104,6 +104,7 @@ __all__ = [
     "settle",
     "settle_contacts",
     "spec_for_rows",
+    "start_point",
     "structural_base",
     "weights_for",
     "write_measurements",

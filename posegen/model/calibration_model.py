@@ -32,6 +32,7 @@ from posegen.model.contact_model import ContactModel, Contacts
 from posegen.model.floor_model import SESSION_FIELDS, FloorModel
 from posegen.model.kinds import Direction, Kind, Part, kind_basis
 from posegen.model.kinematics import ChainModel
+from posegen.model.planes import initial_planes
 from posegen.robot import FloatArray, Indices, Scene, gravity_torques
 
 
@@ -191,3 +192,16 @@ class CalibrationModel:
         for k, indices in enumerate(self.compliance.values()):
             load = observations.torques[:, indices].mean(axis=1)  # (n,) N m
             jac[:, :, self._compliance_start + k] = -d_joints[:, :, indices].sum(axis=2) * load[:, None]
+
+
+def start_point(model: CalibrationModel, observations: Observations) -> FloatArray:
+    """The URDF with each session's plane level at its contacts' mean height, floor constants as measured."""
+    contacts = observations.contacts
+    x = model.nominal()
+    x[: model.contact.size] = initial_planes(model.contact, contacts, model.theta(x))
+    if model.floor is not None:
+        pose = model.floor.measure(model.theta(x), contacts.joints)
+        sessions = np.array(contacts.sessions)
+        for session in set(contacts.sessions):
+            x[model.floor_columns(session)] = pose[sessions == session][:, [0, 1, 5]].mean(axis=0)
+    return x

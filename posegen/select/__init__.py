@@ -7,14 +7,16 @@ file with its plots.
 """
 
 from posegen.model import Design, build_design
+from posegen.select.followup import FollowUp, follow_up
 from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
 from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import Iroc, detmax_runs, iroc, select_k, weight_of
 from posegen.select.subset_selection import Subset, detmax, exchange, greedy, subset_of
-from posegen.select.workflow import SelectionSettings, select_pool_file
+from posegen.select.workflow import SelectionSettings, follow_up_pool_file, select_pool_file
 
 __all__ = [
     "Design",
+    "FollowUp",
     "Iroc",
     "OptimalWeights",
     "SelectionSettings",
@@ -24,6 +26,8 @@ __all__ = [
     "detmax",
     "detmax_runs",
     "exchange",
+    "follow_up",
+    "follow_up_pool_file",
     "greedy",
     "iroc",
     "plot_detmax",

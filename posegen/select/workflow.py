@@ -2,15 +2,27 @@
 
 from __future__ import annotations
 
+import hashlib
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from posegen.io import write_yaml
-from posegen.model import build_design
+import numpy as np
+
+from posegen.errors import InputError
+from posegen.io import read_yaml, write_yaml
+from posegen.model import DEFAULT_NOISE, Contacts, build_design, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
-from posegen.robot import load_pool, scene_for
+from posegen.robot import (
+    POOL_VERSION,
+    SELECTION_FORMAT,
+    CandidateConfig,
+    load_pool,
+    scene_for,
+)
+from posegen.select.followup import follow_up
 from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import detmax_runs, iroc, select_k
 from posegen.select.subset_selection import Subset, subset_of
@@ -83,4 +95,94 @@ def select_pool_file(
     if detmax:
         top_k = subset_of(design, result.ranking[:size]) if k else result.selected
         plot_detmax(top_k, chosen, tuple(detmax), path.with_name(path.stem + "_detmax.png"))
+    return data
+
+
+def follow_up_pool_file(
+    pool_path: str,
+    output: str,
+    given: Sequence[str],
+    calibration_path: str | None = None,
+    k: int = 10,
+    config_path: str | None = None,
+) -> dict[str, Any]:
+    """Choose the next ``k`` postures of a pool for the weakest chain of a calibration; write a selection file.
+
+    Args:
+        pool_path: Pool file.
+        output: Selection file (route and simulate take it like any other).
+        given: Measurement files already recorded, ``FILE[@SESSION]``.
+        calibration_path: Their ``calibration.yaml``: its model, prior scale, noise and the
+            chain its cross-validation predicts worst. None: the config's first candidate at
+            the middle prior scale, noise (1 mm, 0.1 deg), and the chain this model predicts worst.
+        k: Postures to choose.
+        config_path: Scene config; None: the one saved in the pool.
+
+    Raises:
+        PosegenError: Bad pool, measurements or calibration file; k out of range.
+
+    """
+    pool = load_pool(pool_path)
+    scene = scene_for(pool.provenance, config_path)
+    contacts: Contacts | None = None
+    for item in given:
+        path, _, session = item.partition("@")
+        part = read_measurements(path, scene, session or None).contacts
+        contacts = part if contacts is None else contacts.concat(part)
+    if contacts is None:
+        raise InputError("--given: at least one measurement file")
+    scales = scene.calibration.prior_scales
+    candidate, scale = scene.calibration.candidates[0], scales[len(scales) // 2]
+    noise: tuple[float, ...] = DEFAULT_NOISE
+    weakest = None
+    source = "posterior variance of the config's first candidate"
+    if calibration_path is not None:
+        report = read_yaml(calibration_path, "posegen-calibration")
+        try:
+            model = report["model"]
+            candidate = CandidateConfig(
+                model["candidate"], tuple(model["fit"]), bool(model["floor_equations"]), tuple(model["compliance"])
+            )
+            scale = float(model["prior_scale"])
+            shown = report["noise"]["contact"]
+            noise = (shown["z_mm"] * 1e-3, np.deg2rad(shown["roll_deg"]), np.deg2rad(shown["pitch_deg"]))
+            predicted = report["predicted_error"]
+            weakest = max(sorted(predicted), key=lambda c: predicted[c]["mean_abs"]["z_mm"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InputError(f"{calibration_path}: not a posegen calibration ({type(exc).__name__}: {exc})") from exc
+        source = f"cross-validation of {calibration_path}"
+    result = follow_up(
+        scene, pool.joints(), [p.chain for p in pool.postures], contacts, candidate, scale, noise, k, weakest
+    )
+    provenance = dict(pool.provenance)
+    provenance["pool"] = pool_path
+    provenance["pool_sha256"] = hashlib.sha256(Path(pool_path).read_bytes()).hexdigest()
+    provenance["given"] = list(given)
+    provenance["calibration"] = calibration_path
+    pool_data = pool.to_dict()
+    postures = []
+    for rank, (row, gain) in enumerate(zip(result.rows, result.gains, strict=True), start=1):
+        entry: dict[str, Any] = {"pool_id": int(row), "rank": rank, "weight": round(gain, 6)}
+        entry.update(pool_data["postures"][row])
+        postures.append(entry)
+    data = {
+        "format": SELECTION_FORMAT,
+        "format_version": POOL_VERSION,
+        "provenance": provenance,
+        "method": "followup",
+        "joint_names": list(pool.joint_names),
+        "figures": {
+            "selected": len(result.rows),
+            "pool_postures": len(pool.postures),
+            "given_contacts": len(contacts),
+            "model": {"candidate": candidate.name, "prior_scale": scale},
+            "weakest_chain": result.chain,
+            "weakest_from": source,
+            "predicted_height_sigma_mm": {
+                c: {"before": round(b, 4), "after": round(a, 4)} for c, (b, a) in result.height_std_mm.items()
+            },
+        },
+        "postures": postures,
+    }
+    write_yaml(Path(output), data)
     return data

@@ -14,14 +14,22 @@ from posegen.calibrate import (
     estimate,
     held_out_residuals,
     simulate,
-    start_point,
     true_parameters,
 )
 from posegen.calibrate.calibration import FLOOR_NOISE, check_enough, unusable_rows
 from posegen.calibrate.estimation import held_at_urdf
 from posegen.calibrate.simulation import settle_true
 from posegen.errors import InputError
-from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, Kind, Part, candidate_spec, read_measurements
+from posegen.model import (
+    DEFAULT_NOISE,
+    CalibrationModel,
+    Contacts,
+    Kind,
+    Part,
+    candidate_spec,
+    read_measurements,
+    start_point,
+)
 from posegen.robot import CandidateConfig, PriorConfig
 from tests.calibrate.conftest import HIP_PITCH
 from tests.conftest import REAL_DATA

@@ -1,0 +1,143 @@
+"""The next postures to record: those that shrink the predicted error of the weakest chain most.
+
+After a calibration, a chain whose predicted held-out error is too large needs more
+contacts. The design starts from the information already measured: the given
+contacts' whitened regressor in the free directions of the calibration's model, plus
+the prior of those directions (a Bayesian design, so no base-parameter reduction is
+needed). A pool posture adds its own 3 rows (its chain's contact, in the table session
+its chain was measured in; with the floor equations, 6 more).
+
+The criterion is the one the user cares about: the mean posterior variance of the
+weakest chain's contact measurement (height, roll, pitch, in design units of 1 mm and
+0.1 deg) over that chain's pool postures. Postures are added greedily, each the one
+that lowers it most, with rank-3 (Woodbury) updates of the posterior covariance.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from posegen.errors import InputError
+from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, candidate_spec, spec_for_rows, start_point
+from posegen.robot import CandidateConfig, FloatArray, Scene
+
+FLOOR_SIGMA = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))
+
+
+@dataclass(frozen=True)
+class FollowUp:
+    """Postures chosen to follow up a calibration."""
+
+    rows: tuple[int, ...]  # pool rows, in the order chosen
+    chain: str  # the chain whose predicted error is shrunk
+    height_std_mm: dict[str, tuple[float, float]]  # chain -> predicted height sigma, before and after (model)
+    gains: tuple[float, ...]  # decrease of the criterion brought by each posture, in order
+
+
+def _session_of(chain: str, given: Contacts) -> str:
+    """The table session of the given contacts with the most rows of ``chain`` (or of any chain)."""
+    mine = [s for c, s in zip(given.chains, given.sessions, strict=True) if c == chain] or list(given.sessions)
+    return max(sorted(set(mine)), key=mine.count)
+
+
+def follow_up(
+    scene: Scene,
+    joints: FloatArray,
+    chains: Sequence[str],
+    given: Contacts,
+    candidate: CandidateConfig,
+    prior_scale: float,
+    noise: Sequence[float],
+    k: int,
+    weakest: str | None = None,
+) -> FollowUp:
+    """Choose ``k`` pool postures for the weakest chain.
+
+    Args:
+        scene: Scene (its calibration section gives the priors and compliance groups).
+        joints: (n, nj) pool postures.
+        chains: Chain in contact at each pool posture.
+        given: Contacts already measured.
+        candidate: The calibration's model.
+        prior_scale: Its prior scale.
+        noise: Its contact noise (height m, roll rad, pitch rad).
+        k: Postures to choose.
+        weakest: The chain to improve (from cross-validation); None: the chain with the
+            largest predicted height variance under this model.
+
+    Raises:
+        InputError: No pool posture of the weakest chain, or k out of range.
+
+    """
+    all_chains = sorted(set(chains) | set(given.chains))
+    model = CalibrationModel(scene, all_chains, sorted(set(given.sessions)), scene.calibration.compliance)
+    spec = spec_for_rows(
+        model, candidate_spec(model, candidate, scene.calibration.prior, prior_scale), set(given.sessions)
+    )
+    free = list(spec.free)
+    basis = model.basis[:, free]
+    pool = Contacts(
+        np.asarray(joints, dtype=float),
+        tuple(chains),
+        tuple(_session_of(c, given) for c in chains),
+        ("",) * len(chains),
+    )
+    x = start_point(model, model.observations(given))
+    sigma = np.array(noise, dtype=float)
+
+    def rows(contacts: Contacts) -> tuple[FloatArray, FloatArray]:
+        """Whitened regressor per posture (n, 3 or 9, f), and the unwhitened contact rows (n, 3, f)."""
+        out = model.evaluate(x, model.observations(contacts), jacobian=True, floor=spec.floor)
+        contact = np.einsum("nmx,xf->nmf", out.contact_jacobian, basis)
+        whitened = [contact / sigma[None, :, None]]
+        if spec.floor:
+            whitened.append(np.einsum("nmx,xf->nmf", out.floor_jacobian, basis) / np.array(FLOOR_SIGMA)[None, :, None])
+        return np.concatenate(whitened, axis=1), contact
+
+    measured, _ = rows(given)
+    candidates, targets = rows(pool)
+    sd = spec.prior_sd[free]
+    precision = np.where(np.isfinite(sd), 1.0 / np.where(np.isfinite(sd), sd, 1.0) ** 2, 0.0)
+    flat = measured.reshape(-1, len(free))
+    information = flat.T @ flat + np.diag(precision) + 1e-12 * np.eye(len(free))
+    covariance = np.linalg.inv(information)
+    units = np.array(DEFAULT_NOISE)
+    chain_rows = {c: np.flatnonzero(np.array(chains) == c) for c in sorted(set(chains))}
+
+    def height_std_mm(cov: FloatArray) -> dict[str, float]:
+        return {
+            c: float(np.sqrt(np.mean(np.einsum("nf,fg,ng->n", targets[r, 0], cov, targets[r, 0]))) * 1e3)
+            for c, r in chain_rows.items()
+        }
+
+    before = height_std_mm(covariance)
+    chain = weakest or max(before, key=lambda c: before[c])
+    if chain not in chain_rows:
+        raise InputError(f"the pool has no posture of chain '{chain}'; its chains: {', '.join(chain_rows)}")
+    if not 1 <= k <= len(pool):
+        raise InputError(f"--k {k}: choose between 1 and {len(pool)} postures")
+    scaled = targets[chain_rows[chain]] / units[None, :, None]  # (m, 3, f)
+    target = np.einsum("nmf,nmg->fg", scaled, scaled) / len(scaled)  # mean over the chain's postures
+    chosen: list[int] = []
+    gains: list[float] = []
+    for _ in range(k):
+        spread = candidates @ covariance  # B_i = A_i S, (n, m, f)
+        inner = spread @ np.swapaxes(candidates, 1, 2)  # A_i S A_i^T, (n, m, m)
+        gain_matrix = (spread @ target) @ np.swapaxes(spread, 1, 2)  # B_i T B_i^T
+        damping = np.linalg.inv(np.eye(inner.shape[1])[None] + inner)  # (I + A_i S A_i^T)^-1
+        gain = np.einsum("nmk,nkm->n", damping, gain_matrix)
+        gain[chosen] = -np.inf
+        best = int(np.argmax(gain))
+        chosen.append(best)
+        gains.append(float(gain[best]))
+        covariance = covariance - spread[best].T @ damping[best] @ spread[best]
+    after = height_std_mm(covariance)
+    return FollowUp(
+        rows=tuple(chosen),
+        chain=chain,
+        height_std_mm={c: (before[c], after[c]) for c in before},
+        gains=tuple(gains),
+    )
