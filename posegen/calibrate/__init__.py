@@ -1,4 +1,3 @@
-
 """Stage 4: identification from recorded contacts, and its rehearsal on a simulated robot.
 
 Measurements (posegen YAML and recorded CSV), maximum a posteriori estimation under a

@@ -75,6 +75,7 @@ class Calibration:
     before: Estimate
     after: Estimate
     base: BaseParameters
+    base_with_floor: int | None  # base parameters of contacts and floor equations (None: one leg only)
 
 
 def _settings(scene: Scene, settings: Settings) -> tuple[CalibrationConfig, list[CandidateConfig]]:
@@ -210,6 +211,17 @@ def calibrate(
     base = structural_base(
         model.contact, observations.contacts, DEFAULT_NOISE, settings.structural_postures, settings.seed
     )
+    base_with_floor = None
+    if model.floor is not None:
+        with_floor = structural_base(
+            model.contact,
+            observations.contacts,
+            DEFAULT_NOISE,
+            settings.structural_postures,
+            settings.seed,
+            FLOOR_NOISE,
+        )
+        base_with_floor = with_floor.size
     return Calibration(
         model=model,
         config=config,
@@ -222,6 +234,7 @@ def calibrate(
         before=before,
         after=after,
         base=base,
+        base_with_floor=base_with_floor,
     )
 
 

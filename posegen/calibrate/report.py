@@ -217,8 +217,11 @@ def calibration_report(
         "left_out": left_out_rows(calibration),
         "rejected_rows": list(rejected_rows),
         "base_parameters": {
-            "total": calibration.base.size,
-            "note": "QR of the contact regressor at postures shaped like the training ones (identifiability only)",
+            "contacts": calibration.base.size,
+            "contacts_and_floor": calibration.base_with_floor,
+            "parameters": calibration.model.contact.size,
+            "note": "QR of the regressor at postures shaped like the training ones (identifiability only; the fit "
+            "regularises every parameter by its prior)",
         },
         "residuals": residual_tables(calibration, held_out),
         "compliance": {

@@ -13,6 +13,7 @@ import numpy as np
 
 from posegen.errors import InfeasibleError
 from posegen.model.contact_model import ContactModel, Contacts
+from posegen.model.floor_model import FloorModel
 from posegen.model.identifiability import BaseParameters, base_parameters
 from posegen.model.parameters import Group
 from posegen.model.planes import initial_planes, level_planes
@@ -28,6 +29,7 @@ def structural_base(
     noise: tuple[float, float, float] = DEFAULT_NOISE,
     postures: int = STRUCTURAL_POSTURES,
     seed: int = 0,
+    floor_sigma: tuple[float, ...] | None = None,
 ) -> BaseParameters:
     """Base parameters of the (chain, session) pairs present in ``contacts``.
 
@@ -38,6 +40,9 @@ def structural_base(
         noise: Measurement noise (m, rad, rad) scaling the regressor's rows.
         postures: Postures generated per (chain, session) pair.
         seed: Seed of the generated postures.
+        floor_sigma: With the floor equations (noise of x, y, z in m, roll, pitch, yaw in
+            rad): their rows join the regressor, x, y and yaw less their session's mean
+            (which eliminates the session's constants). None: contacts only.
 
     """
     rich = level_postures(model, contacts, postures, seed)
@@ -45,6 +50,14 @@ def structural_base(
     _, jac = model.jacobian(theta, rich)
     sigma = np.array(noise)
     regressor = (jac / sigma[None, :, None]).reshape(-1, model.size)
+    if floor_sigma is not None:
+        _, floor_jac, _ = FloorModel(model).derivatives(theta, rich.joints)  # (n, 6, p)
+        sessions = np.array(rich.sessions)
+        for session in set(rich.sessions):
+            rows = sessions == session
+            floor_jac[np.ix_(rows, [0, 1, 5])] -= floor_jac[rows][:, [0, 1, 5]].mean(axis=0)
+        floor_rows = (floor_jac / np.array(floor_sigma)[None, :, None]).reshape(-1, model.size)
+        regressor = np.vstack([regressor, floor_rows])
     scale = prior_scale(model, weights_for(1.0, noise))
     scale[~np.isfinite(scale)] = UNIT_PRIOR_LENGTH_M
     planes = model.columns(Group.PLANE)

@@ -37,6 +37,15 @@ def test_two_chains_share_the_torso(scene, example_pool):
     assert "left_contact.z" not in names and "right_contact.z" not in names  # at flush contact: plane height
 
 
+def test_the_floor_equations_identify_more_of_the_legs(scene, example_pool):
+    """Both soles on one floor: leg combinations that only open the stance loop become identifiable."""
+    model = ContactModel(scene, ["left", "right"], ["s"])
+    contacts = pool_contacts(example_pool, ["left", "right"])
+    contacts_only = structural_base(model, contacts)
+    with_floor = structural_base(model, contacts, floor_sigma=(1e-4, 1e-4, 1e-4, 1.7e-4, 1.7e-4, 1.7e-4))
+    assert with_floor.size == contacts_only.size + 2  # 114 -> 116 (measured)
+
+
 def test_base_rank_matches_the_pool_regressor(scene, example_pool):
     """The structural base set has the rank of real-like data (flush, both soles down, one height)."""
     model = ContactModel(scene, ["left", "right"], ["s"])
