@@ -224,39 +224,17 @@ def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
 
 
 def bench_calibration() -> None:
-    from posegen.calibrate import calibrate, held_out_residuals, identify, read_measurements
-    from posegen.robot import Scene, load_config
+    from calibration_bench import bench_corrupted_row, bench_real, bench_recovery  # beside this script
 
-    data = ROOT.parent / "shared" / "data" / "talos_real"
+    from posegen.robot import Scene, load_config, load_pool
+
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
-    train = read_measurements(data / "left_train.csv", scene).contacts.concat(
-        read_measurements(data / "right_train.csv", scene).contacts
+    data = next(
+        p / "shared" / "data" / "talos_real" for p in ROOT.parents if (p / "shared" / "data" / "talos_real").is_dir()
     )
-    held_out = read_measurements(data / "left_validation.csv", scene).contacts
-    start = time.perf_counter()
-    cal = calibrate(scene, train, ["left_train", "right_train", "left_validation"])
-    total = time.perf_counter() - start
-    runs = []
-    for _ in range(5):
-        start = time.perf_counter()
-        fit = identify(cal.model, train.subset(list(cal.kept)), cal.base.columns, cal.weights, cal.before.theta)
-        runs.append(time.perf_counter() - start)
-    res = held_out_residuals(cal, held_out)
-    show = np.array([1e3, 180 / np.pi, 180 / np.pi])
-    print(f"\n### calibration: real TALOS data, two chains ({machine()})\n")
-    print("| figure | value |\n|---|---|")
-    print(
-        f"| identification (LM on {cal.base.size} base parameters, {len(train)} contacts) | "
-        f"{1000 * min(runs):.0f} ms ({fit.iterations} iterations) |"
-    )
-    print(f"| whole `calibrate` (base parameters, CV of prior and noise, before/after) | {total:.1f} s |")
-    for protocol in ("training_plane", "refitted_plane"):
-        b = np.mean(np.abs(res[protocol]["before"]), axis=0) * show
-        a = np.mean(np.abs(res[protocol]["after"]), axis=0) * show
-        print(
-            f"| held-out mean abs, {protocol} (z mm, roll deg, pitch deg) | "
-            f"{b[0]:.2f}, {b[1]:.2f}, {b[2]:.2f} -> {a[0]:.2f}, {a[1]:.2f}, {a[2]:.2f} |"
-        )
+    candidate, _ = bench_real(scene, data, machine())
+    bench_corrupted_row(scene, data, candidate)
+    bench_recovery(scene, load_pool(ROOT / "plans" / "talos" / "pool.yaml"))
 
 
 def first_frame_s(browser: Any, page: Path, runs: int = 3) -> float:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from posegen.errors import InfeasibleError
+from posegen.errors import InfeasibleError, InputError
 from posegen.model import CalibrationModel, Contacts, Group, Kind, Parameter, Unit
 from posegen.robot import FloatArray, Scene
 
@@ -43,7 +43,8 @@ class Perturbation:
     plane_height_m: float | None = None  # true table height above the soles; None: the scene's table
     plane_tilt_rad: float = float(np.deg2rad(0.5))  # sigma of the table's roll and pitch
     encoder_noise_rad: float = 0.0  # sigma of the encoder readings' noise
-    compliance_rad_per_nm: float = 0.0  # true compliance of every compliance group of the config
+    compliance_rad_per_nm: float = 0.0  # true compliance of the compliance groups below
+    compliance_groups: tuple[str, ...] = ()  # of the config's calibration.compliance; empty: its first group
 
 
 def true_parameters(model: CalibrationModel, perturbation: Perturbation, seed: int) -> FloatArray:
@@ -147,8 +148,8 @@ def simulate(
     """Recorded contacts of a perturbed robot at planned postures.
 
     Args:
-        scene: Scene of the nominal robot (its compliance groups give way if the
-            perturbation has a compliance).
+        scene: Scene of the nominal robot (the perturbation's compliance groups, from
+            its config, give way under gravity).
         planned: Planned postures (chains, sessions, joints), standing on both soles.
         perturbation: Error sizes.
         seed: Seed of the errors and of the encoder noise.
@@ -162,7 +163,16 @@ def simulate(
         InfeasibleError: No posture can be reached.
 
     """
-    groups = scene.calibration.compliance if perturbation.compliance_rad_per_nm else {}
+    groups = {}
+    if perturbation.compliance_rad_per_nm:
+        configured = scene.calibration.compliance
+        names = perturbation.compliance_groups or tuple(configured)[:1]
+        unknown = [g for g in names if g not in configured]
+        if unknown or not names:
+            raise InputError(
+                f"compliance groups {unknown or '(none)'} are not in calibration.compliance: {', '.join(configured)}"
+            )
+        groups = {g: configured[g] for g in names}
     model = CalibrationModel(scene, sorted(set(planned.chains)), sorted(set(planned.sessions)), groups)
     x = true_parameters(model, perturbation, seed)
     settled, converged = settle_true(model, x, planned)

@@ -60,7 +60,7 @@ def simulate_plan_file(
         error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
         noise_deg: Sigma of the encoder noise (deg).
         session: Table session of every contact.
-        compliance_rad_per_knm: True compliance of each of the config's compliance groups.
+        compliance_rad_per_knm: True compliance of the config's first compliance group.
 
     Raises:
         PosegenError: Bad config or plan, or a contact that does not settle.

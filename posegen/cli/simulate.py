@@ -26,7 +26,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--compliance",
         type=float,
         default=0.0,
-        help="true compliance of each calibration.compliance group of the config, rad/kN m (default 0: rigid)",
+        help="true compliance, rad/kN m, of the config's first calibration.compliance group (default 0: rigid)",
     )
     parser.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")

@@ -59,7 +59,9 @@ def test_a_compliant_robot_gives_way_under_gravity(scene, example_pool):
     )
     soft_scene = type(scene)(config)
     plan = planned(example_pool, list(range(8)))
-    recorded, model, x = simulate(soft_scene, plan, Perturbation(compliance_rad_per_nm=3e-4), seed=4)
+    perturbation = Perturbation(compliance_rad_per_nm=3e-4, compliance_groups=("hip_pitch",))
+    recorded, model, x = simulate(soft_scene, plan, perturbation, seed=4)
+    assert list(model.compliance) == ["hip_pitch"]  # only the groups asked for give way
     observations = model.observations(recorded)
     assert np.abs(model.evaluate(x, observations).contact).max() < 1e-9
     rigid = x.copy()
