@@ -35,10 +35,11 @@ from posegen.model import (
     Kind,
     Observations,
     Spec,
+    base_at,
     candidate_spec,
+    level_postures,
     spec_for_rows,
     start_point,
-    structural_base,
 )
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray, Scene
@@ -208,20 +209,9 @@ def calibrate(
     sides = tuple(model.columns([Kind.CONTACT_HEIGHT, Kind.CONTACT_TILT, Kind.PLANE]))
     before_spec = spec_for_rows(model, Spec(sides, np.full(model.size, np.inf), floor=False), sessions_in)
     before = estimate(model, observations, before_spec, after.noise, start_point(model, observations), rounds=1)
-    base = structural_base(
-        model.contact, observations.contacts, DEFAULT_NOISE, settings.structural_postures, settings.seed
-    )
-    base_with_floor = None
-    if model.floor is not None:
-        with_floor = structural_base(
-            model.contact,
-            observations.contacts,
-            DEFAULT_NOISE,
-            settings.structural_postures,
-            settings.seed,
-            FLOOR_NOISE,
-        )
-        base_with_floor = with_floor.size
+    postures = level_postures(model.contact, observations.contacts, settings.structural_postures, settings.seed)
+    base = base_at(model.contact, postures, DEFAULT_NOISE)
+    base_with_floor = base_at(model.contact, postures, DEFAULT_NOISE, FLOOR_NOISE).size if model.floor else None
     return Calibration(
         model=model,
         config=config,

@@ -96,48 +96,61 @@ def settle_true(model: CalibrationModel, x: FloatArray, planned: Contacts) -> tu
     for session in set(planned.sessions):
         target[np.ix_(sessions == session, [0, 1, 5])] = x[model.floor_columns(session)]
 
-    def residuals(values: FloatArray, jacobian: bool) -> tuple[FloatArray, FloatArray]:
-        """Contact and floor residuals (n, 3 or 9) and, held gravity torques, their joint derivatives."""
-        observations = model.observations(Contacts(values, planned.chains, planned.sessions, planned.labels))
-        bent = Contacts(model.deflected(x, observations), planned.chains, planned.sessions, planned.labels)
-        theta = model.theta(x)
+    def residuals(rows: NDArray[np.intp], values: FloatArray, jacobian: bool) -> tuple[FloatArray, FloatArray]:
+        """Contact and floor residuals of some postures (m, 3 or 9) and, gravity torques held, joint derivatives."""
+        posture = planned.subset(rows)
+        observations = model.observations(Contacts(values[rows], posture.chains, posture.sessions, posture.labels))
         if not jacobian:
             out = model.evaluate(x, observations)
             blocks = [out.contact] + ([out.floor] if model.floor is not None else [])  # floor: less its session's
             return np.concatenate(blocks, axis=1), np.zeros(0)
+        bent = Contacts(model.deflected(x, observations), posture.chains, posture.sessions, posture.labels)
+        theta = model.theta(x)
         res, _, d_joints = model.contact.derivatives(theta, bent)
         blocks, jacs = [res], [d_joints]
         if model.floor is not None:
             pose, _, f_joints = model.floor.derivatives(theta, bent.joints)
-            blocks.append(pose - target)
+            blocks.append(pose - target[rows])
             jacs.append(f_joints)
         return np.concatenate(blocks, axis=1), np.concatenate(jacs, axis=1)
 
-    residual, jacobian = residuals(joints, True)
+    everything = np.arange(len(planned))
+    residual, jacobian = residuals(everything, joints, True)
     damping = np.full(len(planned), 1e-6)  # per posture: Levenberg-Marquardt on the joints
+    active = np.abs(residual).max(axis=1) >= CONTACT_TOLERANCE  # neither converged nor stalled
     for _ in range(MAX_STEPS):
-        if np.max(np.abs(residual)) < CONTACT_TOLERANCE:
+        rows = np.flatnonzero(active)
+        if not len(rows):
             break
-        norm = np.linalg.norm(residual, axis=1)
-        pending = np.abs(residual).max(axis=1) >= CONTACT_TOLERANCE
+        norm = np.linalg.norm(residual[rows], axis=1)
+        pending = np.ones(len(rows), dtype=bool)
+        improved = np.zeros(len(rows), dtype=bool)
         trial = joints.copy()
-        for _attempt in range(12):
-            for i in np.flatnonzero(pending):
+        for _attempt in range(20):  # damping from 1e-6 up to its cap
+            for k in np.flatnonzero(pending):
+                i = rows[k]
                 cols = own[planned.chains[i]]
                 a = jacobian[i][:, cols]
                 trial[i, cols] = joints[i, cols] - a.T @ np.linalg.solve(
                     a @ a.T + damping[i] * np.eye(a.shape[0]), residual[i]
                 )
-            new, _ = residuals(trial, False)
-            better = np.linalg.norm(new, axis=1) < norm
-            damping[pending & better] = np.maximum(damping[pending & better] / 3.0, 1e-12)
-            damping[pending & ~better] = np.minimum(damping[pending & ~better] * 4.0, 1e6)
-            trial[pending & ~better] = joints[pending & ~better]
-            pending &= ~better
+            new, _ = residuals(rows[pending], trial, False)
+            better = np.zeros(len(rows), dtype=bool)
+            better[pending] = np.linalg.norm(new, axis=1) < norm[pending]
+            worse = pending & ~better
+            improved |= better
+            damping[rows[better]] = np.maximum(damping[rows[better]] / 3.0, 1e-12)
+            damping[rows[worse]] *= 4.0
+            trial[rows[worse]] = joints[rows[worse]]
+            pending = worse & (damping[rows] < 1e6)
             if not np.any(pending):
                 break
+        stalled = rows[~improved]  # no step helps even heavily damped: out of reach
         joints = trial
-        residual, jacobian = residuals(joints, True)
+        res, jac = residuals(rows, joints, True)
+        residual[rows], jacobian[rows] = res, jac
+        active[rows] = np.abs(res).max(axis=1) >= CONTACT_TOLERANCE
+        active[stalled] = False
     converged = np.abs(residual).max(axis=1) < 1e-9
     return Contacts(joints, planned.chains, planned.sessions, planned.labels), converged
 

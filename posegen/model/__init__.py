@@ -36,7 +36,7 @@ from posegen.model.prior import (
     spec_for_rows,
 )
 from posegen.model.settle import settle, settle_contacts
-from posegen.model.structural import STRUCTURAL_POSTURES, level_postures, structural_base
+from posegen.model.structural import STRUCTURAL_POSTURES, base_at, level_postures, structural_base
 from posegen.model.weights import (
     DEFAULT_NOISE,
     NOISE_FLOOR,
@@ -81,6 +81,7 @@ __all__ = [
     "Spec",
     "Unit",
     "Weights",
+    "base_at",
     "base_parameters",
     "body_parts",
     "build_design",

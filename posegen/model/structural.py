@@ -45,15 +45,24 @@ def structural_base(
             (which eliminates the session's constants). None: contacts only.
 
     """
-    rich = level_postures(model, contacts, postures, seed)
-    theta = initial_planes(model, rich, model.nominal())
-    _, jac = model.jacobian(theta, rich)
+    return base_at(model, level_postures(model, contacts, postures, seed), noise, floor_sigma)
+
+
+def base_at(
+    model: ContactModel,
+    postures: Contacts,
+    noise: tuple[float, float, float] = DEFAULT_NOISE,
+    floor_sigma: tuple[float, ...] | None = None,
+) -> BaseParameters:
+    """Base parameters of the regressor at given postures (see :func:`structural_base`)."""
+    theta = initial_planes(model, postures, model.nominal())
+    _, jac = model.jacobian(theta, postures)
     sigma = np.array(noise)
     regressor = (jac / sigma[None, :, None]).reshape(-1, model.size)
     if floor_sigma is not None:
-        _, floor_jac, _ = FloorModel(model).derivatives(theta, rich.joints)  # (n, 6, p)
-        sessions = np.array(rich.sessions)
-        for session in set(rich.sessions):
+        _, floor_jac, _ = FloorModel(model).derivatives(theta, postures.joints)  # (n, 6, p)
+        sessions = np.array(postures.sessions)
+        for session in set(postures.sessions):
             rows = sessions == session
             floor_jac[np.ix_(rows, [0, 1, 5])] -= floor_jac[rows][:, [0, 1, 5]].mean(axis=0)
         floor_rows = (floor_jac / np.array(floor_sigma)[None, :, None]).reshape(-1, model.size)

@@ -13,11 +13,11 @@ from posegen.robot import Scene, load_config
 
 @pytest.fixture(scope="module")
 def calibrated(lean_scene, example_pool, tmp_path_factory):
-    rows = list(range(60))
+    rows = list(range(40))
     plan = Contacts(
         example_pool.joints()[rows],
         tuple(example_pool.postures[i].chain for i in rows),
-        ("sim",) * 60,
+        ("sim",) * 40,
         tuple(f"sim.yaml:{i}:c{i}" for i in rows),
     )
     perturbation = Perturbation(encoder_noise_rad=np.deg2rad(0.005), compliance_rad_per_nm=3e-4)
