@@ -285,7 +285,17 @@ def bench_view(pool_path: Path, workdir: Path) -> None:
         )
     measurements, calibration = workdir / "sim60.yaml", workdir / "calibration"
     posegen("simulate", str(selection), "--seed", "7", "-o", str(measurements))
-    posegen("calibrate", str(measurements), "--prior-scale", "5", "-q", "-o", str(calibration))
+    posegen(
+        "calibrate",
+        str(measurements),
+        "--prior-scale",
+        "5",
+        "--candidates",
+        "offsets_legs",
+        "-q",
+        "-o",
+        str(calibration),
+    )
     start = time.perf_counter()
     report = write_report(calibration)
     took = time.perf_counter() - start

@@ -60,7 +60,7 @@ class CalibrationFolder:
 
 @pytest.fixture(scope="session")
 def calibration_folder(scene: Scene, example_pool: Pool, tmp_path_factory: pytest.TempPathFactory) -> CalibrationFolder:
-    """60 training and 20 held-out contacts of a perturbed TALOS, calibrated with a fixed prior."""
+    """60 training and 20 held-out contacts of a perturbed TALOS, calibrated with one candidate and a fixed prior."""
     from posegen.calibrate import Perturbation, Settings, calibrate, simulate, write_calibration
 
     rows = list(range(80))
@@ -68,8 +68,10 @@ def calibration_folder(scene: Scene, example_pool: Pool, tmp_path_factory: pytes
     labels = tuple(example_pool.postures[i].spot for i in rows)
     plan = Contacts(example_pool.joints()[rows], chains, ("sim",) * len(rows), labels)
     recorded, _, _ = simulate(scene, plan, Perturbation(), seed=3)
-    train, held_out = recorded.subset(range(60)), recorded.subset(range(60, 80))
-    calibration = calibrate(scene, train, ["sim"], Settings(kappa=5.0))
+    train, held_out = recorded.subset(range(60)), recorded.subset(range(60, len(recorded)))  # unreachable ones dropped
+    calibration = calibrate(
+        scene, train, ["sim"], Settings(candidates=("offsets_legs",), prior_scale=5.0, fold_seeds=1)
+    )
     path = tmp_path_factory.mktemp("calibration")
     write_calibration(calibration, held_out, path, seed=3)
     return CalibrationFolder(path, calibration, held_out)

@@ -98,6 +98,7 @@ def simulate_route_bag(
     session: str,
     rate_hz: float,
     joint_topic: str,
+    compliance_rad_per_knm: float = 0.0,
 ) -> SimulatedSession:
     """Record a perturbed robot executing a route, as a rosbag2; the truth goes beside it.
 
@@ -112,6 +113,7 @@ def simulate_route_bag(
         session: Table session (names the true plane).
         rate_hz: Recording rate of the joint states and wrenches.
         joint_topic: Topic of the joint states.
+        compliance_rad_per_knm: True compliance of the config's first compliance group.
 
     Raises:
         PosegenError: Not a route, a route without contacts or for another robot, or a
@@ -124,7 +126,7 @@ def simulate_route_bag(
         raise InputError(f"{route_path}: the route makes no contact")
     if not rate_hz > 0:
         raise InputError(f"the recording rate must be positive (Hz), got {rate_hz}")
-    perturbation = perturbation_of(error_mm, error_deg, noise_deg)
+    perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
     settings = SessionSettings(rate_hz=rate_hz)
     recorded = simulate_session(scene, motion, session, perturbation, settings, seed)
     prov = scene.provenance(seed)
@@ -135,6 +137,7 @@ def simulate_route_bag(
         "error_mm": error_mm,
         "error_deg": error_deg,
         "encoder_noise_deg": noise_deg,
+        "compliance_rad_per_knm": compliance_rad_per_knm,
         "sensors": dataclasses.asdict(settings),
     }
     wrenches = {

@@ -7,9 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from posegen.calibrate.record import DISPLAY
 from posegen.robot import FloatArray
-
-DISPLAY = np.array([1e3, 180.0 / np.pi, 180.0 / np.pi])  # m, rad, rad -> mm, deg, deg
 
 
 def _pyplot() -> Any:

@@ -5,9 +5,10 @@ Besides ``calibration.yaml`` (:mod:`posegen.calibrate.report`), a calibration wr
     residuals.csv    one row per contact: set (training | outlier | held_out), label,
                      chain, session, height/roll/pitch residuals before and after
                      (mm, deg), then the joint angles (rad, one column per joint)
-    posterior.npz    the base parameters' names, their posterior covariance (nb, nb),
-                     the singular values of the noise-whitened base regressor (nb,) and
-                     the condition numbers of the regressor alone and with the prior
+    posterior.npz    the fitted directions' names (parameter kinds, :mod:`posegen.model.kinds`),
+                     their posterior covariance (f, f), the singular values of the
+                     noise-whitened regressor (f,) and the condition numbers of the
+                     regressor alone and with the prior
 
 Held-out residuals are those of the plane fitted on the training contacts. Viewers and
 the HTML report read a folder through :func:`read_calibration` only.
@@ -25,9 +26,10 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
+from posegen.calibrate.estimation import frozen_jacobian
 from posegen.errors import InputError
 from posegen.io import load_yaml_file, write_atomic
-from posegen.model import Contacts, prior_scale
+from posegen.model import Contacts
 from posegen.robot import FloatArray
 
 CALIBRATION_FILE = "calibration.yaml"
@@ -62,17 +64,17 @@ class ContactResidual:
 
 @dataclass(frozen=True)
 class Posterior:
-    """Uncertainty and conditioning of the identified base parameters."""
+    """Uncertainty and conditioning of the fitted directions."""
 
-    names: tuple[str, ...]  # (nb,) base parameter names, as in the report's parameter table
-    covariance: FloatArray  # (nb, nb) posterior covariance (prior included), m and rad
-    singular_values: FloatArray  # (nb,) of the noise-whitened base regressor (data only), descending
+    names: tuple[str, ...]  # (f,) fitted directions, as in the report's parameter table
+    covariance: FloatArray  # (f, f) posterior covariance (prior included), m, rad and rad/N m
+    singular_values: FloatArray  # (f,) of the noise-whitened regressor (data only), descending
     condition: float  # of that regressor: largest / smallest singular value
     condition_with_prior: float  # of the regressor stacked on the prior's rows
 
     @property
     def correlation(self) -> FloatArray:
-        """Posterior correlation of the base parameters. Shape (nb, nb)."""
+        """Posterior correlation of the fitted directions. Shape (f, f)."""
         std = np.sqrt(np.clip(np.diag(self.covariance), 1e-300, None))
         return self.covariance / np.outer(std, std)
 
@@ -95,14 +97,15 @@ class CalibrationRecord:
 
 
 def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> list[ContactResidual]:
-    """Every training contact (fitted or left out as an outlier) and every held-out one, with its residuals."""
+    """Every training contact (fitted or left out) and every held-out one, with its residuals."""
     model, train = calibration.model, calibration.train
-    before = model.residuals(calibration.before.theta, train)
-    after = model.residuals(calibration.after.theta, train)
-    outliers = set(calibration.outliers)
+    observations = model.observations(train)
+    before = model.evaluate(calibration.before.x, observations, floor=False).contact
+    after = model.evaluate(calibration.after.x, observations, floor=False).contact
+    kept = set(calibration.kept)
     rows = [
         ContactResidual(
-            set=ContactSet.OUTLIER if i in outliers else ContactSet.TRAINING,
+            set=ContactSet.TRAINING if i in kept else ContactSet.OUTLIER,
             label=train.labels[i],
             chain=train.chains[i],
             session=train.sessions[i],
@@ -130,20 +133,17 @@ def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> li
 
 
 def posterior_of(calibration: Calibration) -> Posterior:
-    """Posterior correlation of the base parameters and conditioning of their regressor."""
-    model, fit = calibration.model, calibration.after
-    free = np.array(fit.free, dtype=int)
-    kept = calibration.train.subset(list(calibration.kept))
-    _, jac = model.jacobian(fit.theta, kept)  # (n, 3, p)
-    regressor = (jac[:, :, free] / np.array(calibration.weights.noise)[None, :, None]).reshape(-1, len(free))
-    scale = prior_scale(model, calibration.weights)[free]
-    prior = np.diag(np.where(np.isfinite(scale), 1.0 / scale, 0.0))  # (nb, nb), zero rows where no prior
-    stacked = np.vstack([regressor, prior[np.isfinite(scale)]])
+    """Posterior correlation of the fitted directions and conditioning of their regressor (m, rad, rad/N m)."""
+    model, fit, spec = calibration.model, calibration.after, calibration.spec
+    observations = model.observations(calibration.train.subset(list(calibration.kept)))
+    per_posture, prior_rows = frozen_jacobian(model, observations, spec, fit.noise, fit.x)
+    regressor = per_posture.reshape(-1, per_posture.shape[2])  # whitened data rows (contacts, and floors if used)
+    stacked = np.vstack([regressor, prior_rows])
     covariance = np.linalg.pinv(stacked.T @ stacked)
     singular = np.linalg.svd(regressor, compute_uv=False)
     with_prior = np.linalg.svd(stacked, compute_uv=False)
     return Posterior(
-        names=tuple(model.parameters[i].name for i in free),
+        names=tuple(model.directions[i].name for i in spec.free),
         covariance=covariance,
         singular_values=singular,
         condition=float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf"),

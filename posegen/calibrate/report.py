@@ -3,6 +3,8 @@
 Output folder::
 
     calibration.yaml     model selection, predicted error, rows left out, noise, parameters, residuals, provenance
+    residuals.csv        every contact's residuals before and after, and its joint angles
+    posterior.npz        posterior covariance of the fitted directions, conditioning of their regressor
     calibrated.urdf      same links and joints, calibrated origins (compliance is not a URDF quantity)
     calibrated.yaml      a scene config that uses calibrated.urdf
     parameters.png       fitted deviations (mm, deg)
@@ -20,13 +22,13 @@ import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
 from posegen.calibrate.model_selection import RULE, CvResult
-from posegen.calibrate.plots import DISPLAY, plot_cross_validation, plot_parameters, plot_residuals
+from posegen.calibrate.plots import plot_cross_validation, plot_parameters, plot_residuals
+from posegen.calibrate.record import CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
 from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas
 from posegen.robot import FloatArray
 
-COMPONENTS = ("z_mm", "roll_deg", "pitch_deg")
 LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT)
 
 
@@ -195,7 +197,7 @@ def calibration_report(
     sigmas = kind_sigmas(calibration.config.prior)
     scale = calibration.selection.chosen.prior_scale
     report: dict[str, Any] = {
-        "format": "posegen-calibration",
+        "format": CALIBRATION_FORMAT,
         "format_version": 2,
         "provenance": model.scene.provenance(seed),
         "chains": sorted(model.contact.chains),
@@ -293,6 +295,7 @@ def write_calibration(
             "Training residuals",
             out_dir / "residuals.png",
         )
+    write_record(calibration, held_out, out_dir)
     write_atomic(out_dir / "calibration.yaml", dump_yaml(report))
     return report
 

@@ -18,8 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from posegen.calibrate.simulation import Perturbation, true_parameters
-from posegen.model import ContactModel, Contacts, settle_contacts
+from posegen.calibrate.simulation import Perturbation, perturbed_robot, settle_true
+from posegen.errors import InfeasibleError
+from posegen.model import CalibrationModel, Contacts
 from posegen.robot import FloatArray, Scene, SegmentType, route_arrays
 
 TORQUE_ARM_M = 0.1  # torque noise = force noise x this lever
@@ -69,8 +70,8 @@ class Session:
     forces: dict[str, FloatArray]  # per chain, (n, 3) N in the wrist sensor frame
     torques: dict[str, FloatArray]  # per chain, (n, 3) N m
     route_start_s: float  # the route's time 0 on the recording's clock
-    model: ContactModel
-    theta: FloatArray  # (p,) true parameters
+    model: CalibrationModel
+    theta: FloatArray  # (nx,) true parameters
 
 
 def contact_label(posture: Any, pool_id: Any) -> str:
@@ -152,9 +153,11 @@ def simulate_session(
     chains = tuple(c.chain for c in motion.contacts)
     labels = tuple(c.label for c in motion.contacts)
     planned = Contacts(np.array([c.posture for c in motion.contacts]), chains, (session,) * len(chains), labels)
-    model = ContactModel(scene, sorted(set(chains)), [session])
-    theta = true_parameters(model, perturbation, seed)
-    settled = settle_contacts(model, theta, planned)
+    model, theta = perturbed_robot(scene, chains, [session], perturbation, seed)
+    settled, converged = settle_true(model, theta, planned)
+    if not np.all(converged):
+        label = planned.labels[int(np.flatnonzero(~converged)[0])]
+        raise InfeasibleError(f"simulated contact {label!r} does not settle on the true plane and floor")
     step = 1.0 / settings.rate_hz
     times = np.arange(int(np.floor((float(motion.times[-1]) + 2 * settings.rest_s) / step)) + 1) * step
     route_time = times - settings.rest_s

@@ -19,6 +19,7 @@ those angles plus noise.
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -155,6 +156,29 @@ def settle_true(model: CalibrationModel, x: FloatArray, planned: Contacts) -> tu
     return Contacts(joints, planned.chains, planned.sessions, planned.labels), converged
 
 
+def perturbed_robot(
+    scene: Scene, chains: Sequence[str], sessions: Sequence[str], perturbation: Perturbation, seed: int
+) -> tuple[CalibrationModel, FloatArray]:
+    """The true robot of a simulation: its model (with the perturbation's compliance groups) and parameters.
+
+    Raises:
+        InputError: A compliance group that the config does not define.
+
+    """
+    groups = {}
+    if perturbation.compliance_rad_per_nm:
+        configured = scene.calibration.compliance
+        names = perturbation.compliance_groups or tuple(configured)[:1]
+        unknown = [g for g in names if g not in configured]
+        if unknown or not names:
+            raise InputError(
+                f"compliance groups {unknown or '(none)'} are not in calibration.compliance: {', '.join(configured)}"
+            )
+        groups = {g: configured[g] for g in names}
+    model = CalibrationModel(scene, sorted(set(chains)), sorted(set(sessions)), groups)
+    return model, true_parameters(model, perturbation, seed)
+
+
 def simulate(
     scene: Scene, planned: Contacts, perturbation: Perturbation, seed: int
 ) -> tuple[Contacts, CalibrationModel, FloatArray]:
@@ -176,18 +200,7 @@ def simulate(
         InfeasibleError: No posture can be reached.
 
     """
-    groups = {}
-    if perturbation.compliance_rad_per_nm:
-        configured = scene.calibration.compliance
-        names = perturbation.compliance_groups or tuple(configured)[:1]
-        unknown = [g for g in names if g not in configured]
-        if unknown or not names:
-            raise InputError(
-                f"compliance groups {unknown or '(none)'} are not in calibration.compliance: {', '.join(configured)}"
-            )
-        groups = {g: configured[g] for g in names}
-    model = CalibrationModel(scene, sorted(set(planned.chains)), sorted(set(planned.sessions)), groups)
-    x = true_parameters(model, perturbation, seed)
+    model, x = perturbed_robot(scene, planned.chains, planned.sessions, perturbation, seed)
     settled, converged = settle_true(model, x, planned)
     if not np.any(converged):
         raise InfeasibleError("no planned posture stands and touches the table on the perturbed robot")

@@ -91,9 +91,7 @@ def simulate_plan_file(
 def perturbation_of(
     error_mm: float, error_deg: float, noise_deg: float, compliance_rad_per_knm: float = 0.0
 ) -> Perturbation:
-    """The perturbation of the command line's units: placement errors in mm and deg, encoder noise in deg,
-    compliance in rad/kN m.
-    """
+    """The perturbation in the command line's units: mm and deg of placement errors, deg of noise, rad/kN m."""
     return Perturbation(
         length_m=error_mm * 1e-3,
         angle_rad=float(np.deg2rad(error_deg)),

@@ -18,7 +18,6 @@ import viser
 
 from posegen.calibrate import ContactResidual, ContactSet
 from posegen.errors import InputError
-from posegen.model import Unit
 from posegen.robot import FloatArray
 from posegen.view.artefact import CalibrationArtefact
 from posegen.view.robot_figure import RobotFigure, robot_meshes
@@ -88,14 +87,12 @@ class CalibrationView(SteppedView):
         side = 0.006 * scene.table_pose[:3, 0]  # before and after side by side
         before = np.array([c.before[0] for c in self._contacts])
         after = np.array([c.after[0] for c in self._contacts])
-        noise = float(self._artefact.record.report.get("weights", {}).get("noise", {}).get("z_mm", 1.0)) * 1e-3
+        noise = float((self._artefact.record.report.get("noise") or {}).get("contact", {}).get("z_mm", 1.0)) * 1e-3
 
         def arrows(name: str, height: FloatArray, offset: FloatArray, rgb: np.ndarray) -> viser.ArrowsHandle:
             tips = base + offset + ARROW_GAIN * height[:, None] * normal
             points = np.stack([base + offset, tips], axis=1)  # (n, 2, 3)
-            return server.scene.add_arrows(
-                name, points, rgb, shaft_radius=0.002, head_radius=0.005, head_length=0.008
-            )
+            return server.scene.add_arrows(name, points, rgb, shaft_radius=0.002, head_radius=0.005, head_length=0.008)
 
         return (
             arrows("/residuals/before", before, -side, np.tile(np.array(BEFORE_RGB, dtype=np.uint8), (len(base), 1))),
@@ -130,9 +127,8 @@ class CalibrationView(SteppedView):
 
 
 def displayed(row: dict[str, Any]) -> tuple[float, float, str]:
-    """A parameter-table row's deviation from the URDF and posterior std, in mm or deg, and that unit."""
-    scale, unit = (180.0 / np.pi, "deg") if row.get("unit") == Unit.ANGLE.value else (1e3, "mm")
-    return float(row.get("deviation", 0.0)) * scale, float(row.get("std", 0.0)) * scale, unit
+    """A parameter-table row's deviation from the URDF and posterior std, and their unit (mm, deg or rad/kNm)."""
+    return float(row.get("deviation", 0.0)), float(row.get("std", 0.0)), str(row.get("unit", ""))
 
 
 def parameter_markdown(rows: list[dict[str, Any]]) -> str:

@@ -38,7 +38,7 @@ table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0}
 td,th{border:1px solid #ddd;padding:0.2em 0.5em;text-align:right} th{background:#f4f4f4}
 td.name,th.name{text-align:left} .muted{color:#777} img{max-width:100%}
 iframe{width:100%;height:560px;border:1px solid #ccc}
-.scroll{max-height:28em;overflow-y:auto;display:inline-block}
+.scroll{max-height:28em;overflow-y:auto;display:inline-block} .warning{color:#b00;font-weight:bold}
 """
 
 
@@ -61,23 +61,36 @@ def table(header: Sequence[str], rows: Iterable[Sequence[object]], names: int = 
 def _summary(report: dict[str, Any], artefact: CalibrationArtefact) -> str:
     counts = {s: sum(c.set == s for c in artefact.record.contacts) for s in ContactSet}
     prov = report.get("provenance") or {}
-    weights = report.get("weights") or {}
-    noise = weights.get("noise") or {}
+    model = report.get("model") or {}
+    noise = (report.get("noise") or {}).get("contact") or {}
     base = report.get("base_parameters") or {}
+    predicted = report.get("predicted_error") or {}
     rows = [
         ("chains", ", ".join(report.get("chains") or [])),
         ("table sessions", ", ".join(report.get("sessions") or [])),
-        ("contacts: training / outliers left out / held-out", " / ".join(str(counts[s]) for s in ContactSet)),
-        ("base parameters identified (of all)", f"{base.get('total')} (of {base.get('parameters')})"),
+        ("contacts: training / left out / held-out", " / ".join(str(counts[s]) for s in ContactSet)),
+        ("model (chosen by cross-validation)", f"{model.get('candidate')}, prior x{model.get('prior_scale')}"),
+        (
+            "base parameters, contacts (and floor equations), of all",
+            f"{base.get('contacts')} ({base.get('contacts_and_floor')}) of {base.get('parameters')}",
+        ),
         (
             "contact noise (estimated)",
             f"{noise.get('z_mm')} mm, {noise.get('roll_deg')} deg, {noise.get('pitch_deg')} deg",
         ),
-        ("prior", f"{weights.get('prior_length_mm')} mm, {weights.get('prior_angle_deg')} deg per parameter"),
+        *(
+            (f"predicted held-out error, {chain} (grouped CV)", _components(error.get("mean_abs") or {}))
+            for chain, error in predicted.items()
+        ),
         ("robot model sha256", str(prov.get("robot_model_sha256", ""))[:16] + "..."),
         ("posegen", prov.get("posegen_version", "")),
     ]
-    return table(("", "value"), rows, names=2)
+    warnings = "".join(f'<p class="warning">{_e(w)}</p>' for w in report.get("warnings") or [])
+    return table(("", "value"), rows, names=2) + warnings
+
+
+def _components(values: dict[str, Any]) -> str:
+    return " / ".join(f"{values.get(c, '')}" for c in COMPONENTS) + " (mm / deg / deg)"
 
 
 def _residual_tables(report: dict[str, Any]) -> str:
@@ -92,14 +105,28 @@ def _residual_tables(report: dict[str, Any]) -> str:
 
 
 def _cross_validation(report: dict[str, Any]) -> str:
+    selection = report.get("model_selection") or {}
     rows = [
-        (p.get("prior_scale"), p.get("score"), *((p.get("mean_abs") or {}).get(c, "") for c in COMPONENTS))
-        for p in report.get("cross_validation") or []
+        (
+            r.get("candidate"),
+            r.get("prior_scale"),
+            r.get("free_parameters"),
+            f"{r.get('score')} +- {r.get('se')}",
+            *(_components(e) for e in (r.get("chains") or {}).values()),
+        )
+        for r in selection.get("ranking") or []
     ]
     if not rows:
-        return "<p>No cross-validation was run (the prior size was fixed).</p>"
-    header = ("prior scale", "score", "height (mm)", "roll (deg)", "pitch (deg)")
-    return table(header, rows, names=0)
+        return "<p>No cross-validation in this report.</p>"
+    chains = list(((selection.get("ranking") or [{}])[0].get("chains") or {}).keys())
+    header = ("candidate", "prior scale", "free parameters", "score +- SE", *(f"{c}: predicted error" for c in chains))
+    chosen = selection.get("chosen") or {}
+    stability = (selection.get("stability") or {}).get("share_of_seeds")
+    return (
+        f"<p>Rule: {_e(selection.get('rule', ''))}. Chosen: <b>{_e(chosen.get('candidate'))} x"
+        f"{_e(chosen.get('prior_scale'))}</b>, the same pick on {stability} of the fold seeds.</p>"
+        + table(header, rows, names=1)
+    )
 
 
 def _parameters(report: dict[str, Any]) -> str:
@@ -107,8 +134,8 @@ def _parameters(report: dict[str, Any]) -> str:
     for p in report.get("parameters") or []:
         deviation, std, unit = displayed(p)
         ratio = abs(deviation) / std if std > 0 else float("inf")
-        rows.append((p["name"], p.get("group", ""), unit, f"{deviation:+.4f}", f"{std:.4f}", f"{ratio:.1f}"))
-    header = ("parameter", "group", "unit", "deviation from URDF", "posterior std", "|deviation| / std")
+        rows.append((p["name"], p.get("kind", ""), unit, f"{deviation:+.4f}", f"{std:.4f}", f"{ratio:.1f}"))
+    header = ("parameter", "kind", "unit", "deviation from URDF", "posterior std", "|deviation| / std")
     return f'<div class="scroll">{table(header, rows, names=2)}</div>'
 
 
@@ -120,7 +147,7 @@ def _conditioning(artefact: CalibrationArtefact) -> str:
         names=2,
     )
     return (
-        f"<p>Condition number of the noise-whitened base regressor: <b>{posterior.condition:.4g}</b> "
+        f"<p>Condition number of the noise-whitened regressor: <b>{posterior.condition:.4g}</b> "
         f"(with the prior: {posterior.condition_with_prior:.4g}).</p>"
         f'<img src="{singular_value_figure(posterior)}" alt="singular values">'
         f"<h3>Most correlated pairs</h3>{pairs}"
@@ -129,14 +156,14 @@ def _conditioning(artefact: CalibrationArtefact) -> str:
 
 
 def _outliers(report: dict[str, Any]) -> str:
-    outliers = report.get("outliers") or []
+    left_out = report.get("left_out") or []
     rejected = report.get("rejected_rows") or []
     parts = []
-    if outliers:
-        rows = ((o.get("contact"), o.get("normalised_cv_residual")) for o in outliers)
-        parts.append(table(("contact", "normalised CV residual"), rows))
+    if left_out:
+        rows = ((f"{r.get('file')}:{r.get('line')}", r.get("spot"), r.get("reason"), r.get("value")) for r in left_out)
+        parts.append(table(("row", "spot", "reason", "residual or offset"), rows))
     else:
-        parts.append("<p>No training contact was flagged as an outlier.</p>")
+        parts.append("<p>No training row was left out.</p>")
     if rejected:
         parts.append("<h3>Input rows left out as unusable</h3><ul>")
         parts.extend(f"<li>{_e(r)}</li>" for r in rejected)
@@ -157,10 +184,10 @@ def report_html(artefact: CalibrationArtefact) -> str:
             f'<img src="{residual_figure(contacts)}" alt="residuals per contact">'
             f'<img src="{distribution_figure(contacts)}" alt="residual distributions">',
         ),
-        ("Cross-validation of the prior size", _cross_validation(report)),
+        ("Model selection: repeated grouped cross-validation", _cross_validation(report)),
         ("Identified parameters", _parameters(report)),
-        ("Conditioning and correlation of the base regressor", _conditioning(artefact)),
-        ("Outliers", _outliers(report)),
+        ("Conditioning and correlation of the regressor", _conditioning(artefact)),
+        ("Rows left out", _outliers(report)),
         (
             "3D: nominal (grey) and calibrated (blue) robot at each contact",
             "<p>Arrows: height residual at each contact, 20x magnified; grey before, after coloured by "

@@ -120,6 +120,4 @@ def strongest_correlations(posterior: Posterior, count: int = 12) -> list[tuple[
     rho: FloatArray = posterior.correlation
     upper = np.triu_indices(len(rho), k=1)
     order = np.argsort(-np.abs(rho[upper]))[:count]
-    return [
-        (posterior.names[int(upper[0][i])], posterior.names[int(upper[1][i])], float(rho[upper][i])) for i in order
-    ]
+    return [(posterior.names[int(upper[0][i])], posterior.names[int(upper[1][i])], float(rho[upper][i])) for i in order]

@@ -97,7 +97,6 @@ def set_scenery(server: viser.ViserServer, scene: Scene) -> None:
     server.initial_camera.up = (0.0, 0.0, 1.0)
 
 
-
 def info_label(server: viser.ViserServer, scene: Scene) -> viser.LabelHandle:
     """The label that tells what is shown, above the far edge of the table."""
     above = scene.table_pose @ np.array([scene.table.size_m[0] / 2, 0.0, 0.45, 1.0])

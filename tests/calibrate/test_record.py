@@ -18,10 +18,11 @@ def test_every_contact_is_read_back_with_its_residuals(calibration_folder, recor
     sets = [c.set for c in record.contacts]
     assert sets.count(ContactSet.HELD_OUT) == len(held_out)
     assert sets.count(ContactSet.TRAINING) + sets.count(ContactSet.OUTLIER) == len(train)
-    assert sets.count(ContactSet.OUTLIER) == len(calibration.outliers)
+    assert sets.count(ContactSet.OUTLIER) == len(train) - len(calibration.kept)
     fitted = record.contacts[: len(train)]
-    before = calibration.model.residuals(calibration.before.theta, train)
-    after = calibration.model.residuals(calibration.after.theta, train)
+    model = calibration.model
+    before = model.evaluate(calibration.before.x, model.observations(train), floor=False).contact
+    after = model.evaluate(calibration.after.x, model.observations(train), floor=False).contact
     assert np.allclose([c.before for c in fitted], before, rtol=1e-12, atol=1e-15)
     assert np.allclose([c.after for c in fitted], after, rtol=1e-12, atol=1e-15)
     assert np.array_equal([c.joints for c in fitted], train.joints)
@@ -31,12 +32,13 @@ def test_every_contact_is_read_back_with_its_residuals(calibration_folder, recor
 
 
 def test_posterior_matches_the_identification(calibration_folder, record):
-    fit = calibration_folder.calibration.after
+    calibration = calibration_folder.calibration
     posterior = record.posterior
     std = np.sqrt(np.diag(posterior.covariance))
-    assert np.allclose(std, fit.std[list(fit.free)], rtol=1e-6)  # computed independently by identify()
-    names = {p["name"] for p in record.report["parameters"]}
-    assert set(posterior.names) == names
+    free = list(calibration.spec.free)
+    assert np.allclose(std, calibration.after.std[free], rtol=1e-6)  # computed independently by estimate()
+    assert posterior.names == tuple(calibration.model.directions[i].name for i in free)
+    assert {p["name"] for p in record.report["parameters"]} <= set(posterior.names)  # planes are not reported
     rho = posterior.correlation
     assert np.allclose(rho, rho.T) and np.allclose(np.diag(rho), 1.0) and np.all(np.abs(rho) <= 1 + 1e-9)
 

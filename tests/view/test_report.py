@@ -24,10 +24,10 @@ def test_the_report_is_written_beside_calibration_yaml_with_every_section(calibr
     for title in (
         "Residuals before and after calibration",
         "Every contact",
-        "Cross-validation of the prior size",
+        "Model selection: repeated grouped cross-validation",
         "Identified parameters",
-        "Conditioning and correlation of the base regressor",
-        "Outliers",
+        "Conditioning and correlation of the regressor",
+        "Rows left out",
         "3D: nominal (grey) and calibrated (blue) robot at each contact",
     ):
         assert f"<h2>{title}</h2>" in text
@@ -42,15 +42,16 @@ def test_every_identified_parameter_is_listed_with_its_std(calibration_folder, r
     parameters = read_calibration(calibration_folder.path).report["parameters"]
     assert len(rows) == len(parameters) + 1
     first = re.findall(r"<td[^>]*>(.*?)</td>", rows[1])
-    expected = parameters[0]
-    scale = 180 / np.pi if expected["unit"] == "rad" else 1e3
-    assert first[0] == expected["name"] and float(first[4]) == pytest.approx(expected["std"] * scale, abs=1e-4)
+    expected = parameters[0]  # shown in its own unit (mm, deg or rad/kNm)
+    assert first[0] == expected["name"] and float(first[4]) == pytest.approx(expected["std"], abs=1e-4)
 
 
 def test_conditioning_figures_are_the_posterior_ones(calibration_folder, report):
     _, text = report
     posterior = read_calibration(calibration_folder.path).posterior
     assert f"<b>{posterior.condition:.4g}</b>" in text
+    section = text.split("<h2>Model selection: repeated grouped cross-validation</h2>")[1].split("<h2>")[0]
+    assert "offsets_legs" in section and "score +- SE" in section
     pairs = strongest_correlations(posterior)
     rho = posterior.correlation
     off = np.abs(rho[np.triu_indices(len(rho), k=1)])
