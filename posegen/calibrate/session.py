@@ -5,8 +5,10 @@ perturbation model, same chains and session). It follows the route's trajectory,
 sampled at the recording rate (cubic Hermite through the route's positions and
 velocities). At each contact the force controller carries the arm from the planned
 contact posture to the settled one, where the true contact is flush with the true table
-(the settle step): the correction grows over the go-to-contact segment, is held, and
-fades over the release. The wrist of that arm reads the normal force, growing and fading
+(the settle step, under gravity if the robot is compliant): the correction grows over
+the go-to-contact segment, is held, and fades over the release. The legs follow the
+route, as the stance controller holds them (``posegen simulate`` of postures closes the
+second leg on the true robot instead). The wrist of that arm reads the normal force, growing and fading
 with the correction; both wrists read a constant sensor offset and noise, and the
 encoders read the angles plus noise. The recording starts and ends with the robot at rest.
 """
@@ -154,10 +156,10 @@ def simulate_session(
     labels = tuple(c.label for c in motion.contacts)
     planned = Contacts(np.array([c.posture for c in motion.contacts]), chains, (session,) * len(chains), labels)
     model, theta = perturbed_robot(scene, chains, [session], perturbation, seed)
-    settled, converged = settle_true(model, theta, planned)
+    settled, converged = settle_true(model, theta, planned, stand=False)  # the legs follow the route
     if not np.all(converged):
         label = planned.labels[int(np.flatnonzero(~converged)[0])]
-        raise InfeasibleError(f"simulated contact {label!r} does not settle on the true plane and floor")
+        raise InfeasibleError(f"simulated contact {label!r} does not settle on the true plane")
     step = 1.0 / settings.rate_hz
     times = np.arange(int(np.floor((float(motion.times[-1]) + 2 * settings.rest_s) / step)) + 1) * step
     route_time = times - settings.rest_s

@@ -79,8 +79,13 @@ def true_parameters(model: CalibrationModel, perturbation: Perturbation, seed: i
     return x
 
 
-def settle_true(model: CalibrationModel, x: FloatArray, planned: Contacts) -> tuple[Contacts, NDArray[np.bool_]]:
+def settle_true(
+    model: CalibrationModel, x: FloatArray, planned: Contacts, stand: bool = True
+) -> tuple[Contacts, NDArray[np.bool_]]:
     """Joint angles at which each planned posture stands and touches under parameters ``x``.
+
+    With ``stand`` false the legs keep their planned angles and only the contacts settle
+    (a route's rehearsal, whose legs follow the planned trajectory).
 
     Returns:
         The settled postures and which of them converged (n,): a posture whose second
@@ -89,7 +94,8 @@ def settle_true(model: CalibrationModel, x: FloatArray, planned: Contacts) -> tu
     """
     scene = model.scene
     legs = set(scene.stance_leg_joints())
-    second_leg = scene.leg_joints(scene.second_sole) if model.floor is not None else []
+    floor = model.floor if stand else None
+    second_leg = scene.leg_joints(scene.second_sole) if floor is not None else []
     own = {name: sorted(set(chain.joint_indices) - legs) + second_leg for name, chain in model.contact.chains.items()}
     joints = planned.joints.copy()
     sessions = np.array(planned.sessions)
@@ -102,15 +108,15 @@ def settle_true(model: CalibrationModel, x: FloatArray, planned: Contacts) -> tu
         posture = planned.subset(rows)
         observations = model.observations(Contacts(values[rows], posture.chains, posture.sessions, posture.labels))
         if not jacobian:
-            out = model.evaluate(x, observations)
-            blocks = [out.contact] + ([out.floor] if model.floor is not None else [])  # floor: less its session's
+            out = model.evaluate(x, observations, floor=floor is not None)
+            blocks = [out.contact] + ([out.floor] if floor is not None else [])  # floor: less its session's
             return np.concatenate(blocks, axis=1), np.zeros(0)
         bent = Contacts(model.deflected(x, observations), posture.chains, posture.sessions, posture.labels)
         theta = model.theta(x)
         res, _, d_joints = model.contact.derivatives(theta, bent)
         blocks, jacs = [res], [d_joints]
-        if model.floor is not None:
-            pose, _, f_joints = model.floor.derivatives(theta, bent.joints)
+        if floor is not None:
+            pose, _, f_joints = floor.derivatives(theta, bent.joints)
             blocks.append(pose - target[rows])
             jacs.append(f_joints)
         return np.concatenate(blocks, axis=1), np.concatenate(jacs, axis=1)
