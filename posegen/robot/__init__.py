@@ -56,6 +56,7 @@ from posegen.robot.postures import (
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for
 from posegen.robot.stance_space import StanceSpace
+from posegen.robot.statics import MOMENT_ARM_M, gravity_torques
 from posegen.robot.trajectory import (
     ACCELERATION_STEP,
     POSITION_DTYPE,
