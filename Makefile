@@ -8,12 +8,16 @@ export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 DEMO := plans/demo
 
-.PHONY: install demo test lint bench clean browser
+.PHONY: install demo test lint bench clean browser lock
 
-$(STAMP): pyproject.toml
+LOCK := constraints.txt
+
+# Every package at the version in $(LOCK) (the versions `make test` was last run with),
+# the build backend included (no build isolation): a new release upstream changes nothing.
+$(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev]'
+	$(PY) -m pip install --quiet -c $(LOCK) --upgrade pip setuptools
+	$(PY) -m pip install --quiet -c $(LOCK) --no-build-isolation -e '.[dev]'
 	touch $(STAMP)
 
 install: $(STAMP)
@@ -57,5 +61,18 @@ test: lint browser
 bench: $(STAMP) browser
 	$(PY) benchmarks/run.py
 
+# Rewrite the lock from a fresh venv: the locked versions kept and new dependencies at the
+# newest versions allowed, or with UPGRADE=1 everything at the newest versions allowed.
+# Then run `make test` (it reinstalls from the new lock) and commit $(LOCK) if it passes.
+lock:
+	rm -rf .venv-lock
+	$(PYTHON) -m venv .venv-lock
+	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --upgrade pip setuptools
+	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --no-build-isolation -e '.[dev]'
+	echo "# The versions make test runs with (pip constraints); make lock refreshes them (README)." > $(LOCK).new
+	.venv-lock/bin/python -m pip freeze --all --exclude-editable >> $(LOCK).new
+	mv $(LOCK).new $(LOCK)
+	rm -rf .venv-lock
+
 clean:
-	rm -rf $(VENV) $(DEMO) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .venv-lock $(DEMO) .pytest_cache .mypy_cache .ruff_cache

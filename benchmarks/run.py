@@ -21,6 +21,18 @@ import numpy as np
 import scale  # benchmarks/scale.py, beside this file
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def real_data() -> Path:
+    """The real TALOS recordings: ``$POSEGEN_REAL_DATA``, else ``shared/data/talos_real`` beside the checkout."""
+    if os.environ.get("POSEGEN_REAL_DATA"):
+        return Path(os.environ["POSEGEN_REAL_DATA"])
+    return next(
+        (p / "shared" / "data" / "talos_real" for p in ROOT.parents if (p / "shared" / "data" / "talos_real").is_dir()),
+        ROOT.parent / "shared" / "data" / "talos_real",
+    )
+
+
 POSEGEN = str(Path(sys.executable).with_name("posegen"))
 
 
@@ -229,9 +241,7 @@ def bench_calibration() -> None:
     from posegen.robot import Scene, load_config, load_pool
 
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
-    data = next(
-        p / "shared" / "data" / "talos_real" for p in ROOT.parents if (p / "shared" / "data" / "talos_real").is_dir()
-    )
+    data = real_data()
     candidate, _ = bench_real(scene, data, machine())
     bench_corrupted_row(scene, data, candidate)
     bench_recovery(scene, load_pool(ROOT / "plans" / "talos" / "pool.yaml"))

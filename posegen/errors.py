@@ -24,6 +24,14 @@ class BackendError(PosegenError):
     """Work cannot run where it was sent (Dask scheduler unreachable, no worker, other version)."""
 
 
+class ArgumentError(PosegenError):
+    """A number given to a command (a seed, a count, a size) is out of its range."""
+
+
+class OutputError(PosegenError):
+    """An output cannot be written: its place is not writable, or another posegen is writing it."""
+
+
 class InfeasibleError(PosegenError):
     """The problem has no solution (table out of reach, empty pool, rank-deficient design)."""
 
@@ -43,3 +51,9 @@ def unknown_name(kind: str, name: str, valid: Iterable[str]) -> str:
     choices = sorted(valid)
     shown = ", ".join(choices[:40]) + (", ..." if len(choices) > 40 else "")
     return f"unknown {kind} '{name}'; valid {kind}s: {shown}"
+
+
+def reason(exc: BaseException) -> str:
+    """An exception as one line for a message: its type and the first line of its text."""
+    lines = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {lines[0]}" if lines else type(exc).__name__

@@ -1,4 +1,9 @@
-"""Shared fixtures: the default TALOS scene and a small pool generated once per session."""
+"""Shared fixtures: the default TALOS scene, a small pool generated once per session, the real data.
+
+The real TALOS recordings are read from ``$POSEGEN_REAL_DATA`` when it is set, else from
+``shared/data/talos_real`` beside the checkout; tests that need them are skipped, with
+the reason, when they are not there.
+"""
 
 from __future__ import annotations
 
@@ -20,10 +25,15 @@ from posegen.select import select_pool_file
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "talos_table.yaml"
-REAL_DATA = next(  # beside the checkout (shared/data/talos_real), or beside a folder holding it
-    (p / "shared" / "data" / "talos_real" for p in ROOT.parents if (p / "shared" / "data" / "talos_real").is_dir()),
-    ROOT.parent / "shared" / "data" / "talos_real",
+REAL_DATA = (  # $POSEGEN_REAL_DATA; else shared/data/talos_real beside the checkout, or beside a folder holding it
+    Path(os.environ["POSEGEN_REAL_DATA"])
+    if os.environ.get("POSEGEN_REAL_DATA")
+    else next(
+        (p / "shared" / "data" / "talos_real" for p in ROOT.parents if (p / "shared" / "data" / "talos_real").is_dir()),
+        ROOT.parent / "shared" / "data" / "talos_real",
+    )
 )
+REAL_FILES = ("left_train.csv", "left_validation.csv", "right_train.csv")
 EXAMPLE_POOL = ROOT / "plans" / "talos" / "pool.yaml"
 
 
@@ -98,3 +108,12 @@ def route_file(example_pool: Pool, tmp_path_factory: pytest.TempPathFactory) -> 
     write_yaml(plan, data)
     route_plan_file(str(plan), str(folder / "route.yaml"), 0, None)
     return folder / "route.yaml"
+
+
+@pytest.fixture(scope="session")
+def real_data() -> Path:
+    """The folder of the real TALOS recordings; skips the test when they are not there."""
+    missing = [name for name in REAL_FILES if not (REAL_DATA / name).is_file()]
+    if missing:
+        pytest.skip(f"real TALOS data not found in {REAL_DATA} (set POSEGEN_REAL_DATA to its folder)")
+    return REAL_DATA

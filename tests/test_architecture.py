@@ -3,7 +3,7 @@
 Layers, bottom first (README, "Architecture")::
 
     posegen (version), errors, progress
-    io | parallel
+    io | parallel | arguments
     robot
     model
     pool | select | route | calibrate      (stages: never each other)
@@ -33,6 +33,7 @@ LAYERS = {
     "posegen.progress": 0,
     "posegen.io": 1,
     "posegen.parallel": 1,
+    "posegen.arguments": 1,
     "posegen.robot": 2,
     "posegen.model": 3,
     "posegen.pool": 4,

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from posegen.arguments import check_seed, check_size
 from posegen.calibrate.contact_windows import (
     PlannedContact,
     Rejection,
@@ -26,9 +27,19 @@ from posegen.calibrate.contact_windows import (
     wrist_force,
 )
 from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
-from posegen.calibrate.workflow import perturbation_of, write_truth
-from posegen.errors import InputError, unknown_name
-from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
+from posegen.calibrate.workflow import check_compliance, perturbation_of, write_truth
+from posegen.errors import ArgumentError, InputError, unknown_name
+from posegen.io import (
+    JointStates,
+    OutputKind,
+    RecordedBag,
+    Wrenches,
+    check_bag_destination,
+    check_writable,
+    claim_output,
+    write_recording,
+    write_yaml,
+)
 from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measurements_to_dict
 from posegen.robot import FloatArray, Scene, load_config, read_route, scene_for
 
@@ -120,35 +131,40 @@ def simulate_route_bag(
             contact that does not settle on the true plane.
 
     """
+    check_seed(seed, "--seed")
+    perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
+    check_size(rate_hz, "--rate", positive=True)
+    bag_path = Path(bag)
+    truth = bag_path.with_name(bag_path.name + ".truth.yaml")
+    check_writable(bag_path, OutputKind.FOLDER)
+    check_writable(truth)
+    check_bag_destination(bag_path)
     motion, scene = _route(route_path, None, config_path)
+    check_compliance(scene, compliance_rad_per_knm)
     wrench_topics(scene)  # before the simulation: every wrist needs a topic
     if not motion.contacts:
         raise InputError(f"{route_path}: the route makes no contact")
-    if not rate_hz > 0:
-        raise InputError(f"the recording rate must be positive (Hz), got {rate_hz}")
-    perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
     settings = SessionSettings(rate_hz=rate_hz)
-    recorded = simulate_session(scene, motion, session, perturbation, settings, seed)
-    prov = scene.provenance(seed)
-    prov["simulation"] = {
-        "route": route_path,
-        "route_sha256": _sha256(route_path),
-        "session": session,
-        "error_mm": error_mm,
-        "error_deg": error_deg,
-        "encoder_noise_deg": noise_deg,
-        "compliance_rad_per_knm": compliance_rad_per_knm,
-        "sensors": dataclasses.asdict(settings),
-    }
-    wrenches = {
-        topic: Wrenches(recorded.times_s, recorded.forces[chain], recorded.torques[chain])
-        for chain, topic in wrench_topics(scene).items()
-    }
-    joints = JointStates(scene.joint_names, recorded.times_s, recorded.positions)
-    bag_path = Path(bag)
-    truth = bag_path.with_name(bag_path.name + ".truth.yaml")
-    write_recording(bag_path, joints, joint_topic, wrenches, prov)
-    write_truth(truth, recorded.model, recorded.theta, prov)
+    with claim_output(bag_path, OutputKind.FOLDER, beside=(truth,)):
+        recorded = simulate_session(scene, motion, session, perturbation, settings, seed)
+        prov = scene.provenance(seed)
+        prov["simulation"] = {
+            "route": route_path,
+            "route_sha256": _sha256(route_path),
+            "session": session,
+            "error_mm": error_mm,
+            "error_deg": error_deg,
+            "encoder_noise_deg": noise_deg,
+            "compliance_rad_per_knm": compliance_rad_per_knm,
+            "sensors": dataclasses.asdict(settings),
+        }
+        wrenches = {
+            topic: Wrenches(recorded.times_s, recorded.forces[chain], recorded.torques[chain])
+            for chain, topic in wrench_topics(scene).items()
+        }
+        joints = JointStates(scene.joint_names, recorded.times_s, recorded.positions)
+        write_recording(bag_path, joints, joint_topic, wrenches, prov)
+        write_truth(truth, recorded.model, recorded.theta, prov)
     return SimulatedSession(bag_path, truth, len(motion.contacts), float(recorded.times_s[-1]), len(recorded.times_s))
 
 
@@ -237,50 +253,55 @@ def measure_bag(
     """
     if route_path is None and not use_wrench:
         raise InputError("without a wrench topic, --route is needed to tell contacts from pauses")
+    if session is not None and not session.strip():
+        raise ArgumentError("--session: give a session name")
+    check_writable(output)
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
     scene = Scene(load_config(config_path))
     planned_motion = None if route_path is None else _route(route_path, scene)[0]
     topics = wrench_topics(scene) if use_wrench else {}
-    joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
-    columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
-    forces = None
-    if use_wrench:
-        forces = {c: wrist_force(joints.times_s, w.times_s, w.forces) for c, w in zip(topics, wrenches, strict=True)}
-    settings = scene.config.recording
-    windows, rejected = find_windows(joints.times_s, joints.positions, forces, settings)
-    base = np.where(scene.locked, scene.locked_values, scene.reference)
-    if planned_motion is not None:
-        planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
-        heights = None if use_wrench else _heights(scene, windows, planned_motion, columns, base)
-        windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights)
-    accepted, full = _within_limits(scene, windows, columns, base, rejected)
-    rejected.sort(key=lambda r: r.start_s)
-    if not accepted:
-        first = f"; first rejected: {rejected[0].start_s:.2f} s, {rejected[0].reason}" if rejected else ""
-        raise InputError(f"{bag}: no contact window found ({len(rejected)} rejected{first})")
-    name = session or Path(bag).resolve().name
-    labels = tuple(f"{Path(bag).name}:{w.label or 'contact'}@{w.start_s:.2f}s" for w in accepted)
-    contacts = Contacts(np.array(full), tuple(w.chain for w in accepted), (name,) * len(accepted), labels)
-    prov = scene.provenance(None)
-    prov["recording"] = {
-        "bag": str(bag),
-        "bag_sha256": digest,
-        "storage": recorded.storage,
-        "session": name,
-        "topics": {"joint_states": joint_topic, "wrenches": topics},
-        "thresholds": dataclasses.asdict(settings),
-        "route": route_path,
-        "route_sha256": _sha256(route_path) if route_path else None,
-        "joint_states": {"samples": len(joints.times_s), "duration_s": float(joints.times_s[-1] - joints.times_s[0])},
-        "joints_not_recorded": absent,
-    }
-    data = measurements_to_dict(scene, contacts, prov)
-    for entry, window in zip(data["contacts"], accepted, strict=True):
-        entry.update(_window_fields(window))
-    data["rejected"] = [{"start_s": r.start_s, "end_s": r.end_s, "reason": r.reason} for r in rejected]
-    write_yaml(output, data)
-    duration = float(joints.times_s[-1] - joints.times_s[0])
-    return Measured(Path(output), tuple(accepted), tuple(rejected), topics, duration)
+    with claim_output(output):
+        joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
+        columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
+        forces = None
+        if use_wrench:
+            pairs = zip(topics, wrenches, strict=True)
+            forces = {c: wrist_force(joints.times_s, w.times_s, w.forces) for c, w in pairs}
+        settings = scene.config.recording
+        windows, rejected = find_windows(joints.times_s, joints.positions, forces, settings)
+        duration = float(joints.times_s[-1] - joints.times_s[0])
+        base = np.where(scene.locked, scene.locked_values, scene.reference)
+        if planned_motion is not None:
+            planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
+            heights = None if use_wrench else _heights(scene, windows, planned_motion, columns, base)
+            windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights)
+        accepted, full = _within_limits(scene, windows, columns, base, rejected)
+        rejected.sort(key=lambda r: r.start_s)
+        if not accepted:
+            first = f"; first rejected: {rejected[0].start_s:.2f} s, {rejected[0].reason}" if rejected else ""
+            raise InputError(f"{bag}: no contact window found ({len(rejected)} rejected{first})")
+        name = session or Path(bag).resolve().name
+        labels = tuple(f"{Path(bag).name}:{w.label or 'contact'}@{w.start_s:.2f}s" for w in accepted)
+        contacts = Contacts(np.array(full), tuple(w.chain for w in accepted), (name,) * len(accepted), labels)
+        prov = scene.provenance(None)
+        prov["recording"] = {
+            "bag": str(bag),
+            "bag_sha256": digest,
+            "storage": recorded.storage,
+            "session": name,
+            "topics": {"joint_states": joint_topic, "wrenches": topics},
+            "thresholds": dataclasses.asdict(settings),
+            "route": route_path,
+            "route_sha256": _sha256(route_path) if route_path else None,
+            "joint_states": {"samples": len(joints.times_s), "duration_s": duration},
+            "joints_not_recorded": absent,
+        }
+        data = measurements_to_dict(scene, contacts, prov)
+        for entry, window in zip(data["contacts"], accepted, strict=True):
+            entry.update(_window_fields(window))
+        data["rejected"] = [{"start_s": r.start_s, "end_s": r.end_s, "reason": r.reason} for r in rejected]
+        write_yaml(output, data)
+        return Measured(Path(output), tuple(accepted), tuple(rejected), topics, duration)
 
 
 def _window_fields(window: Window) -> dict[str, Any]:

@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from posegen.arguments import check_count, check_seed, check_size
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, select_model
@@ -79,6 +80,31 @@ class Calibration:
     base_with_floor: int | None  # base parameters of contacts and floor equations (None: one leg only)
 
 
+def check_settings(settings: Settings) -> None:
+    """Check the numbers of ``settings`` (before any file is read).
+
+    Raises:
+        ArgumentError: A prior scale that is not a positive number, a fold seed count
+            below 1, or a seed out of range.
+
+    """
+    if settings.prior_scale is not None:
+        check_size(settings.prior_scale, "--prior-scale", positive=True)
+    if settings.fold_seeds is not None:
+        check_count(settings.fold_seeds, "--fold-seeds")
+    check_seed(settings.seed, "--seed")
+
+
+def check_candidates(scene: Scene, settings: Settings) -> None:
+    """Check that the candidate models ``settings`` names are the config's.
+
+    Raises:
+        InputError: One is not.
+
+    """
+    _settings(scene, settings)
+
+
 def _settings(scene: Scene, settings: Settings) -> tuple[CalibrationConfig, list[CandidateConfig]]:
     config = scene.calibration
     if settings.prior_scale is not None:
@@ -107,13 +133,21 @@ def unusable_rows(model: CalibrationModel, observations: Observations, config: C
         for i in np.flatnonzero(beyond > 1.0):
             size = max(np.abs(offsets[i, :3]).max() * 1e3, np.degrees(np.abs(offsets[i, 3:]).max()))
             flags.append(Flag(int(i), contacts.labels[i], "feet off the floor (mm or deg)", float(size), 0))
-    for flag in flags:
-        LOG.warning("row left out: %s: %s", flag.label, flag.reason)
+    for flag in flags:  # the command prints them with the result (or names them in its error)
+        LOG.info("row left out: %s: %s", flag.label, flag.reason)
     return sorted(flags, key=lambda f: f.row)
 
 
-def check_enough(model: CalibrationModel, contacts: Contacts, config: CalibrationConfig) -> None:
+def check_enough(
+    model: CalibrationModel, contacts: Contacts, config: CalibrationConfig, left_out: Sequence[Flag] = ()
+) -> None:
     """Enough rows to fit the planes and to hold out regions of every chain.
+
+    Args:
+        model: The model to fit.
+        contacts: The usable rows.
+        config: The calibration section of the config.
+        left_out: The rows left out (named in the message, by file and line).
 
     Raises:
         InputError: Fewer contact equations than parameters without a prior, or a chain
@@ -123,14 +157,35 @@ def check_enough(model: CalibrationModel, contacts: Contacts, config: Calibratio
     planes = 3 * len(set(contacts.sessions))
     if 3 * len(contacts) <= planes:
         raise InputError(
-            f"{len(contacts)} usable rows give {3 * len(contacts)} equations for the {planes} plane parameters "
-            "that have no prior: record more contacts"
+            f"{len(contacts)} usable rows{_files_of(contacts.labels)} give {3 * len(contacts)} equations for the "
+            f"{planes} plane parameters that have no prior{_left_out(left_out)}: record more contacts"
         )
     for chain in model.contact.chains:
         rows = zip(contacts.chains, contacts.sessions, contacts.labels, strict=True)
-        spots = {(s, spot_of(label)) for c, s, label in rows if c == chain}
+        mine = [(s, label) for c, s, label in rows if c == chain]
+        spots = {(s, spot_of(label)) for s, label in mine}
         if len(spots) < 2:
-            raise InputError(f"chain '{chain}' has {len(spots)} usable spot(s): cross-validation needs at least 2")
+            raise InputError(
+                f"chain '{chain}' has {len(spots)} usable spot(s){_files_of([label for _, label in mine])}"
+                f"{_left_out(left_out)}: cross-validation needs at least 2"
+            )
+
+
+def _left_out(flags: Sequence[Flag]) -> str:
+    """``; N rows left out: FILE:LINE (why), ...`` (a few of them), or nothing."""
+    if not flags:
+        return ""
+    shown = ", ".join(f"{f.label.rsplit(':', 1)[0]} ({f.reason})" for f in flags[:3])
+    return f"; {len(flags)} row(s) left out: {shown}" + (f" and {len(flags) - 3} more" if len(flags) > 3 else "")
+
+
+def _files_of(labels: Sequence[str]) -> str:
+    """`` (FILE:LINE, ...)`` of the rows a message is about (a few of them), or nothing without labels."""
+    named = [label.rsplit(":", 1)[0] for label in labels if label.count(":") >= 2]
+    if not named:
+        return ""
+    shown = ", ".join(named[:3]) + (f" and {len(named) - 3} more" if len(named) > 3 else "")
+    return f" ({shown})"
 
 
 def calibrate(
@@ -160,7 +215,7 @@ def calibrate(
     everything = model.observations(train)
     flags = unusable_rows(model, everything, config)
     kept = [i for i in range(len(train)) if i not in {f.row for f in flags}]
-    check_enough(model, train.subset(kept), config)
+    check_enough(model, train.subset(kept), config, flags)
     usable = list(kept)
     noise = Noise(DEFAULT_NOISE, FLOOR_NOISE)
     seeds = range(settings.seed, settings.seed + config.fold_seeds)
@@ -184,7 +239,7 @@ def calibrate(
         if selection is not None and now == kept:
             break
         kept = now
-        check_enough(model, train.subset(kept), config)
+        check_enough(model, train.subset(kept), config, [*flags, *(f for f in screened if f.row in flagged)])
         observations = everything.subset(kept)
         folds = repeated_folds(model.contact, observations.contacts, config.folds, seeds)
         selection = select_model(model, observations, config, folds, noise, candidates, progress)

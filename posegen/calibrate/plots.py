@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.record import DISPLAY
+from posegen.io import atomic_path
 from posegen.robot import FloatArray
 
 
@@ -34,7 +35,8 @@ def plot_parameters(rows: list[dict[str, Any]], path: Path) -> None:
         ax.grid(axis="y", alpha=0.3)
     axes[0].set_title("Fitted deviations from the URDF (posterior std)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:  # a killed run leaves the old plot or the new one
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
@@ -53,7 +55,8 @@ def plot_residuals(before: FloatArray, after: FloatArray, title: str, path: Path
     axes[0].legend()
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:  # a killed run leaves the old plot or the new one
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
@@ -73,5 +76,6 @@ def plot_cross_validation(curves: dict[str, list[dict[str, float]]], chosen: tup
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:  # a killed run leaves the old plot or the new one
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)

@@ -27,7 +27,7 @@ import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
 from posegen.calibrate.estimation import frozen_jacobian
-from posegen.errors import InputError
+from posegen.errors import InputError, reason
 from posegen.io import load_yaml_file, write_atomic
 from posegen.model import Contacts
 from posegen.robot import FloatArray
@@ -193,7 +193,7 @@ def _read_residuals(path: Path) -> tuple[tuple[str, ...], tuple[ContactResidual,
             if len(row) != len(header):
                 raise ValueError(f"line {line}: {len(row)} fields, expected {len(header)}")
             values = np.array([float(v) for v in row[4:]])
-            shown = values[:first - 4] / np.tile(DISPLAY, 2)
+            shown = values[: first - 4] / np.tile(DISPLAY, 2)
             contacts.append(
                 ContactResidual(
                     set=ContactSet(row[0]),
@@ -205,25 +205,31 @@ def _read_residuals(path: Path) -> tuple[tuple[str, ...], tuple[ContactResidual,
                     after=shown[3:],
                 )
             )
-    except (OSError, IndexError, ValueError) as exc:
+    except (OSError, IndexError, ValueError, csv.Error) as exc:
         raise InputError(f"{path}: not a posegen residual table ({exc})") from exc
+    if not all(np.all(np.isfinite(c.joints)) for c in contacts):
+        raise InputError(f"{path}: not a posegen residual table (joint angles that are not finite)")
     return joint_names, tuple(contacts)
 
 
 def _read_posterior(path: Path) -> Posterior:
     try:
         with np.load(path, allow_pickle=False) as data:
-            names = tuple(str(n) for n in data["names"])
-            condition = data["condition"]
-            return Posterior(
+            names = tuple(str(n) for n in np.atleast_1d(data["names"]))
+            condition = np.array(data["condition"], dtype=float).reshape(2)
+            posterior = Posterior(
                 names=names,
                 covariance=np.array(data["covariance"], dtype=float),
-                singular_values=np.array(data["singular_values"], dtype=float),
+                singular_values=np.array(data["singular_values"], dtype=float).reshape(-1),
                 condition=float(condition[0]),
                 condition_with_prior=float(condition[1]),
             )
-    except (OSError, KeyError, ValueError) as exc:
-        raise InputError(f"{path}: not a posegen posterior file ({exc})") from exc
+    except Exception as exc:  # numpy's readers raise many kinds on damaged bytes (SyntaxError, MemoryError...)
+        raise InputError(f"{path}: not a posegen posterior file ({reason(exc)})") from exc
+    nb = len(posterior.names)
+    if posterior.covariance.shape != (nb, nb) or len(posterior.singular_values) > nb:
+        raise InputError(f"{path}: not a posegen posterior file (shapes do not match {nb} parameters)")
+    return posterior
 
 
 def read_calibration(path: str | Path) -> CalibrationRecord:
@@ -239,6 +245,8 @@ def read_calibration(path: str | Path) -> CalibrationRecord:
     report = load_yaml_file(directory / CALIBRATION_FILE, InputError)
     if not isinstance(report, dict) or report.get("format") != CALIBRATION_FORMAT:
         raise InputError(f"{directory / CALIBRATION_FILE}: not a {CALIBRATION_FORMAT} file")
+    if not isinstance(report.get("provenance") or {}, dict):
+        raise InputError(f"{directory / CALIBRATION_FILE}: 'provenance' must be a mapping")
     for name in (RESIDUALS_FILE, POSTERIOR_FILE, CALIBRATED_CONFIG_FILE):
         if not (directory / name).is_file():
             raise InputError(f"{directory}: no {name} (calibrate again with this posegen version)")

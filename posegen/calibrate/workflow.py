@@ -9,10 +9,12 @@ from typing import Any
 
 import numpy as np
 
-from posegen.calibrate.calibration import Settings, calibrate
+from posegen.arguments import check_seed, check_size
+from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
-from posegen.io import write_yaml
+from posegen.errors import ArgumentError
+from posegen.io import OutputKind, check_writable, claim_output, write_yaml
 from posegen.model import CalibrationModel, Contacts, read_measurements, write_measurements
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene, load_config, load_plan
@@ -62,42 +64,80 @@ def simulate_plan_file(
         session: Table session of every contact.
         compliance_rad_per_knm: True compliance of the config's first compliance group.
 
+    The arguments, the plan (its robot model included) and the outputs' place are
+    checked before any work; the output is locked while it is made.
+
     Raises:
-        PosegenError: Bad config or plan, or a contact that does not settle.
+        PosegenError: Bad arguments, config or plan, a plan of another robot model, an
+            output that cannot be written, or a contact that does not settle.
 
     """
-    scene = Scene(load_config(config_path))
-    plan, _ = load_plan(plan_path)
-    plan.check_joints(scene.joint_names, plan_path)
-    chains = tuple(p.chain for p in plan.postures)
-    planned = Contacts(plan.joints(), chains, (session,) * len(chains), tuple(p.spot for p in plan.postures))
+    check_seed(seed, "--seed")
     perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
-    recorded, model, x = simulate(scene, planned, perturbation, seed)
-    prov = scene.provenance(seed)
-    prov["simulation"] = {
-        "postures": plan_path,
-        "error_mm": error_mm,
-        "error_deg": error_deg,
-        "encoder_noise_deg": noise_deg,
-        "compliance_rad_per_knm": compliance_rad_per_knm,
-    }
+    if not session:
+        raise ArgumentError("--session: give a session name")
     measurements = Path(output)
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
-    write_truth(truth, model, x, prov)
-    write_measurements(measurements, scene, recorded, prov)
+    check_writable(measurements)
+    check_writable(truth)
+    scene = Scene(load_config(config_path))
+    check_compliance(scene, compliance_rad_per_knm)
+    plan, _ = load_plan(plan_path)
+    scene.check_made_for(plan.provenance, plan_path)
+    plan.check_joints(scene.joint_names, plan_path)
+    plan.check_limits(scene.joint_names, scene.lower, scene.upper, plan_path)
+    chains = tuple(p.chain for p in plan.postures)
+    planned = Contacts(plan.joints(), chains, (session,) * len(chains), tuple(p.spot for p in plan.postures))
+    with claim_output(measurements, beside=(truth,)):
+        recorded, model, x = simulate(scene, planned, perturbation, seed)
+        prov = scene.provenance(seed)
+        prov["simulation"] = {
+            "postures": plan_path,
+            "error_mm": error_mm,
+            "error_deg": error_deg,
+            "encoder_noise_deg": noise_deg,
+            "compliance_rad_per_knm": compliance_rad_per_knm,
+        }
+        write_truth(truth, model, x, prov)
+        write_measurements(measurements, scene, recorded, prov)
     return Simulated(contacts=len(recorded), measurements=measurements, truth=truth)
 
 
 def perturbation_of(
     error_mm: float, error_deg: float, noise_deg: float, compliance_rad_per_knm: float = 0.0
 ) -> Perturbation:
-    """The perturbation in the command line's units: mm and deg of placement errors, deg of noise, rad/kN m."""
+    """The perturbation in the command line's units: mm and deg of placement errors, deg of noise, rad/kN m.
+
+    Raises:
+        ArgumentError: A size that is negative or not a finite number.
+
+    """
+    for value, flag in (
+        (error_mm, "--error-mm"),
+        (error_deg, "--error-deg"),
+        (noise_deg, "--noise-deg"),
+        (compliance_rad_per_knm, "--compliance"),
+    ):
+        check_size(value, flag)
     return Perturbation(
         length_m=error_mm * 1e-3,
         angle_rad=float(np.deg2rad(error_deg)),
         encoder_noise_rad=float(np.deg2rad(noise_deg)),
         compliance_rad_per_nm=compliance_rad_per_knm * 1e-3,
     )
+
+
+def check_compliance(scene: Scene, compliance_rad_per_knm: float) -> None:
+    """Check that a simulated compliance has a group of the config to act on.
+
+    Raises:
+        ArgumentError: A compliance but no ``calibration.compliance`` group in the config.
+
+    """
+    if compliance_rad_per_knm and not scene.calibration.compliance:
+        raise ArgumentError(
+            f"--compliance {compliance_rad_per_knm:g}: the config defines no calibration.compliance group to act on"
+        )
 
 
 def write_truth(path: Path, model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> None:
@@ -150,11 +190,18 @@ def calibrate_files(
         PosegenError: Bad config or input, or too few contacts.
 
     """
+    check_settings(settings)
+    if not measurements:
+        raise ArgumentError("give at least one training measurement file")
+    out_dir = Path(output)
+    check_writable(out_dir, OutputKind.FOLDER)
     scene = Scene(load_config(config_path))
+    check_candidates(scene, settings)
     rejected: list[str] = []
     train = read_contacts(measurements, scene, rejected)
     validation = read_contacts(held_out, scene, rejected) if held_out else None
     sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
-    calibration = calibrate(scene, train, sessions, settings, progress)
-    report = write_calibration(calibration, validation, Path(output), settings.seed, rejected)
+    with claim_output(out_dir, OutputKind.FOLDER):
+        calibration = calibrate(scene, train, sessions, settings, progress)
+        report = write_calibration(calibration, validation, out_dir, settings.seed, rejected)
     return Calibrated(report=report, training_contacts=len(train))

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import DEFAULT_CONFIG
+from posegen.cli.options import DEFAULT_CONFIG, positive, positive_size, seed
 from posegen.cli.progress import ProgressBar
 
 NAME = "calibrate"
 HELP = "identify the kinematics from recorded contacts"
-PROGRESS = True  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,16 +18,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
     parser.add_argument(
         "--prior-scale",
-        type=float,
+        type=positive_size,
         default=None,
         help="fix the prior scale (x calibration.prior of the config); default: chosen by cross-validation",
     )
     parser.add_argument(
         "--candidates", nargs="+", default=[], help="only these of the config's candidate models (default: all)"
     )
-    parser.add_argument("--fold-seeds", type=int, default=None, help="repetitions of the CV (default: the config's)")
+    parser.add_argument(
+        "--fold-seeds", type=positive, default=None, help="repetitions of the CV (default: the config's)"
+    )
     parser.add_argument("--keep-outliers", action="store_true", help="report bad rows but keep them in the fit")
-    parser.add_argument("--seed", type=int, default=0, help="first seed of the CV folds (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="first seed of the CV folds (default 0)")
     parser.add_argument("-o", "--output", default="plans/calibration", help="output folder (default plans/calibration)")
 
 

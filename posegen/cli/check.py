@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import EXIT_VIOLATIONS, add_backend_arguments
+from posegen.cli.options import EXIT_VIOLATIONS, add_backend_arguments, positive_size
 from posegen.cli.progress import ProgressBar
 
 NAME = "check"
 HELP = "re-verify a pool or a route from scratch (exit 1 on any violation)"
-PROGRESS = True  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -17,7 +16,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("file", help="pool or route file")
     parser.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
     parser.add_argument(
-        "--min-dt", type=float, default=None, help="route: smallest time step between points in s (default 0.001)"
+        "--min-dt",
+        type=positive_size,
+        default=None,
+        help="route: smallest time step between points in s (default 0.001)",
     )
     add_backend_arguments(parser)
 

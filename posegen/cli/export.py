@@ -6,7 +6,6 @@ import argparse
 
 NAME = "export"
 HELP = "write a route as a rosbag2 (JointTrajectory per segment and whole, segment table)"
-PROGRESS = False  # draws a progress bar (and takes -q)
 
 TRAJECTORY_TOPIC = "/joint_trajectory_controller/joint_trajectory"  # ros2_control's trajectory controller
 SEGMENTS_TOPIC = "/posegen/segments"

@@ -1,10 +1,12 @@
 """The ``posegen`` command line. The only place errors become exit codes.
 
 Each subcommand is a module of this package: its name and help, its arguments, and a
-``run`` that calls one public function of its stage and prints the result.
+``run`` that calls one public function of its stage and prints the result. Every
+subcommand takes ``-q`` (no progress output).
 
-Exit codes: 0 success, 1 a check found violations, 2 bad input or infeasible problem,
-130 interrupted.
+Exit codes: 0 success, 1 a check found violations, 2 bad input (arguments and files
+included), an infeasible problem, or an output that cannot be written, 130 interrupted.
+Every error is one line on stderr, ``posegen: error: ...``.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import argparse
 import logging
 import os
 import sys
+from typing import NoReturn
 
 from posegen import __version__
 from posegen.cli import calibrate, check, export, measure, pool, route, select, simulate, view
@@ -24,9 +27,20 @@ EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130
 
 
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line, like every other posegen error."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``posegen: error: ...`` on one line and exit 2."""
+        command = self.prog.removeprefix("posegen").strip()
+        where = f"{command}: " if command else ""
+        print(f"posegen: error: {where}{message} (see: {self.prog} --help)", file=sys.stderr)
+        sys.exit(EXIT_ERROR)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="posegen",
         description="Plan and run the whole-body geometric calibration of a humanoid touching a table.",
         epilog="pipeline: pool -> select -> route -> export -> (record a rosbag2 on the robot) -> measure "
@@ -39,8 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
     for command in COMMANDS:
         sub = commands.add_parser(command.NAME, help=command.HELP)
         command.add_arguments(sub)
-        if command.PROGRESS:
-            sub.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+        if "-q" not in sub._option_string_actions:
+            sub.add_argument("-q", "--quiet", action="store_true", help="no progress output")
         sub.set_defaults(run=command.run)
     return parser
 
@@ -51,14 +65,20 @@ def main(argv: list[str] | None = None) -> int:
         # Before numpy loads: small matrices run faster on one BLAS thread (we parallelise
         # over processes), and results are bit-identical however the command is launched.
         os.environ.setdefault(var, "1")
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help, --version, or a bad argument (already reported)
+        return exc.code if isinstance(exc.code, int) else EXIT_ERROR
     logging.basicConfig(
-        level=logging.INFO if args.verbose else logging.WARNING, format="posegen: %(message)s", stream=sys.stderr
+        level=logging.INFO if args.verbose else logging.WARNING,
+        format="posegen: %(message)s",
+        stream=sys.stderr,
+        force=True,  # the current stderr, also when main runs more than once in a process
     )
     try:
         return int(args.run(args))
     except PosegenError as exc:
-        print(f"posegen: error: {exc}", file=sys.stderr)
+        print(f"posegen: error: {' '.join(str(exc).split())}", file=sys.stderr)  # one line, always
         return EXIT_ERROR
     except KeyboardInterrupt:
         print("posegen: interrupted; rerun the same command to resume", file=sys.stderr)
@@ -66,6 +86,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:  # the machine refused (disk full, permissions changed mid-run)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"posegen: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_ERROR
 
 
 if __name__ == "__main__":

@@ -8,7 +8,6 @@ from posegen.cli.options import DEFAULT_CONFIG, JOINT_STATES_TOPIC
 
 NAME = "measure"
 HELP = "find the static contacts in a recorded rosbag2 and write them as measurements"
-PROGRESS = False  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

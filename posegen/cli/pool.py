@@ -5,19 +5,18 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posegen.cli.options import DEFAULT_CONFIG, add_backend_arguments
+from posegen.cli.options import DEFAULT_CONFIG, add_backend_arguments, positive, seed
 from posegen.cli.progress import ProgressBar
 
 NAME = "pool"
 HELP = "generate feasible contact postures"
-PROGRESS = True  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
-    parser.add_argument("--n", type=int, default=1500, help="number of postures (default 1500)")
+    parser.add_argument("--n", type=positive, default=1500, help="number of postures (default 1500)")
     parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="random seed (default 0)")
     add_backend_arguments(parser)
     parser.add_argument("-o", "--output", default="plans/pool.yaml", help="pool file (default plans/pool.yaml)")
 

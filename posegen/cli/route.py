@@ -5,19 +5,18 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from posegen.cli.options import add_backend_arguments
+from posegen.cli.options import add_backend_arguments, seed
 from posegen.cli.progress import ProgressBar
 
 NAME = "route"
 HELP = "order, plan and time a trajectory through selected postures"
-PROGRESS = True  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("selection", nargs="?", default="plans/selected.yaml", help="selection or pool file")
     parser.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the ordering, OMPL and shortcuts (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="seed of the ordering, OMPL and shortcuts (default 0)")
     parser.add_argument(
         "--pool",
         default=None,

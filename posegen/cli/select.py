@@ -4,21 +4,22 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import fraction, positive
+from posegen.cli.options import fraction, non_negative, positive, seed
 from posegen.cli.progress import ProgressBar
 from posegen.errors import InputError
 
 NAME = "select"
 HELP = "choose optimal postures from a pool (IROC, DETMAX, exact k)"
-PROGRESS = True  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("pool", nargs="?", default="plans/pool.yaml", help="pool file (default plans/pool.yaml)")
     parser.add_argument("--k", type=positive, default=None, help="exactly K postures (default: where IROC's O1 peaks)")
-    parser.add_argument("--runs", type=int, default=0, help="DETMAX runs from seeded random starts (default 0)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the DETMAX starts (default 0)")
+    parser.add_argument(
+        "--runs", type=non_negative, default=0, help="DETMAX runs from seeded random starts (default 0)"
+    )
+    parser.add_argument("--seed", type=seed, default=0, help="seed of the DETMAX starts (default 0)")
     parser.add_argument(
         "--fraction",
         type=fraction,

@@ -4,34 +4,35 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import DEFAULT_CONFIG, JOINT_STATES_TOPIC
+from posegen.cli.options import DEFAULT_CONFIG, JOINT_STATES_TOPIC, name, positive_size, seed, size
 
 NAME = "simulate"
 HELP = "contacts of a perturbed robot at planned postures, or its recorded run of a route (--bag)"
-PROGRESS = False  # draws a progress bar (and takes -q)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("postures", help="pool or selection file; with --bag, a route file")
     parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the robot errors and noise (default 0)")
-    parser.add_argument("--error-mm", type=float, default=2.0, help="sigma of length errors (default 2 mm)")
+    parser.add_argument("--seed", type=seed, default=0, help="seed of the robot errors and noise (default 0)")
+    parser.add_argument("--error-mm", type=size, default=2.0, help="sigma of length errors (default 2 mm)")
     parser.add_argument(
-        "--error-deg", type=float, default=0.5, help="sigma of angle errors (default 0.5 deg, clipped 1.5)"
+        "--error-deg", type=size, default=0.5, help="sigma of angle errors (default 0.5 deg, clipped 1.5)"
     )
-    parser.add_argument("--noise-deg", type=float, default=0.005, help="encoder noise sigma (default 0.005 deg)")
-    parser.add_argument("--session", default="sim", help="table session name (default sim)")
+    parser.add_argument("--noise-deg", type=size, default=0.005, help="encoder noise sigma (default 0.005 deg)")
+    parser.add_argument("--session", type=name, default="sim", help="table session name (default sim)")
     parser.add_argument(
         "--compliance",
-        type=float,
+        type=size,
         default=0.0,
         help="true compliance, rad/kN m, of the config's first calibration.compliance group (default 0: rigid)",
     )
     parser.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
     bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR.truth.yaml")
-    bag.add_argument("--rate", type=float, default=500.0, help="joint state and wrench rate in Hz (default 500)")
+    bag.add_argument(
+        "--rate", type=positive_size, default=500.0, help="joint state and wrench rate in Hz (default 500)"
+    )
     bag.add_argument(
         "--joint-topic", default=JOINT_STATES_TOPIC, help=f"JointState topic (default {JOINT_STATES_TOPIC})"
     )

@@ -4,18 +4,18 @@ from __future__ import annotations
 
 import argparse
 
+from posegen.cli.options import port
 from posegen.view import DEFAULT_HOST, DEFAULT_PORT
 
 NAME = "view"
 HELP = "3D view of a pool, selection, route or calibration folder (live, or one HTML file)"
-PROGRESS = False
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("artefact", help="pool, selection or route file, or calibration folder")
     parser.add_argument("--html", default=None, help="write one self-contained HTML page here instead of serving")
-    parser.add_argument("--port", type=int, default=DEFAULT_PORT, help=f"live viewer port (default {DEFAULT_PORT})")
+    parser.add_argument("--port", type=port, default=DEFAULT_PORT, help=f"live viewer port (default {DEFAULT_PORT})")
     parser.add_argument(
         "--host", default=DEFAULT_HOST, help=f"live viewer address (default {DEFAULT_HOST}: this machine only)"
     )
@@ -24,16 +24,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Write the page, or serve the live viewer until Ctrl-C (which ends it normally)."""
-    from posegen.view import open_artefact, serve, write_html
+    from posegen.view import open_artefact, serve, write_html_file
 
-    artefact = open_artefact(args.artefact, args.config)
     if args.html:
-        page = write_html(artefact, args.html)
+        page = write_html_file(args.artefact, args.html, args.config)
         print(
             f"view: {page.steps} steps, {page.duration_s:.1f} s of playback -> {args.html} "
             f"({page.size_bytes / 1e6:.2f} MB, built in {page.build_s + page.serialize_s:.1f} s; opens offline)"
         )
         return 0
+    artefact = open_artefact(args.artefact, args.config)
+
     def ready(url: str) -> None:
         print(f"view: {args.artefact} at {url} (Ctrl-C to stop)", flush=True)
 

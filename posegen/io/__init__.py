@@ -1,4 +1,4 @@
-"""Files: atomic writes, YAML artefacts with their provenance, kind-checked reads, array sidecars, rosbag2.
+"""Files: atomic writes, output locks, YAML artefacts with provenance, kind-checked reads, sidecars, rosbag2.
 
 Below every other layer but :mod:`posegen.errors`: nothing here knows the robot. The
 rosbag2 modules hold the format concerns of talking to ROS 2: fixed-layout CDR
@@ -8,8 +8,10 @@ and routes as bags (:mod:`~posegen.io.trajectory_bag`).
 """
 
 from posegen.io.arrays import encode_arrays, read_arrays, sidecar_path, sidecar_reference, write_with_arrays
-from posegen.io.artefact import dump_yaml, load_yaml_file, provenance, read_yaml, write_yaml
-from posegen.io.atomic import write_atomic
+from posegen.io.artefact import dump_yaml, load_yaml_file, provenance, read_text_file, read_yaml, write_yaml
+from posegen.io.atomic import atomic_path, write_atomic
+from posegen.io.bag_writer import check_bag_destination
+from posegen.io.output import OutputKind, OutputLock, check_writable, claim_output, lock_path
 from posegen.io.recorded_bag import JOINT_STATE, WRENCH_STAMPED, JointStates, RecordedBag, Wrenches, write_recording
 from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, SegmentRow, write_trajectory_bag
 
@@ -20,14 +22,22 @@ __all__ = [
     "TRAJECTORY",
     "WRENCH_STAMPED",
     "JointStates",
+    "OutputKind",
+    "OutputLock",
     "RecordedBag",
     "SegmentRow",
     "Wrenches",
+    "atomic_path",
+    "check_bag_destination",
+    "check_writable",
+    "claim_output",
     "dump_yaml",
     "encode_arrays",
     "load_yaml_file",
+    "lock_path",
     "provenance",
     "read_arrays",
+    "read_text_file",
     "read_yaml",
     "sidecar_path",
     "sidecar_reference",

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from posegen.errors import InputError
+from posegen.errors import InputError, reason
 from posegen.io.artefact import dump_yaml
 from posegen.io.atomic import write_atomic
 
@@ -93,8 +93,10 @@ def read_arrays(path: str | Path, reference: Any, names: tuple[str, ...]) -> dic
             if missing:
                 raise InputError(f"{file}: missing arrays {', '.join(missing)}")
             return {name: archive[name] for name in names}
-    except (ValueError, OSError, zipfile.BadZipFile) as exc:
-        raise InputError(f"{file}: not a readable .npz file ({exc})") from exc
+    except InputError:
+        raise
+    except Exception as exc:  # numpy's readers raise many kinds on damaged bytes (SyntaxError, MemoryError...)
+        raise InputError(f"{file}: not a readable .npz file ({reason(exc)})") from exc
 
 
 def write_with_arrays(

@@ -41,14 +41,25 @@ def write_yaml(path: str | Path, data: dict[str, Any]) -> None:
 
 def load_yaml_file(path: Path, error: type[PosegenError]) -> Any:
     """Parse a YAML file; a missing file or bad YAML raises ``error`` with a one-line message."""
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise error(f"cannot read {path}: {exc.strerror}") from exc
+    text = read_text_file(path, error)
     try:
         return yaml.load(text, Loader=_Loader)
     except yaml.YAMLError as exc:
         raise error(f"{path}: not valid YAML ({str(exc).splitlines()[0]})") from exc
+    except RecursionError:
+        raise error(f"{path}: not valid YAML (nested too deeply)") from None
+
+
+def read_text_file(path: Path, error: type[PosegenError]) -> str:
+    """The text of a UTF-8 file (a byte-order mark is dropped); unreadable or binary raises ``error``."""
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise error(f"cannot read {path}: {exc.strerror}") from exc
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
 
 
 def read_yaml(path: str | Path, kind: str | tuple[str, ...]) -> dict[str, Any]:

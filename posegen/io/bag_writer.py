@@ -61,6 +61,18 @@ class BagWriter:
             write(connections[source[k]], int(times[k]), rows[source[k]][row[k]].tobytes())
 
 
+def check_bag_destination(path: str | Path) -> None:
+    """Check, before any work, that a bag may be written at ``path`` (nothing there, or a bag it replaces).
+
+    Raises:
+        InputError: ``path`` exists and is not a rosbag2 directory (it is never deleted).
+
+    """
+    path = Path(path)
+    if path.exists() and not (path.is_dir() and (path / "metadata.yaml").is_file()):
+        raise InputError(f"{path} exists and is not a rosbag2 directory: not overwriting it")
+
+
 @contextmanager
 def writing_bag(path: str | Path, provenance: dict[str, Any]) -> Iterator[BagWriter]:
     """Write a rosbag2 directory at ``path``, all or nothing.
@@ -72,8 +84,7 @@ def writing_bag(path: str | Path, provenance: dict[str, Any]) -> Iterator[BagWri
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     path = Path(path)
-    if path.exists() and not (path.is_dir() and (path / "metadata.yaml").is_file()):
-        raise InputError(f"{path} exists and is not a rosbag2 directory: not overwriting it")
+    check_bag_destination(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     scratch = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
     try:

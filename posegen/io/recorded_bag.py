@@ -24,7 +24,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from posegen.errors import InputError
+from posegen.errors import InputError, reason
 from posegen.io import cdr, mcap_index
 from posegen.io.bag_writer import writing_bag
 from posegen.io.cdr import FloatArray
@@ -159,7 +159,7 @@ class RecordedBag:
             self.start_ns = int(info["starting_time"]["nanoseconds_since_epoch"])
             compression = str(info.get("compression_mode") or "").lower()
         except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
-            raise InputError(f"{self.path}: not a rosbag2 bag (metadata.yaml: {type(exc).__name__}: {exc})") from exc
+            raise InputError(f"{self.path}: not a rosbag2 bag (metadata.yaml: {reason(exc)})") from exc
         if self.storage not in STORAGES:
             raise InputError(f"{self.path}: unknown storage plugin '{self.storage}'; valid: {', '.join(STORAGES)}")
         missing = [f.name for f in self.files if not f.is_file()]
@@ -173,7 +173,7 @@ class RecordedBag:
             with Reader(self.path) as reader:
                 self.topics = {c.topic: c.msgtype for c in reader.connections}
         except Exception as exc:  # rosbags raises several types for unreadable storage
-            raise InputError(f"{self.path}: cannot read the bag ({type(exc).__name__}: {exc})") from exc
+            raise InputError(f"{self.path}: cannot read the bag ({reason(exc)})") from exc
 
     def require(self, topic: str, msgtype: str) -> None:
         """Check that the bag has ``topic`` with messages of ``msgtype``.
@@ -229,7 +229,7 @@ class RecordedBag:
         except InputError:
             raise
         except Exception as exc:  # a corrupt message or storage file
-            raise InputError(f"{self.path}: cannot read the bag ({type(exc).__name__}: {exc})") from exc
+            raise InputError(f"{self.path}: cannot read the bag ({reason(exc)})") from exc
         times, positions = decoders[joint_topic].series(self.start_ns, self.path)
         joints = JointStates(decoders[joint_topic].names, times, positions)
         wrenches = []

@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from posegen.errors import InputError
-from posegen.io import read_yaml, write_yaml
+from posegen.errors import InputError, reason, unknown_name
+from posegen.io import read_text_file, read_yaml, write_yaml
 from posegen.model.contact_model import Contacts
 from posegen.robot import Scene
 
@@ -54,6 +54,18 @@ def _check_angles(scene: Scene, names: Sequence[str], values: np.ndarray, where:
             f"{where}: {names[k]} = {values[k]:.4f} rad is outside its limits "
             f"[{scene.lower[idx[k]]:.3f}, {scene.upper[idx[k]]:.3f}] +/- {tolerance} rad (shifted column?)"
         )
+
+
+def _check_names(scene: Scene, names: Sequence[str], path: Path) -> None:
+    """Check that every recorded joint name is the model's.
+
+    Raises:
+        InputError: One is not (the valid names are listed).
+
+    """
+    for name in names:
+        if name not in scene.joint_names:
+            raise InputError(f"{path}: {unknown_name('joint', name, scene.joint_names)}")
 
 
 def _full_joints(scene: Scene, names: Sequence[str], values: np.ndarray) -> np.ndarray:
@@ -109,15 +121,14 @@ def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TO
 
     """
     try:
-        rows = list(csv.reader(path.read_text().splitlines()))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(f"cannot read {path}: {exc}") from exc
+        rows = list(csv.reader(read_text_file(path, InputError).splitlines()))
+    except csv.Error as exc:
+        raise InputError(f"{path}: not a readable CSV file ({exc})") from exc
     header = next((r for r in rows if "joint_names" in r), None)
     if header is None:
         raise InputError(f"{path}: no header row with 'joint_names'")
     names = [c.strip() for c in header[header.index("joint_names") + 1 :] if c.strip()]
-    for name in names:
-        scene.joint_index(name)
+    _check_names(scene, names, path)
     by_recording = {c.recorded_as: c.name for c in scene.chains}
     joints, chains, labels, rejected = [], [], [], []
     for line, row in enumerate(rows, start=1):
@@ -171,8 +182,9 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
     raw = data.get("contacts")
     if not isinstance(names, list) or not isinstance(raw, list) or not raw:
         raise InputError(f"{path}: 'joint_names' and a non-empty 'contacts' list are required")
-    for name in names:
-        scene.joint_index(str(name))
+    if not all(isinstance(n, str) for n in names):
+        raise InputError(f"{path}: 'joint_names' must be a list of names")
+    _check_names(scene, names, path)
     chains_known = {c.name for c in scene.chains}
     joints, chains, sessions, labels = [], [], [], []
     for i, item in enumerate(raw):
@@ -180,8 +192,8 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         try:
             values = np.array([float(v) for v in item["joints"]])
             chain = str(item["chain"])
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InputError(f"{where}: malformed ({type(exc).__name__}: {exc})") from exc
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
+            raise InputError(f"{where}: malformed ({reason(exc)})") from exc
         if chain not in chains_known:
             raise InputError(f"{where}: unknown chain '{chain}'; valid chains: {', '.join(sorted(chains_known))}")
         if len(values) != len(names):

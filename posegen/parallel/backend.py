@@ -10,6 +10,9 @@ import itertools
 import json
 import multiprocessing
 import os
+import select
+import threading
+import time
 from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass
 from types import TracebackType
@@ -110,8 +113,36 @@ class Backend(abc.ABC):
 _STATES: dict[str, Any] = {}  # per worker process: each job's state, built by the pool's initializer
 
 
-def _init_process(job: Job[Any, Any, Any]) -> None:
+def _end_with(pid: int) -> None:
+    """End this worker process when process ``pid``, the run that started it, ends (``kill -9`` too).
+
+    Without it, the workers of a killed run (and their forkserver) would wait forever for
+    work that never comes.
+    """
+    try:
+        handle: int | None = os.pidfd_open(pid)  # readable once ``pid`` has ended
+    except (AttributeError, OSError):  # not Linux 5.3+: poll instead
+        handle = None
+
+    def watch() -> None:
+        if handle is not None:
+            select.select([handle], [], [])
+        else:
+            while True:
+                time.sleep(1.0)
+                try:
+                    os.kill(pid, 0)
+                except ProcessLookupError:
+                    break
+        os._exit(1)
+
+    threading.Thread(target=watch, name="posegen-end-with-run", daemon=True).start()
+
+
+def _init_process(job: Job[Any, Any, Any], run_pid: int | None = None) -> None:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    if run_pid is not None:
+        _end_with(run_pid)
     _STATES[job.name] = job.setup()
 
 
@@ -161,7 +192,7 @@ class ProcessBackend(Backend):
         if executor is None:
             context = multiprocessing.get_context("forkserver")
             executor = concurrent.futures.ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job,)
+                max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job, os.getpid())
             )
         try:
             yield from in_order(

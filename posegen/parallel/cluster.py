@@ -23,6 +23,7 @@ from typing import Any
 
 from dask.base import tokenize
 from distributed import Client, Future, get_worker
+from distributed.comm.addressing import parse_address, parse_host_port
 from distributed.diagnostics.plugin import WorkerPlugin
 
 from posegen import __version__
@@ -77,6 +78,12 @@ class DaskBackend(Backend):
     """Jobs on the Dask cluster whose scheduler is at ``address``."""
 
     def __init__(self, address: str) -> None:
+        try:  # a malformed address, checked first: a Client that fails to parse it hangs at exit
+            scheme, location = parse_address(address)
+            if scheme in ("tcp", "tls"):
+                parse_host_port(location)
+        except ValueError as exc:
+            raise BackendError(f"not a Dask scheduler address: {address!r} ({exc}); give tcp://HOST:PORT") from None
         try:
             self.client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
         except (OSError, TimeoutError, ValueError) as exc:

@@ -15,8 +15,9 @@ from typing import Any
 
 from posegen import __version__
 from posegen.errors import InputError
+from posegen.io import read_text_file
 from posegen.pool.sampler import Rejection
-from posegen.robot import Config, Posture
+from posegen.robot import Config, Posture, posture_from_dict
 
 Outcome = Posture | Rejection
 
@@ -27,18 +28,19 @@ def _encode(outcome: Outcome) -> Any:
     return {k: getattr(outcome, k) for k in Posture.__dataclass_fields__}
 
 
-def _decode(raw: Any) -> Outcome:
+def _decode(raw: Any, n_joints: int) -> Outcome:
     if isinstance(raw, str):
         return Rejection(raw)
-    return Posture(**{**raw, "joints": tuple(raw["joints"]), "contact_xy_m": tuple(raw["contact_xy_m"])})
+    return posture_from_dict(raw, n_joints, "checkpoint")
 
 
 class Checkpoint:
     """Append-only record of finished chunks, keyed by what determines the pool."""
 
-    def __init__(self, path: Path, key: str) -> None:
+    def __init__(self, path: Path, key: str, n_joints: int) -> None:
         self.path = path
         self.key = key
+        self.n_joints = n_joints  # joints per posture
 
     def load(self) -> list[list[Outcome]]:
         """Chunks finished by an earlier run with the same key (none if there was none).
@@ -49,20 +51,20 @@ class Checkpoint:
         """
         if not self.path.exists():
             return []
-        lines = self.path.read_text().splitlines()
+        lines = read_text_file(self.path, InputError).splitlines()
         try:
             header = json.loads(lines[0]) if lines else {}
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, RecursionError):
             header = {}
-        if header.get("key") != self.key:
+        if not isinstance(header, dict) or header.get("key") != self.key:
             raise InputError(
                 f"{self.path} belongs to a different run (config, seed or version); delete it or choose another output"
             )
         chunks = []
         for line in lines[1:]:
             try:
-                chunks.append([_decode(r) for r in json.loads(line)])
-            except (json.JSONDecodeError, TypeError, ValueError, KeyError):
+                chunks.append([_decode(r, self.n_joints) for r in json.loads(line)])
+            except (json.JSONDecodeError, TypeError, ValueError, KeyError, InputError):
                 break  # a line cut short by the kill: everything after it is redone
         return chunks
 

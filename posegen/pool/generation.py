@@ -16,6 +16,7 @@ import itertools
 import logging
 from pathlib import Path
 
+from posegen.arguments import check_seed
 from posegen.errors import BackendError, InfeasibleError
 from posegen.io import provenance
 from posegen.parallel import Backend, Job, ProcessBackend
@@ -81,9 +82,11 @@ def generate_pool(
     """
     if n <= 0:
         raise InfeasibleError(f"--n must be a positive number of postures, got {n}")
+    check_seed(seed)
     scene = Scene(config)
     model_sha = scene.files.sha256()
-    checkpoint = Checkpoint(checkpoint_path, run_key(config, seed, model_sha)) if checkpoint_path else None
+    key = run_key(config, seed, model_sha)
+    checkpoint = Checkpoint(checkpoint_path, key, len(scene.joint_names)) if checkpoint_path else None
     done = checkpoint.load() if checkpoint else []
     if checkpoint:
         checkpoint.start(done)

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from posegen.io import read_yaml
+from posegen.arguments import check_count, check_seed
+from posegen.errors import PosegenError
+from posegen.io import claim_output, read_yaml, sidecar_path
 from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
@@ -22,20 +24,34 @@ def generate_pool_file(
 ) -> Pool:
     """Generate (or resume) a pool and write it to ``output``.
 
+    The output is checked and locked before any work (:func:`posegen.io.claim_output`).
     Finished chunks are recorded in ``<output>.partial.jsonl``: rerunning the same
     command after a kill resumes from there. The pool file is written once, atomically,
-    and the checkpoint removed after it.
+    and the checkpoint removed after it; a run that fails removes the checkpoint it
+    started (one it resumed is kept).
 
     Raises:
-        PosegenError: Bad config, an infeasible scene, or a checkpoint of another run.
+        PosegenError: Bad arguments or config, an output that cannot be written or is
+            being written, an infeasible scene, or a checkpoint of another run.
 
     """
-    config = load_config(config_path)
+    check_count(n, "--n")
+    check_seed(seed, "--seed")
+    if not isinstance(workers, Backend):
+        check_count(workers, "--workers")
     path = Path(output)
     checkpoint = path.with_name(path.name + ".partial.jsonl")
-    pool = generate_pool(config, n, seed, workers, checkpoint, progress)
-    write_pool(path, pool)
-    checkpoint.unlink(missing_ok=True)
+    with claim_output(path, beside=(checkpoint, sidecar_path(path))):
+        config = load_config(config_path)
+        resuming = checkpoint.exists()
+        try:
+            pool = generate_pool(config, n, seed, workers, checkpoint, progress)
+        except PosegenError:
+            if not resuming:
+                checkpoint.unlink(missing_ok=True)
+            raise
+        write_pool(path, pool)
+        checkpoint.unlink(missing_ok=True)
     return pool
 
 

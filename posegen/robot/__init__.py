@@ -7,7 +7,7 @@ postures, and the files that carry postures and trajectories between stages (poo
 selection, route).
 """
 
-from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig
+from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
 from posegen.robot.config import (
     ChainConfig,
@@ -130,6 +130,7 @@ __all__ = [
     "load_config",
     "load_plan",
     "load_pool",
+    "parse_candidate",
     "parse_config",
     "plan_entries",
     "polygon_margin",

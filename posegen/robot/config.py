@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
+from posegen.arguments import is_finite_number
 from posegen.errors import ConfigError
 from posegen.io import load_yaml_file
 from posegen.robot.calibration_config import CalibrationConfig, calibration_to_dict, parse_calibration
@@ -206,26 +207,29 @@ class _Reader:
             raise ConfigError(f"{self._path(key)}: expected a non-empty string, got {value!r}")
         return value
 
+    def optional_text(self, key: str) -> str | None:
+        return None if self.raw(key, None) is None else self.text(key)
+
     def number(self, key: str, default: Any = ..., minimum: float | None = None) -> float:
         value = self.raw(key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(f"{self._path(key)}: expected a number, got {value!r}")
+        if not is_finite_number(value):
+            raise ConfigError(f"{self._path(key)}: expected a finite number, got {value!r}")
         if minimum is not None and value < minimum:
             raise ConfigError(f"{self._path(key)}: must be >= {minimum}, got {value}")
         return float(value)
 
-    def integer(self, key: str, default: Any = ..., minimum: int = 1) -> int:
+    def integer(self, key: str, default: Any = ..., minimum: int = 1, maximum: int = 1_000_000) -> int:
         value = self.raw(key, default)
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise ConfigError(f"{self._path(key)}: expected an integer >= {minimum}, got {value!r}")
+        if isinstance(value, bool) or not isinstance(value, int) or not minimum <= value <= maximum:
+            raise ConfigError(f"{self._path(key)}: expected an integer from {minimum} to {maximum}, got {value!r}")
         return value
 
     def numbers(self, key: str, length: int | None = None, default: Any = ...) -> tuple[float, ...]:
         value = self.raw(key, default)
-        ok = isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        ok = isinstance(value, list) and all(is_finite_number(v) for v in value)
         if not ok or (length is not None and len(value) != length) or not value:
             size = f"{length} " if length is not None else ""
-            raise ConfigError(f"{self._path(key)}: expected a list of {size}numbers, got {value!r}")
+            raise ConfigError(f"{self._path(key)}: expected a list of {size}finite numbers, got {value!r}")
         return tuple(float(v) for v in value)
 
     def texts(self, key: str, default: Any = ...) -> tuple[str, ...]:
@@ -254,12 +258,14 @@ def parse_config(data: Any, source_path: str = "") -> Config:
     base = Path(source_path).parent if source_path else Path.cwd()
 
     def absolute(value: str | None) -> str | None:  # relative paths are relative to the config file
+        if value is not None and "\0" in value:
+            raise ConfigError(f"robot.source: {value!r} is not a valid path")
         return None if value is None else str((base / value).resolve())
 
     source = RobotSource(
-        example_robot_data=src.raw("example_robot_data", None),
-        urdf=absolute(src.raw("urdf", None)),
-        srdf=absolute(src.raw("srdf", None)),
+        example_robot_data=src.optional_text("example_robot_data"),
+        urdf=absolute(src.optional_text("urdf")),
+        srdf=absolute(src.optional_text("srdf")),
         package_dirs=tuple(str(absolute(d)) for d in src.texts("package_dirs", [])),
     )
     if (source.example_robot_data is None) == (source.urdf is None):
@@ -267,9 +273,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
     if source.urdf is not None and source.srdf is None:
         raise ConfigError("robot.source.srdf: missing (needed with urdf)")
     locked = robot.raw("locked_joints", {})
-    if not isinstance(locked, dict) or not all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) for v in locked.values()
-    ):
+    if not isinstance(locked, dict) or not all(is_finite_number(v) for v in locked.values()):
         raise ConfigError("robot.locked_joints: expected a mapping joint name -> angle (rad)")
 
     st = top.sub("stance")
@@ -338,7 +342,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         soft_iterations=sp.integer("soft_iterations"),
         hard_iterations=sp.integer("hard_iterations"),
         spot_tolerance_m=sp.number("spot_tolerance_m", minimum=0.0),
-        chunk_size=sp.integer("chunk_size"),
+        chunk_size=sp.integer("chunk_size", maximum=10_000),
     )
     route = _section(top, "route", RouteConfig())
     recording = _section(top, "recording", RecordingConfig())

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from posegen.errors import InputError
+from posegen.errors import InputError, reason
 from posegen.io import read_arrays, read_yaml, write_with_arrays
 from posegen.robot.geometry import FloatArray
 
@@ -46,6 +46,7 @@ POOL_VERSION = 1  # postures inline
 POOL_ARRAYS_VERSION = 2  # postures in a .npz sidecar
 _SCALARS = ("contact_yaw_rad", "min_distance_m", "com_margin_m")  # float fields, one value per posture
 ARRAY_NAMES = ("sample", "chain", "spot", "joints", "contact_xy_m", *_SCALARS)
+LIMIT_SLACK_RAD = 1e-6  # a posture this far past a joint limit is still taken as within it
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,22 @@ class Pool:
         """
         if self.joint_names != joint_names:
             raise InputError(f"{where}: joint names differ from the robot model's")
+
+    def check_limits(self, names: tuple[str, ...], lower: FloatArray, upper: FloatArray, where: str) -> None:
+        """Check that every posture lies within the joint limits (rad, shape (nj,) each), to 1e-6 rad.
+
+        Raises:
+            InputError: One does not; the first is named (``posegen check`` lists them all).
+
+        """
+        joints = self.joints()
+        outside = (joints < lower - LIMIT_SLACK_RAD) | (joints > upper + LIMIT_SLACK_RAD)
+        if outside.any():
+            k, j = (int(i) for i in np.argwhere(outside)[0])
+            raise InputError(
+                f"{where}: posture {k}: {names[j]} = {joints[k, j]:.4f} rad is outside its limits "
+                f"[{lower[j]:.4f}, {upper[j]:.4f}] (posegen check lists every violation)"
+            )
 
     def per_spot(self) -> dict[str, dict[str, int]]:
         """Number of postures per target spot and chain."""
@@ -154,6 +171,8 @@ def posture_from_dict(raw: Any, n_joints: int, where: str) -> Posture:
 
     """
     try:
+        if not isinstance(raw["chain"], str) or not isinstance(raw["spot"], str):
+            raise TypeError("chain and spot must be names")
         joints = tuple(float(v) for v in raw["joints"])
         xy = tuple(float(v) for v in raw["contact_xy_m"])
         posture = Posture(
@@ -166,10 +185,15 @@ def posture_from_dict(raw: Any, n_joints: int, where: str) -> Posture:
             min_distance_m=float(raw["min_distance_m"]),
             com_margin_m=float(raw["com_margin_m"]),
         )
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
-        raise InputError(f"{where}: malformed posture ({type(exc).__name__}: {exc})") from exc
-    if len(joints) != n_joints or not np.all(np.isfinite(joints)):
-        raise InputError(f"{where}: expected {n_joints} finite joint angles, got {len(joints)}")
+    except (KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
+        raise InputError(f"{where}: malformed posture ({reason(exc)})") from exc
+    if len(joints) != n_joints:
+        raise InputError(f"{where}: expected {n_joints} joint angles (one per joint name), got {len(joints)}")
+    if not np.all(np.isfinite(joints)):
+        raise InputError(f"{where}: joint angle {int(np.argmin(np.isfinite(joints)))} is not a finite number")
+    numbers = (*posture.contact_xy_m, posture.contact_yaw_rad, posture.min_distance_m, posture.com_margin_m)
+    if len(xy) != 2 or not np.all(np.isfinite(numbers)):
+        raise InputError(f"{where}: contact_xy_m (2 values), contact_yaw_rad and the margins must be finite numbers")
     return posture
 
 
@@ -184,6 +208,12 @@ def _postures_from_arrays(data: dict[str, Any], n_joints: int, where: str) -> tu
     expected = {name: (n,) for name in ARRAY_NAMES} | {"joints": (n, n_joints), "contact_xy_m": (n, 2)}
     if shapes != expected:
         raise InputError(f"{where}: arrays of inconsistent shapes {shapes}; expected {expected}")
+    integers = all(np.issubdtype(arrays[name].dtype, np.integer) for name in ("sample", "chain", "spot"))
+    numbers = all(np.issubdtype(arrays[name].dtype, np.number) for name in ("joints", "contact_xy_m", *_SCALARS))
+    if not integers or not numbers:
+        raise InputError(f"{where}: arrays of the wrong kinds (sample, chain, spot: integers; the rest: numbers)")
+    if not all(isinstance(name, str) for name in (*chains, *spots)):
+        raise InputError(f"{where}: 'chains' and 'spots' must be lists of names")
     for name, vocabulary in (("chain", chains), ("spot", spots)):
         codes = arrays[name]
         if n and (codes.min() < 0 or codes.max() >= len(vocabulary)):
@@ -221,11 +251,14 @@ def pool_from_dict(data: dict[str, Any], where: str = "pool") -> Pool:
 
     """
     version = data.get("format_version")
-    if version not in (POOL_VERSION, POOL_ARRAYS_VERSION):
-        raise InputError(f"{where}: unsupported format_version {version!r}")
+    if isinstance(version, bool) or version not in (POOL_VERSION, POOL_ARRAYS_VERSION):
+        raise InputError(
+            f"{where}: unsupported format_version {version!r} (this posegen reads {POOL_VERSION} and "
+            f"{POOL_ARRAYS_VERSION})"
+        )
     names = data.get("joint_names")
-    if not isinstance(names, list):
-        raise InputError(f"{where}: 'joint_names' must be a list")
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise InputError(f"{where}: 'joint_names' must be a list of names")
     if version == POOL_ARRAYS_VERSION:
         postures = _postures_from_arrays(data, len(names), where)
     else:
@@ -236,12 +269,20 @@ def pool_from_dict(data: dict[str, Any], where: str = "pool") -> Pool:
             posture_from_dict(raw, len(names), f"{where}: posture {i}") for i, raw in enumerate(raw_postures)
         )
     summary = data.get("summary") or {}
+    provenance = data.get("provenance") or {}
+    if not isinstance(summary, dict) or not isinstance(provenance, dict):
+        raise InputError(f"{where}: 'summary' and 'provenance' must be mappings")
+    attempted = summary.get("attempted", len(postures))
+    rejected = summary.get("rejected") or {}
+    counts = [attempted, *rejected.values()] if isinstance(rejected, dict) else None
+    if counts is None or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in counts):
+        raise InputError(f"{where}: summary: 'attempted' and the 'rejected' counts must be non-negative integers")
     return Pool(
-        joint_names=tuple(str(n) for n in names),
+        joint_names=tuple(names),
         postures=postures,
-        provenance=dict(data.get("provenance") or {}),
-        attempted=int(summary.get("attempted", len(postures))),
-        rejected={str(k): int(v) for k, v in (summary.get("rejected") or {}).items()},
+        provenance=dict(provenance),
+        attempted=attempted,
+        rejected={str(k): v for k, v in rejected.items()},
     )
 
 

@@ -14,7 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError, InputError, unknown_name
-from posegen.io import provenance
+from posegen.io import provenance, read_text_file
 from posegen.robot.config import ChainConfig, Config, load_config, parse_config
 from posegen.robot.description import augmented_urdf, frame_id, resolve_robot_files
 from posegen.robot.geometry import FloatArray, convex_hull_clockwise, flatten_on_floor, polygon_margin, yaw_rotation
@@ -60,7 +60,7 @@ class Scene:
         self.route = config.route
         self.calibration = config.calibration
         self.files = resolve_robot_files(config)
-        nominal_text = self.files.urdf.read_text()
+        nominal_text = read_text_file(self.files.urdf, ConfigError)
         try:
             nominal = pin.buildModelFromXML(nominal_text, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
@@ -96,7 +96,11 @@ class Scene:
             self.locked[i] = True
             self.locked_values[i] = value
 
-        pin.loadReferenceConfigurations(self.model, str(self.files.srdf), False)
+        read_text_file(self.files.srdf, ConfigError)  # a clear error for a binary or unreadable SRDF
+        try:
+            pin.loadReferenceConfigurations(self.model, str(self.files.srdf), False)
+        except (RuntimeError, ValueError) as exc:
+            raise ConfigError(f"cannot read SRDF {self.files.srdf}: {str(exc).strip().splitlines()[0]}") from exc
         refs = self.model.referenceConfigurations
         postures = {str(e.key()): np.array(e.data()) for e in refs}
         if self.stance.reference_posture not in postures:
@@ -166,6 +170,8 @@ class Scene:
 
         """
         sha = recorded.get("robot_model_sha256")
+        if sha is not None and not isinstance(sha, str):
+            raise InputError(f"{where}: provenance: robot_model_sha256 is not a hash ({sha!r})")
         if sha and sha != self.files.sha256():
             raise InputError(f"{where} was made for another robot model (sha256 {sha[:12]}...)")
 
@@ -293,7 +299,10 @@ def scene_for(recorded: dict[str, Any], config_path: str | None) -> Scene:
 
     Raises:
         ConfigError: The config is missing, malformed or names what the robot lacks.
+        InputError: The provenance is not a mapping.
 
     """
+    if not isinstance(recorded, dict):
+        raise InputError(f"the provenance must be a mapping, not {type(recorded).__name__}")
     config = load_config(config_path) if config_path else parse_config(recorded.get("config"), "")
     return Scene(config)

@@ -43,8 +43,8 @@ from typing import Any
 
 import numpy as np
 
-from posegen.errors import InputError
-from posegen.io import read_arrays, read_yaml
+from posegen.errors import InputError, reason
+from posegen.io import read_arrays, read_text_file, read_yaml
 from posegen.robot.geometry import FloatArray
 
 ROUTE_FORMAT = "posegen-route"
@@ -86,28 +86,33 @@ def read_route(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     if path.suffix.lower() == ".json":
         try:
-            data = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise InputError(f"cannot read route {path}: {exc}") from exc
+            data = json.loads(read_text_file(path, InputError))
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise InputError(f"{path}: not valid JSON ({reason(exc)})") from exc
         if not isinstance(data, dict) or data.get("format") != ROUTE_FORMAT:
             raise InputError(f"{path}: not a {ROUTE_FORMAT} file")
     else:
         data = read_yaml(path, ROUTE_FORMAT)
     try:
+        if not isinstance(data.get("provenance") or {}, dict):
+            raise TypeError("provenance must be a mapping")
         trajectory = data["trajectory"]
-        [str(name) for name in trajectory["joint_names"]]
+        if not all(isinstance(name, str) for name in trajectory["joint_names"]):
+            raise TypeError("joint_names must be a list of names")
         for seg in data["segments"]:
             SegmentType(seg["type"])
             int(seg["first_point"])
             int(seg["last_point"])
+            float(seg["start_s"])
+            float(seg["end_s"])
         version = int(data.get("format_version", 1))
         if version >= 2:
             arrays = read_arrays(path, data.get("arrays"), ROUTE_ARRAYS)
             int(trajectory["points"])
         else:
             arrays = _inline_arrays(trajectory["points"])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise InputError(f"{path}: malformed route ({type(exc).__name__}: {exc})") from exc
+    except (KeyError, TypeError, ValueError, IndexError, OverflowError, AttributeError) as exc:
+        raise InputError(f"{path}: malformed route ({reason(exc)})") from exc
     data["point_arrays"] = arrays
     return data
 
@@ -131,19 +136,34 @@ def is_route_file(path: str | Path) -> bool:
 
     """
     path = Path(path)
-    try:
-        head = path.read_text()[:4096]
-    except OSError as exc:
-        raise InputError(f"cannot read {path}: {exc.strerror}") from exc
+    head = read_text_file(path, InputError)[:4096]
     return path.suffix.lower() == ".json" or f"format: {ROUTE_FORMAT}" in head
 
 
-def route_arrays(data: dict[str, Any]) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Times (m,), positions, velocities and accelerations (m, nj) of a read route, as C-ordered float64."""
+def route_arrays(data: dict[str, Any], where: str = "route") -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Times (m,), positions, velocities and accelerations (m, nj) of a read route, as C-ordered float64.
+
+    For the route's users (viewer, exporter, rehearsal); ``posegen check`` reads
+    ``point_arrays`` itself, to report what is wrong with them rather than refuse them.
+
+    Raises:
+        InputError: The arrays disagree in shape with each other or the joint names, or a
+            segment points outside them.
+
+    """
     arrays = data["point_arrays"]
-    times, positions, velocities, accelerations = (
-        np.ascontiguousarray(arrays[name], dtype=float) for name in ROUTE_ARRAYS
-    )
+    try:
+        times, positions, velocities, accelerations = (
+            np.ascontiguousarray(arrays[name], dtype=float) for name in ROUTE_ARRAYS
+        )
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{where}: point arrays that are not numbers ({reason(exc)})") from exc
+    shape = (len(times), len(data["trajectory"]["joint_names"]))
+    if times.ndim != 1 or any(a.shape != shape for a in (positions, velocities, accelerations)):
+        raise InputError(f"{where}: point arrays of inconsistent shapes (expected {shape[0]} points of {shape[1]})")
+    ends = [int(s[k]) for s in data["segments"] for k in ("first_point", "last_point")]
+    if any(not 0 <= k < len(times) for k in ends):
+        raise InputError(f"{where}: a segment points outside the route's {len(times)} points")
     return times, positions, velocities, accelerations
 
 

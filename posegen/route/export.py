@@ -101,19 +101,25 @@ def route_header(
     }
 
 
+def route_outputs(path: Path, csv_too: bool = False) -> list[Path]:
+    """The files :func:`write_route` writes: the header, its sidecar, and the CSV if asked."""
+    written = [path, sidecar_path(path)]
+    if csv_too:
+        written.append(path.with_suffix(".csv"))
+    return written
+
+
 def write_route(path: Path, route: Route, header: dict[str, Any], csv_too: bool = False) -> list[Path]:
     """Write the route (the deflated sidecar first, the header that names it last; the CSV if asked).
 
     Returns:
-        The paths written: the header, its sidecar, and the CSV if asked.
+        The paths written: :func:`route_outputs`.
 
     """
     arrays = route_arrays_of(route)
-    written = [path, sidecar_path(path)]
+    written = route_outputs(path, csv_too)
     if csv_too:
-        csv_path = path.with_suffix(".csv")
-        write_atomic(csv_path, _csv(header, arrays))
-        written.append(csv_path)
+        write_atomic(written[2], _csv(header, arrays))
     write_with_arrays(path, header, arrays, compress=True)
     return written
 

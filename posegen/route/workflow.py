@@ -10,18 +10,28 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from posegen.errors import InputError
-from posegen.io import SegmentRow, write_trajectory_bag
+from posegen.arguments import check_seed, check_size
+from posegen.errors import ArgumentError, InputError
+from posegen.io import (
+    OutputKind,
+    SegmentRow,
+    check_bag_destination,
+    check_writable,
+    claim_output,
+    write_trajectory_bag,
+)
 from posegen.model import Design, build_design
 from posegen.parallel import Backend
 from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import Pool, Scene, SegmentType, Verification, load_plan, read_route, route_arrays, scene_for
 from posegen.route.check import MIN_DT_S, verify_route
-from posegen.route.export import route_header, write_route
+from posegen.route.export import route_header, route_outputs, write_route
 from posegen.route.repair import Substitutes, o1_figures
 from posegen.route.route import Route, plan_route
 
 LOG = logging.getLogger(__name__)
+
+ROUTE_SUFFIXES = (".yaml", ".yml", ".json")
 
 
 @dataclass(frozen=True)
@@ -59,35 +69,49 @@ def route_plan_file(
             be reached); None: the one the selection records, if it is still there.
         csv: Also write a CSV of the points beside the route.
 
+    The seed, the plan, its robot model and the outputs' place are checked before any
+    planning; the output is locked while it is made.
+
     Raises:
-        PosegenError: Bad or empty plan, another robot model, or no posture reachable.
+        PosegenError: Bad seed, bad or empty plan, another robot model, an output that
+            cannot be written, or no posture reachable.
 
     """
+    check_seed(seed, "--seed")
+    path = Path(output)
+    if path.suffix.lower() not in ROUTE_SUFFIXES:
+        raise ArgumentError(f"-o {output}: a route file ends in {' or '.join(ROUTE_SUFFIXES)}")
+    outputs = route_outputs(path, csv)
+    for output_path in outputs:
+        check_writable(output_path)
     plan, entries = load_plan(plan_path)
     scene = scene_for(plan.provenance, config_path)
     scene.check_made_for(plan.provenance, plan_path)
     plan.check_joints(scene.joint_names, plan_path)
+    plan.check_limits(scene.joint_names, scene.lower, scene.upper, plan_path)
     substitutes, pool_entries, repair = _substitutes(scene, plan, entries, plan_path, pool_path)
-    progress(Progress(0, 2 * len(plan.postures) + 1, "job"))
-    start = time.perf_counter()
-    route = plan_route(scene, plan.postures, seed, workers, substitutes, progress)
-    elapsed = time.perf_counter() - start
-    n = len(entries)
-    nodes = {i: entries[i] for i in range(n)}
-    nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
-    summary = _summary(scene, route, len(plan.postures))
-    summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
-    if substitutes is not None and route.substitutions:
-        summary["information"] = o1_figures(substitutes, [r for v in route.visited if (r := _row(v, n, substitutes))])
-    provenance = dict(plan.provenance)
-    provenance.update(
-        {
-            "seed": seed,
-            "selection": plan_path,
-            "selection_sha256": hashlib.sha256(Path(plan_path).read_bytes()).hexdigest(),
-        }
-    )
-    written = write_route(Path(output), route, route_header(route, nodes, provenance, summary), csv)
+    with claim_output(path, beside=outputs[1:]):
+        progress(Progress(0, 2 * len(plan.postures) + 1, "job"))
+        start = time.perf_counter()
+        route = plan_route(scene, plan.postures, seed, workers, substitutes, progress)
+        elapsed = time.perf_counter() - start
+        n = len(entries)
+        nodes = {i: entries[i] for i in range(n)}
+        nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
+        summary = _summary(scene, route, len(plan.postures))
+        summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
+        if substitutes is not None and route.substitutions:
+            rows = [r for v in route.visited if (r := _row(v, n, substitutes))]
+            summary["information"] = o1_figures(substitutes, rows)
+        provenance = dict(plan.provenance)
+        provenance.update(
+            {
+                "seed": seed,
+                "selection": plan_path,
+                "selection_sha256": hashlib.sha256(Path(plan_path).read_bytes()).hexdigest(),
+            }
+        )
+        written = write_route(path, route, route_header(route, nodes, provenance, summary), csv)
     return Routed(route=route, summary=summary, written=tuple(written), planning_s=elapsed, repair=repair)
 
 
@@ -178,6 +202,7 @@ def check_route_file(
             for another robot model.
 
     """
+    check_size(min_dt, "--min-dt", positive=True)
     data = read_route(path)
     recorded = data.get("provenance") or {}
     scene = scene_for(recorded, config_path)
@@ -208,6 +233,8 @@ def export_route_bag(route_path: str, bag: str, topic: str, segments_topic: str)
         PosegenError: Not a route, or the destination is not a bag.
 
     """
+    check_writable(bag, OutputKind.FOLDER)
+    check_bag_destination(bag)
     data = read_route(route_path)
     times, positions, velocities, accelerations = route_arrays(data)
     rows = [
@@ -226,7 +253,8 @@ def export_route_bag(route_path: str, bag: str, topic: str, segments_topic: str)
     provenance = dict(data.get("provenance") or {})
     provenance.update({"route": route_path, "route_sha256": hashlib.sha256(Path(route_path).read_bytes()).hexdigest()})
     names = data["trajectory"]["joint_names"]
-    count = write_trajectory_bag(
-        bag, names, times, (positions, velocities, accelerations), rows, topic, segments_topic, provenance
-    )
+    with claim_output(bag, OutputKind.FOLDER):
+        count = write_trajectory_bag(
+            bag, names, times, (positions, velocities, accelerations), rows, topic, segments_topic, provenance
+        )
     return Exported(bag=Path(bag), messages=count, segments=len(rows), points=len(times))

@@ -7,7 +7,7 @@ file with its plots.
 """
 
 from posegen.model import Design, build_design
-from posegen.select.followup import FollowUp, follow_up
+from posegen.select.followup import FollowUp, follow_up, read_calibration_model
 from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
 from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import Iroc, detmax_runs, iroc, select_k, weight_of
@@ -32,6 +32,7 @@ __all__ = [
     "iroc",
     "plot_detmax",
     "plot_o1",
+    "read_calibration_model",
     "select_k",
     "select_pool_file",
     "selection_to_dict",

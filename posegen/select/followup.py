@@ -15,14 +15,16 @@ that lowers it most, with rank-3 (Woodbury) updates of the posterior covariance.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from posegen.errors import InputError
+from posegen.errors import InputError, reason
+from posegen.io import read_yaml
 from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, candidate_spec, spec_for_rows, start_point
-from posegen.robot import CandidateConfig, FloatArray, Scene
+from posegen.robot import CandidateConfig, FloatArray, Scene, parse_candidate
 
 FLOOR_SIGMA = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))
 
@@ -141,3 +143,34 @@ def follow_up(
         height_std_mm={c: (before[c], after[c]) for c in before},
         gains=tuple(gains),
     )
+
+
+def read_calibration_model(path: str, scene: Scene) -> tuple[CandidateConfig, float, tuple[float, ...], str]:
+    """The model, prior scale, contact noise (m, rad, rad) and weakest chain a ``calibration.yaml`` records.
+
+    What ``posegen select --given --calibration`` designs with (the chain the
+    calibration's cross-validation predicts worst is the one to improve).
+
+    Raises:
+        PosegenError: Not a calibration of this robot's config, or values out of range.
+
+    """
+    report = read_yaml(path, "posegen-calibration")
+    try:
+        model = report["model"]
+        candidate = parse_candidate(
+            str(model["candidate"]),
+            {"fit": model["fit"], "floor": model["floor_equations"], "compliance": model["compliance"]},
+            f"{path}: model",
+            scene.calibration.compliance,
+        )
+        scale = float(model["prior_scale"])
+        shown = report["noise"]["contact"]
+        noise = (float(shown["z_mm"]) * 1e-3, math.radians(shown["roll_deg"]), math.radians(shown["pitch_deg"]))
+        predicted = report["predicted_error"]
+        weakest = str(max(sorted(predicted), key=lambda c: float(predicted[c]["mean_abs"]["z_mm"])))
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError) as exc:
+        raise InputError(f"{path}: not a posegen calibration ({reason(exc)})") from exc
+    if not all(math.isfinite(v) and v > 0 for v in (scale, *noise)):
+        raise InputError(f"{path}: the prior scale and the contact noise must be positive numbers")
+    return candidate, scale, noise, weakest

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from posegen.io import atomic_path
 from posegen.model import Design
 from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool
 from posegen.select.selection import Iroc
@@ -35,7 +36,6 @@ def selection_to_dict(
     chosen: Subset,
     method: str,
     detmax: tuple[Subset, ...],
-    timings: dict[str, float],
     seed: int,
 ) -> dict[str, Any]:
     """Plain data of a selection file."""
@@ -84,7 +84,6 @@ def selection_to_dict(
                 "rank": [s.rank for s in detmax],
                 "best_o1": max((s.o1 for s in detmax), default=None),
             },
-            "timings_s": {k: round(v, 3) for k, v in timings.items()},
         },
         "postures": postures,
     }
@@ -116,7 +115,8 @@ def plot_o1(result: Iroc, path: Path) -> None:
     twin.legend(lines[0] + more[0], lines[1] + more[1], loc="lower right")
     ax.set_title(f"IROC: O1 of the top-k postures (gap {result.weights.gap:.1e})")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
 
 
@@ -137,5 +137,6 @@ def plot_detmax(iroc_subset: Subset, chosen: Subset, detmax: tuple[Subset, ...],
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)

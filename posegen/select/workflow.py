@@ -3,29 +3,30 @@
 from __future__ import annotations
 
 import hashlib
+import logging
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from posegen.errors import InputError
-from posegen.io import read_yaml, write_yaml
+from posegen.arguments import check_count, check_seed
+from posegen.errors import InfeasibleError, InputError
+from posegen.io import check_writable, claim_output, write_yaml
 from posegen.model import DEFAULT_NOISE, Contacts, build_design, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import (
     POOL_VERSION,
     SELECTION_FORMAT,
-    CandidateConfig,
     load_pool,
     scene_for,
 )
-from posegen.select.followup import follow_up
+from posegen.select.followup import follow_up, read_calibration_model
 from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import detmax_runs, iroc, select_k
 from posegen.select.subset_selection import Subset, subset_of
+
+LOG = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -58,43 +59,66 @@ def select_pool_file(
     Returns:
         The selection file's content.
 
+    The arguments, the pool (its robot model included) and the output's place are
+    checked before any work; the output is locked while it is made. Wall times of the
+    steps are logged (``-v``), never written into the file: the same pool and settings
+    give the same bytes.
+
     Raises:
-        PosegenError: Not a pool, an empty or rank-deficient pool, or k out of range.
+        PosegenError: Bad arguments, not a pool, a pool of another robot model, an empty
+            or rank-deficient pool, k out of range, or an output that cannot be written.
 
     """
     settings = settings or SelectionSettings()
     k, runs, seed = settings.k, settings.runs, settings.seed
+    if k is not None:
+        check_count(k, "--k")
+    check_count(runs, "--runs", minimum=0)
+    check_seed(seed, "--seed")
+    path = Path(output)
+    plots = [path.with_name(path.stem + "_o1.png"), path.with_name(path.stem + "_detmax.png")]
+    check_writable(path)
+    for plot in plots:
+        check_writable(plot)
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, config_path)
-    timings: dict[str, float] = {}
-    say = Steps(4 + runs, progress)
-    start = time.perf_counter()
-    say("information matrices")
-    design, _ = build_design(scene, pool.joints(), [p.chain for p in pool.postures])
-    timings["design"] = time.perf_counter() - start
-    start = time.perf_counter()
-    say("IROC weights")
-    result = iroc(design, fractions=settings.fractions)
-    timings["iroc"] = time.perf_counter() - start
-    size = k if k else len(result.selected.rows)
-    start = time.perf_counter()
-    detmax: list[Subset] = []
-    for r in range(runs):
-        say(f"DETMAX run {r + 1}")
-        detmax.extend(detmax_runs(design, size, 1, seed * 1000 + r))
-    timings["detmax"] = time.perf_counter() - start
-    start = time.perf_counter()
-    say("exact design" if k else "write")
-    chosen = select_k(design, size, result.ranking, tuple(detmax)) if k else result.selected
-    timings["k_selection"] = time.perf_counter() - start
-    method = "k" if k else "iroc"
-    data = selection_to_dict(pool, pool_path, design, result, chosen, method, tuple(detmax), timings, seed)
-    path = Path(output)
-    write_yaml(path, data)
-    plot_o1(result, path.with_name(path.stem + "_o1.png"))
-    if detmax:
-        top_k = subset_of(design, result.ranking[:size]) if k else result.selected
-        plot_detmax(top_k, chosen, tuple(detmax), path.with_name(path.stem + "_detmax.png"))
+    scene.check_made_for(pool.provenance, pool_path)
+    pool.check_joints(scene.joint_names, pool_path)
+    pool.check_limits(scene.joint_names, scene.lower, scene.upper, pool_path)
+    if not pool.postures:
+        raise InfeasibleError(f"{pool_path}: the pool is empty")
+    if k is not None and k > len(pool.postures):
+        raise InfeasibleError(f"--k {k}: the pool has only {len(pool.postures)} postures")
+    with claim_output(path, beside=plots):
+        timings: dict[str, float] = {}
+        say = Steps(4 + runs, progress)
+        start = time.perf_counter()
+        say("information matrices")
+        design, _ = build_design(scene, pool.joints(), [p.chain for p in pool.postures])
+        timings["design"] = time.perf_counter() - start
+        start = time.perf_counter()
+        say("IROC weights")
+        result = iroc(design, fractions=settings.fractions)
+        timings["iroc"] = time.perf_counter() - start
+        size = k if k else len(result.selected.rows)
+        start = time.perf_counter()
+        detmax: list[Subset] = []
+        for r in range(runs):
+            say(f"DETMAX run {r + 1}")
+            detmax.extend(detmax_runs(design, size, 1, seed * 1000 + r))
+        timings["detmax"] = time.perf_counter() - start
+        start = time.perf_counter()
+        say("exact design" if k else "write")
+        chosen = select_k(design, size, result.ranking, tuple(detmax)) if k else result.selected
+        timings["k_selection"] = time.perf_counter() - start
+        LOG.info("timings (s): %s", ", ".join(f"{step} {t:.3f}" for step, t in timings.items()))
+        method = "k" if k else "iroc"
+        data = selection_to_dict(pool, pool_path, design, result, chosen, method, tuple(detmax), seed)
+        write_yaml(path, data)
+        plot_o1(result, plots[0])
+        if detmax:
+            top_k = subset_of(design, result.ranking[:size]) if k else result.selected
+            plot_detmax(top_k, chosen, tuple(detmax), plots[1])
     return data
 
 
@@ -122,67 +146,71 @@ def follow_up_pool_file(
         PosegenError: Bad pool, measurements or calibration file; k out of range.
 
     """
+    check_count(k, "--k")
+    path = Path(output)
+    check_writable(path)
+    if not given:
+        raise InputError("--given: at least one measurement file")
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, config_path)
+    scene.check_made_for(pool.provenance, pool_path)
+    pool.check_joints(scene.joint_names, pool_path)
+    pool.check_limits(scene.joint_names, scene.lower, scene.upper, pool_path)
+    if k > len(pool.postures):
+        raise InfeasibleError(f"--k {k}: the pool has only {len(pool.postures)} postures")
     contacts: Contacts | None = None
     for item in given:
-        path, _, session = item.partition("@")
-        part = read_measurements(path, scene, session or None).contacts
+        measured, _, session = item.partition("@")
+        part = read_measurements(measured, scene, session or None).contacts
         contacts = part if contacts is None else contacts.concat(part)
-    if contacts is None:
-        raise InputError("--given: at least one measurement file")
+    assert contacts is not None  # given is not empty
     scales = scene.calibration.prior_scales
     candidate, scale = scene.calibration.candidates[0], scales[len(scales) // 2]
     noise: tuple[float, ...] = DEFAULT_NOISE
     weakest = None
     source = "posterior variance of the config's first candidate"
     if calibration_path is not None:
-        report = read_yaml(calibration_path, "posegen-calibration")
-        try:
-            model = report["model"]
-            candidate = CandidateConfig(
-                model["candidate"], tuple(model["fit"]), bool(model["floor_equations"]), tuple(model["compliance"])
-            )
-            scale = float(model["prior_scale"])
-            shown = report["noise"]["contact"]
-            noise = (shown["z_mm"] * 1e-3, np.deg2rad(shown["roll_deg"]), np.deg2rad(shown["pitch_deg"]))
-            predicted = report["predicted_error"]
-            weakest = max(sorted(predicted), key=lambda c: predicted[c]["mean_abs"]["z_mm"])
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InputError(f"{calibration_path}: not a posegen calibration ({type(exc).__name__}: {exc})") from exc
+        candidate, scale, noise, weakest = read_calibration_model(calibration_path, scene)
         source = f"cross-validation of {calibration_path}"
-    result = follow_up(
-        scene, pool.joints(), [p.chain for p in pool.postures], contacts, candidate, scale, noise, k, weakest
-    )
-    provenance = dict(pool.provenance)
-    provenance["pool"] = pool_path
-    provenance["pool_sha256"] = hashlib.sha256(Path(pool_path).read_bytes()).hexdigest()
-    provenance["given"] = list(given)
-    provenance["calibration"] = calibration_path
-    pool_data = pool.to_dict()
-    postures = []
-    for rank, (row, gain) in enumerate(zip(result.rows, result.gains, strict=True), start=1):
-        entry: dict[str, Any] = {"pool_id": int(row), "rank": rank, "weight": round(gain, 6)}
-        entry.update(pool_data["postures"][row])
-        postures.append(entry)
-    data = {
-        "format": SELECTION_FORMAT,
-        "format_version": POOL_VERSION,
-        "provenance": provenance,
-        "method": "followup",
-        "joint_names": list(pool.joint_names),
-        "figures": {
-            "selected": len(result.rows),
-            "pool_postures": len(pool.postures),
-            "given_contacts": len(contacts),
-            "model": {"candidate": candidate.name, "prior_scale": scale},
-            "weakest_chain": result.chain,
-            "weakest_from": source,
-            "predicted_height_sigma_mm": {
-                c: {"before": round(b, 4), "after": round(a, 4)} for c, (b, a) in result.height_std_mm.items()
+        chains = {p.chain for p in pool.postures}
+        if weakest not in chains:
+            raise InfeasibleError(
+                f"{pool_path}: no posture of chain '{weakest}', the weakest of {calibration_path}; "
+                f"the pool's chains: {', '.join(sorted(chains))}"
+            )
+    with claim_output(path):
+        result = follow_up(
+            scene, pool.joints(), [p.chain for p in pool.postures], contacts, candidate, scale, noise, k, weakest
+        )
+        provenance = dict(pool.provenance)
+        provenance["pool"] = pool_path
+        provenance["pool_sha256"] = hashlib.sha256(Path(pool_path).read_bytes()).hexdigest()
+        provenance["given"] = list(given)
+        provenance["calibration"] = calibration_path
+        pool_data = pool.to_dict()
+        postures = []
+        for rank, (row, gain) in enumerate(zip(result.rows, result.gains, strict=True), start=1):
+            entry: dict[str, Any] = {"pool_id": int(row), "rank": rank, "weight": round(gain, 6)}
+            entry.update(pool_data["postures"][row])
+            postures.append(entry)
+        data = {
+            "format": SELECTION_FORMAT,
+            "format_version": POOL_VERSION,
+            "provenance": provenance,
+            "method": "followup",
+            "joint_names": list(pool.joint_names),
+            "figures": {
+                "selected": len(result.rows),
+                "pool_postures": len(pool.postures),
+                "given_contacts": len(contacts),
+                "model": {"candidate": candidate.name, "prior_scale": scale},
+                "weakest_chain": result.chain,
+                "weakest_from": source,
+                "predicted_height_sigma_mm": {
+                    c: {"before": round(b, 4), "after": round(a, 4)} for c, (b, a) in result.height_std_mm.items()
+                },
             },
-        },
-        "postures": postures,
-    }
-    write_yaml(Path(output), data)
+            "postures": postures,
+        }
+        write_yaml(path, data)
     return data

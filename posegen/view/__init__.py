@@ -19,7 +19,7 @@ from posegen.view.artefact import (
 from posegen.view.report import REPORT_FILE, report_html, write_report
 from posegen.view.robot_figure import MeshSource, RobotFigure, RobotMeshes, robot_meshes
 from posegen.view.scenery import ROBOT_RGB, Camera, framing
-from posegen.view.viewer import DEFAULT_HOST, DEFAULT_PORT, Page, html_page, serve, write_html
+from posegen.view.viewer import DEFAULT_HOST, DEFAULT_PORT, Page, html_page, serve, write_html, write_html_file
 
 __all__ = [
     "DEFAULT_HOST",
@@ -44,5 +44,6 @@ __all__ = [
     "robot_meshes",
     "serve",
     "write_html",
+    "write_html_file",
     "write_report",
 ]

@@ -18,7 +18,7 @@ from typing import Any
 
 from posegen.calibrate import COMPONENTS, ContactSet
 from posegen.errors import InputError
-from posegen.io import write_atomic
+from posegen.io import OutputKind, claim_output, write_atomic
 from posegen.view.artefact import CalibrationArtefact, open_artefact
 from posegen.view.calibration_view import displayed
 from posegen.view.report_figures import (
@@ -217,5 +217,6 @@ def write_report(directory: str | Path, config_path: str | None = None) -> Path:
     artefact = open_artefact(directory, config_path)
     assert isinstance(artefact, CalibrationArtefact), "a folder is a calibration"
     path = artefact.record.directory / REPORT_FILE
-    write_atomic(path, report_html(artefact))
+    with claim_output(artefact.record.directory, OutputKind.FOLDER):
+        write_atomic(path, report_html(artefact))
     return path

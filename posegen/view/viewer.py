@@ -19,8 +19,8 @@ from typing import Protocol
 
 import viser
 
-from posegen.io import write_atomic
-from posegen.view.artefact import Artefact, CalibrationArtefact, PlanArtefact, RouteArtefact
+from posegen.io import check_writable, claim_output, write_atomic
+from posegen.view.artefact import Artefact, CalibrationArtefact, PlanArtefact, RouteArtefact, open_artefact
 from posegen.view.calibration_view import CalibrationView
 from posegen.view.plan_view import PlanView
 from posegen.view.route_view import RouteView
@@ -105,15 +105,27 @@ def html_page(artefact: Artefact) -> Page:
 
 
 def write_html(artefact: Artefact, path: str | Path) -> Page:
-    """Write an artefact's view as one self-contained HTML page (atomically) and return it.
+    """Write an artefact's view as one self-contained HTML page (atomically, the page locked) and return it.
 
     Raises:
-        PosegenError: The artefact cannot be drawn.
+        PosegenError: The artefact cannot be drawn, or the page cannot be written.
 
     """
-    page = html_page(artefact)
-    write_atomic(path, page.html)
+    with claim_output(path):
+        page = html_page(artefact)
+        write_atomic(path, page.html)
     return page
+
+
+def write_html_file(artefact_path: str | Path, path: str | Path, config_path: str | None = None) -> Page:
+    """``posegen view ARTEFACT --html FILE``: the page's place is checked before the artefact is read.
+
+    Raises:
+        PosegenError: The page cannot be written, or the artefact cannot be read or drawn.
+
+    """
+    check_writable(path)
+    return write_html(open_artefact(artefact_path, config_path), path)
 
 
 def serve(

@@ -32,7 +32,6 @@ from posegen.model import (
 )
 from posegen.robot import CandidateConfig, PriorConfig
 from tests.calibrate.conftest import HIP_PITCH
-from tests.conftest import REAL_DATA
 
 TO_DISPLAY = np.array([1e3, 180 / np.pi, 180 / np.pi])  # mm, deg, deg
 COMPLIANCE = 3e-4  # rad/N m: ~1 deg of hip sag under 50 N m
@@ -161,11 +160,11 @@ def test_unusable_rows_are_reported_and_too_few_rows_refused(lean_scene, example
         check_enough(model, data.subset(one_each), lean_scene.calibration)
 
 
-def test_real_data_beats_before_and_the_published_toolbox(scene):
-    train = read_measurements(REAL_DATA / "left_train.csv", scene).contacts.concat(
-        read_measurements(REAL_DATA / "right_train.csv", scene).contacts
+def test_real_data_beats_before_and_the_published_toolbox(scene, real_data):
+    train = read_measurements(real_data / "left_train.csv", scene).contacts.concat(
+        read_measurements(real_data / "right_train.csv", scene).contacts
     )
-    held_out = read_measurements(REAL_DATA / "left_validation.csv", scene).contacts
+    held_out = read_measurements(real_data / "left_validation.csv", scene).contacts
     settings = Settings(candidates=("offsets_hip_pitch",), prior_scale=10.0, fold_seeds=1)  # the model chosen
     calibration = calibrate(scene, train, ["left_train", "right_train", "left_validation"], settings)
     residuals = held_out_residuals(calibration, held_out)

@@ -117,17 +117,15 @@ def test_simulate_then_calibrate(tmp_path, capsys):
     assert "predicted held-out error, left" in stdout and "model offsets" in stdout
 
 
-def test_calibrate_real_csv(tmp_path, capsys):
-    from tests.conftest import REAL_DATA
-
+def test_calibrate_real_csv(tmp_path, capsys, real_data):
     out = tmp_path / "real"
     code, stdout, _ = run(
         [
             "calibrate",
-            str(REAL_DATA / "left_train.csv"),
-            str(REAL_DATA / "right_train.csv"),
+            str(real_data / "left_train.csv"),
+            str(real_data / "right_train.csv"),
             "--validate",
-            str(REAL_DATA / "left_validation.csv"),
+            str(real_data / "left_validation.csv"),
             "--candidates",
             "offsets_hip_pitch",
             "--prior-scale",

@@ -5,15 +5,14 @@ import pytest
 
 from posegen.errors import InputError
 from posegen.model import read_measurements, write_measurements
-from tests.conftest import REAL_DATA
 
 
 @pytest.mark.parametrize(
     ("name", "rows", "chain"),
     [("left_train", 21, "left"), ("left_validation", 9, "left"), ("right_train", 29, "right")],
 )
-def test_real_csv_layouts(scene, name, rows, chain):
-    recording = read_measurements(REAL_DATA / f"{name}.csv", scene)
+def test_real_csv_layouts(scene, real_data, name, rows, chain):
+    recording = read_measurements(real_data / f"{name}.csv", scene)
     contacts = recording.contacts
     assert len(contacts) == rows and recording.rejected == ()
     assert set(contacts.chains) == {chain}
@@ -22,53 +21,55 @@ def test_real_csv_layouts(scene, name, rows, chain):
     assert np.all(np.abs(contacts.joints) < 3.2)
 
 
-def test_session_override(scene):
-    contacts = read_measurements(REAL_DATA / "left_validation.csv", scene, "day2").contacts
+def test_session_override(scene, real_data):
+    contacts = read_measurements(real_data / "left_validation.csv", scene, "day2").contacts
     assert set(contacts.sessions) == {"day2"}
 
 
-def _copy_with(tmp_path, edit):
-    lines = (REAL_DATA / "left_train.csv").read_text().splitlines()
+def _copy_with(tmp_path, edit, real_data):
+    lines = (real_data / "left_train.csv").read_text().splitlines()
     lines = edit(lines)
     path = tmp_path / "edited.csv"
     path.write_text("\n".join(lines) + "\n")
     return path
 
 
-def test_shifted_column_is_reported(scene, tmp_path):
+def test_shifted_column_is_reported(scene, real_data, tmp_path):
     def shift(lines):
         cells = lines[3].split(",")
         cells.insert(5, "0.0")  # every angle moves one column right
         lines[3] = ",".join(cells[:-1])
         return lines
 
-    recording = read_measurements(_copy_with(tmp_path, shift), scene)
+    recording = read_measurements(_copy_with(tmp_path, shift, real_data), scene)
     assert len(recording.contacts) == 20  # the other rows are kept
     assert len(recording.rejected) == 1 and re.search(r"edited.csv:4: .* outside its limits", recording.rejected[0])
 
 
-def test_text_in_an_angle_field_is_reported(scene, tmp_path):
+def test_text_in_an_angle_field_is_reported(scene, real_data, tmp_path):
     def text(lines):
         cells = lines[2].split(",")
         cells[10] = "handle"
         lines[2] = ",".join(cells)
         return lines
 
-    recording = read_measurements(_copy_with(tmp_path, text), scene)
+    recording = read_measurements(_copy_with(tmp_path, text, real_data), scene)
     assert recording.rejected == (
         f"{tmp_path / 'edited.csv'}:3: angle field 'handle' is not a number (shifted column?)",
     )
 
 
-def test_unknown_gripper_no_usable_row_and_missing_header(scene, tmp_path):
+def test_unknown_gripper_no_usable_row_and_missing_header(scene, real_data, tmp_path):
     with pytest.raises(InputError, match=r"no usable data row .* no known gripper"):
-        read_measurements(_copy_with(tmp_path, lambda ls: [ls[0], ls[1].replace("talos/left_gripper", "hand")]), scene)
+        read_measurements(
+            _copy_with(tmp_path, lambda ls: [ls[0], ls[1].replace("talos/left_gripper", "hand")], real_data), scene
+        )
     with pytest.raises(InputError, match="no header"):
-        read_measurements(_copy_with(tmp_path, lambda ls: ls[1:]), scene)
+        read_measurements(_copy_with(tmp_path, lambda ls: ls[1:], real_data), scene)
 
 
-def test_posegen_format_round_trip(scene, tmp_path):
-    contacts = read_measurements(REAL_DATA / "right_train.csv", scene).contacts
+def test_posegen_format_round_trip(scene, real_data, tmp_path):
+    contacts = read_measurements(real_data / "right_train.csv", scene).contacts
     path = tmp_path / "m.yaml"
     write_measurements(path, scene, contacts, {"seed": 0})
     again = read_measurements(path, scene).contacts

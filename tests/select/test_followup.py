@@ -6,7 +6,7 @@ import yaml
 
 from posegen.model import Contacts
 from posegen.robot import CandidateConfig
-from posegen.select import follow_up
+from posegen.select import follow_up, read_calibration_model
 
 CANDIDATE = CandidateConfig("offsets_legs", ("*.joint_offset", "leg.*"))
 
@@ -66,3 +66,14 @@ def test_cli_writes_a_selection_file_for_route_and_simulate(tmp_path, example_po
     data = yaml.safe_load(out.read_text())
     assert data["format"] == "posegen-selection" and data["method"] == "followup" and len(data["postures"]) == 5
     assert main(["simulate", str(out), "-o", str(tmp_path / "sim.yaml")]) == 0
+
+
+def test_the_model_of_a_calibration_is_read_back(calibration_folder, scene):
+    """``select --given --calibration`` designs with the calibration's model, prior scale, noise and weakest chain."""
+    found = read_calibration_model(str(calibration_folder.path / "calibration.yaml"), scene)
+    candidate, scale, noise, weakest = found
+    calibration = calibration_folder.calibration
+    chosen = calibration.selection.chosen
+    assert candidate == calibration.candidate and scale == chosen.prior_scale
+    assert noise == pytest.approx(calibration.after.noise.contact, rel=1e-2)  # m, rad (written rounded, mm and deg)
+    assert weakest == max(sorted(chosen.chains), key=lambda c: chosen.chains[c].mean_abs[0])

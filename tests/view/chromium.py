@@ -185,9 +185,7 @@ class Browser:
 
     def requests(self) -> list[str]:
         """URLs of every request the page made."""
-        return [
-            e["params"]["request"]["url"] for e in self.events if e.get("method") == "Network.requestWillBeSent"
-        ]
+        return [e["params"]["request"]["url"] for e in self.events if e.get("method") == "Network.requestWillBeSent"]
 
     def network_requests(self) -> list[str]:
         """Requests that would leave the machine (anything but file, data, blob and about URLs)."""

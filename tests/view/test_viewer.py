@@ -70,7 +70,7 @@ def test_interpolation_passes_through_the_route_points_and_is_linear_between():
 def test_the_camera_is_the_framing_and_the_page_fetches_nothing(selection_file, selection_page):
     page = recording(selection_page.html)
     camera = framing(open_artefact(selection_file).scene)
-    (_, position), = messages_of(page, "SetCameraPositionMessage")
+    ((_, position),) = messages_of(page, "SetCameraPositionMessage")
     assert np.allclose(position["position"], camera.position)
     html = selection_page.html
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", html)  # no script, style or image from a server

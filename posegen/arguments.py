@@ -1,0 +1,65 @@
+"""Checks of the numbers a command is given (seeds, counts, sizes), made before any work.
+
+The stages call these at the top of their public functions; the command line uses the
+same checks as argument types, so a bad value gets the same message either way.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TypeGuard
+
+from posegen.errors import ArgumentError
+
+MAX_SEED = 2**31 - 1  # every generator posegen seeds (numpy, OMPL, python-tsp) takes this range
+
+
+def is_finite_number(value: object) -> TypeGuard[int | float]:
+    """Whether ``value`` is an int or float (not a bool) and finite."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _integer(value: object, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ArgumentError(f"{name} must be an integer, got {value!r}")
+    return value
+
+
+def check_seed(value: object, name: str = "seed") -> int:
+    """A random seed: an integer from 0 to :data:`MAX_SEED`.
+
+    Raises:
+        ArgumentError: It is not.
+
+    """
+    number = _integer(value, name)
+    if not 0 <= number <= MAX_SEED:
+        raise ArgumentError(f"{name} must be an integer from 0 to {MAX_SEED}, got {number}")
+    return number
+
+
+def check_count(value: object, name: str, minimum: int = 1, maximum: int = 10**9) -> int:
+    """A number of things, from ``minimum`` to ``maximum``.
+
+    Raises:
+        ArgumentError: It is not.
+
+    """
+    number = _integer(value, name)
+    if not minimum <= number <= maximum:
+        raise ArgumentError(f"{name} must be an integer from {minimum} to {maximum}, got {number}")
+    return number
+
+
+def check_size(value: object, name: str, positive: bool = False) -> float:
+    """A finite size, >= 0 (> 0 with ``positive``).
+
+    Raises:
+        ArgumentError: It is not.
+
+    """
+    if not is_finite_number(value):
+        raise ArgumentError(f"{name} must be a finite number, got {value!r}")
+    if value < 0 or (positive and value == 0):
+        raise ArgumentError(f"{name} must be {'> 0' if positive else '>= 0'}, got {value}")
+    return float(value)

@@ -1,0 +1,80 @@
+"""The install cannot drift: every package `make test` runs with is pinned in constraints.txt.
+
+The Makefile installs with ``-c constraints.txt``; these tests check that the lock covers
+everything posegen (with its ``dev`` extra) pulls in, at the versions installed here,
+and that the caps keeping pinocchio's native libraries loadable are declared.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata as metadata
+from pathlib import Path
+
+import pytest
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
+
+ROOT = Path(__file__).resolve().parents[1]
+LOCK = ROOT / "constraints.txt"
+REFRESH = "refresh the lock: make lock, then make test (README, Set-up)"
+
+
+def pins() -> dict[str, str]:
+    out = {}
+    for line in LOCK.read_text().splitlines():
+        line = line.split("#")[0].strip()
+        if line:
+            name, _, version = line.partition("==")
+            assert version, f"constraints.txt: {line!r} is not name==version"
+            out[canonicalize_name(name)] = version
+    return out
+
+
+def declared() -> list[Requirement]:
+    """What pyproject.toml asks for, runtime and ``dev``."""
+    tomllib = pytest.importorskip("tomllib", reason="Python 3.11+ reads pyproject.toml")
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    return [Requirement(r) for r in [*project["dependencies"], *project["optional-dependencies"]["dev"]]]
+
+
+def closure() -> dict[str, str]:
+    """Every distribution posegen[dev] needs, as installed here: name -> version."""
+    found: dict[str, str] = {}
+    todo = [(r, "") for r in declared()]
+    while todo:
+        requirement, extra = todo.pop()
+        if requirement.marker and not requirement.marker.evaluate({"extra": extra}):
+            continue
+        name = canonicalize_name(requirement.name)
+        try:
+            dist = metadata.distribution(requirement.name)
+        except metadata.PackageNotFoundError:
+            pytest.fail(f"{requirement.name} is required but not installed: run make install")
+        for wanted in requirement.extras or {""}:
+            key = f"{name}[{wanted}]"
+            if key in found:
+                continue
+            found[key] = dist.version
+            todo.extend((Requirement(r), wanted) for r in dist.requires or [])
+    return {key.split("[")[0]: version for key, version in found.items()}
+
+
+def test_every_installed_requirement_is_pinned_at_its_installed_version():
+    locked = pins()
+    for name, version in sorted(closure().items()):
+        assert name in locked, f"{name} {version} is installed but not in constraints.txt: {REFRESH}"
+        assert locked[name] == version, f"{name}: {version} installed, {locked[name]} locked: {REFRESH}"
+
+
+def test_the_lock_satisfies_what_pyproject_asks():
+    locked = pins()
+    for requirement in declared():
+        name = canonicalize_name(requirement.name)
+        assert name in locked, f"{requirement.name} is declared but not locked: {REFRESH}"
+        assert requirement.specifier.contains(locked[name], prereleases=True), (str(requirement), locked[name])
+
+
+def test_the_native_library_caps_are_declared():
+    caps = {canonicalize_name(r.name): r.specifier for r in declared()}
+    assert "cmeel-urdfdom" in caps and not caps["cmeel-urdfdom"].contains("5.0.0")  # liburdfdom_sensor.so.4.0
+    assert "cmeel-tinyxml2" in caps and not caps["cmeel-tinyxml2"].contains("11.0.0")  # libtinyxml2.so.10
