@@ -318,7 +318,7 @@ def main() -> None:
     parser.add_argument(
         "--only",
         nargs="*",
-        default=["pool", "dask", "select", "route", "bag", "calibration", "view", "scale"],
+        default=["pool", "dask", "select", "route", "bag", "calibration", "view", "scale", "robots"],
         help="stages to run",
     )
     parser.add_argument("--n", type=int, default=1500, help="pool size")
@@ -350,6 +350,10 @@ def main() -> None:
         bench_view(pool_path, workdir)
     if "scale" in args.only:
         scale.bench_scale(workdir, args.large_n, args.measure_n or args.large_n, machine())
+    if "robots" in args.only:
+        from robots import bench_robots  # benchmarks/robots.py, beside this script
+
+        bench_robots(workdir / "robots", machine())
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ Library code raises these; only :mod:`posegen.cli` turns them into exit codes.
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
 
 
@@ -50,7 +51,9 @@ def unknown_name(kind: str, name: str, valid: Iterable[str]) -> str:
     """
     choices = sorted(valid)
     shown = ", ".join(choices[:40]) + (", ..." if len(choices) > 40 else "")
-    return f"unknown {kind} '{name}'; valid {kind}s: {shown}"
+    close = difflib.get_close_matches(name, choices, n=3)
+    hint = f"; did you mean {' or '.join(close)}?" if close else ""
+    return f"unknown {kind} '{name}'; valid {kind}s: {shown}{hint}"
 
 
 def reason(exc: BaseException) -> str:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+import yaml
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
@@ -35,6 +36,21 @@ REAL_DATA = (  # $POSEGEN_REAL_DATA; else shared/data/talos_real beside the chec
 )
 REAL_FILES = ("left_train.csv", "left_validation.csv", "right_train.csv")
 EXAMPLE_POOL = ROOT / "plans" / "talos" / "pool.yaml"
+RADIUS_M = 0.01  # tip radius of the point contacts of point_config_data
+
+
+def point_config_data(cone_deg: float = 30.0) -> dict:
+    """TALOS touching the table with the tip of its third finger (a declared frame at the tip's centre)."""
+    data = yaml.safe_load(CONFIG.read_text())
+    data["robot"]["frames"] = {
+        f"{side}_tip": {"parent": f"gripper_{side}_fingertip_3_link", "xyz_m": [0.0, 0.0, -0.03 + RADIUS_M]}
+        for side in ("left", "right")
+    }
+    for side in ("left", "right"):
+        data["chains"][side].update(
+            contact_kind="point", point_frame=f"{side}_tip", point_radius_m=RADIUS_M, point_cone_deg=cone_deg
+        )
+    return data
 
 
 @pytest.fixture(scope="session")
@@ -45,6 +61,14 @@ def config() -> Config:
 @pytest.fixture(scope="session")
 def scene(config: Config) -> Scene:
     return Scene(config)
+
+
+@pytest.fixture(scope="session")
+def point_scene() -> Scene:
+    """TALOS whose chains plan point contacts (and still declare their flush contact: sessions may mix)."""
+    from posegen.robot import parse_config
+
+    return Scene(parse_config(point_config_data()))
 
 
 @pytest.fixture(scope="session")

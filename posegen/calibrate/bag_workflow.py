@@ -40,7 +40,7 @@ from posegen.io import (
     write_recording,
     write_yaml,
 )
-from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measurements_to_dict
+from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measurements_to_dict, planned_kinds
 from posegen.robot import FloatArray, Scene, load_config, read_route, scene_for
 
 
@@ -194,7 +194,7 @@ def _heights(scene: Scene, windows: list[Window], motion: Motion, columns: list[
     held = np.repeat(base[None, :], len(windows), axis=0)
     held[:, columns] = [w.joints for w in windows]
     model = ContactModel(scene, sorted(set(chains)), ["nominal"])
-    contacts = Contacts(held, chains, ("nominal",) * len(chains), ("",) * len(chains))
+    contacts = Contacts(held, chains, ("nominal",) * len(chains), ("",) * len(chains), planned_kinds(scene, chains))
     return [float(h) for h in model.residuals(model.nominal(), contacts)[:, 0]]
 
 
@@ -282,7 +282,8 @@ def measure_bag(
             raise InputError(f"{bag}: no contact window found ({len(rejected)} rejected{first})")
         name = session or Path(bag).resolve().name
         labels = tuple(f"{Path(bag).name}:{w.label or 'contact'}@{w.start_s:.2f}s" for w in accepted)
-        contacts = Contacts(np.array(full), tuple(w.chain for w in accepted), (name,) * len(accepted), labels)
+        made = tuple(w.chain for w in accepted)
+        contacts = Contacts(np.array(full), made, (name,) * len(accepted), labels, planned_kinds(scene, made))
         prov = scene.provenance(None)
         prov["recording"] = {
             "bag": str(bag),

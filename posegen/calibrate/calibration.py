@@ -25,7 +25,14 @@ from posegen.arguments import check_count, check_seed, check_size
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, select_model
-from posegen.calibrate.screening import Flag, chi_threshold, feet_off_the_floor, feet_offsets, robust_residuals
+from posegen.calibrate.screening import (
+    Flag,
+    chi_thresholds,
+    feet_off_the_floor,
+    feet_offsets,
+    robust_residuals,
+    row_dof,
+)
 from posegen.errors import InfeasibleError, InputError
 from posegen.model import (
     DEFAULT_NOISE,
@@ -39,6 +46,7 @@ from posegen.model import (
     base_at,
     candidate_spec,
     level_postures,
+    row_counts,
     spec_for_rows,
     start_point,
 )
@@ -155,9 +163,10 @@ def check_enough(
 
     """
     planes = 3 * len(set(contacts.sessions))
-    if 3 * len(contacts) <= planes:
+    equations = int(row_counts(contacts.kinds).sum())  # 3 per flush contact, 1 per point contact
+    if equations <= planes:
         raise InputError(
-            f"{len(contacts)} usable rows{_files_of(contacts.labels)} give {3 * len(contacts)} equations for the "
+            f"{len(contacts)} usable rows{_files_of(contacts.labels)} give {equations} equations for the "
             f"{planes} plane parameters that have no prior{_left_out(left_out)}: record more contacts"
         )
     for chain in model.contact.chains:
@@ -211,7 +220,7 @@ def calibrate(
     """
     settings = settings or Settings()
     config, candidates = _settings(scene, settings)
-    model = CalibrationModel(scene, sorted(set(train.chains)), sessions, config.compliance)
+    model = CalibrationModel(scene, sorted(set(train.chains)), sessions, config.compliance, train.kinds_by_chain())
     everything = model.observations(train)
     flags = unusable_rows(model, everything, config)
     kept = [i for i in range(len(train)) if i not in {f.row for f in flags}]
@@ -228,10 +237,10 @@ def calibrate(
     for round_ in range(1, MAX_ROUNDS + 1):
         # every usable row is screened again with the current model: a row flagged by a poorer model comes back
         studentised, _, _ = robust_residuals(model, everything.subset(usable), spec, noise, start)
-        bound = chi_threshold(len(usable), config.outlier_false_alarm, 9 if spec.floor else 3)
+        bounds = chi_thresholds(row_dof(everything.subset(usable), spec.floor), config.outlier_false_alarm)
         screened = [
             Flag(row, train.labels[row], "residual", float(value), round_)
-            for row, value in zip(usable, studentised, strict=True)
+            for row, value, bound in zip(usable, studentised, bounds, strict=True)
             if value > bound
         ]
         flagged = {f.row for f in screened} if settings.drop_outliers else set()
@@ -261,7 +270,7 @@ def calibrate(
     chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
     observations = everything.subset(kept)
     after = selection.estimates[chosen.name, selection.chosen.prior_scale]
-    sides = tuple(model.columns([Kind.CONTACT_HEIGHT, Kind.CONTACT_TILT, Kind.PLANE]))
+    sides = tuple(model.columns([Kind.CONTACT_HEIGHT, Kind.CONTACT_TILT, Kind.CONTACT_POINT, Kind.PLANE]))
     before_spec = spec_for_rows(model, Spec(sides, np.full(model.size, np.inf), floor=False), sessions_in)
     before = estimate(model, observations, before_spec, after.noise, start_point(model, observations), rounds=1)
     postures = level_postures(model.contact, observations.contacts, settings.structural_postures, settings.seed)

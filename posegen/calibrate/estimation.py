@@ -13,7 +13,10 @@ posture, 1 except while screening for bad rows.
 The noise of each component is the residual RMS corrected for the degrees of freedom
 the fit used (RSS / (m - trace of the hat matrix over that component's rows)): an
 unbiased estimate of the measurement noise even when the fit is close to interpolating,
-which the training RMS is not.
+which the training RMS is not. m counts the rows measured: a point contact measures a
+height (the same quantity as a flush contact's, one sigma for both) and no roll or
+pitch, whose rows are zero in residual and Jacobian alike; with no flush contact the
+roll and pitch sigmas keep their values.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, Spec
+from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, Spec, row_mask
 from posegen.robot import FloatArray
 
 FLOOR_NOISE_FLOOR = (1e-5, 1e-5, 1e-5, float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)))
@@ -264,7 +267,9 @@ def estimate_noise(
     n = len(observations)
     contact = whitened[: 3 * n].reshape(n, 3) * np.array(noise.contact)
     dof = leverage[: 3 * n].reshape(n, 3).sum(axis=0)
-    sigma_c = np.sqrt(np.sum(contact**2, axis=0) / np.maximum(n - dof, 1.0))
+    rows = row_mask(observations.contacts.kinds).sum(axis=0)  # (3,) measured rows per component
+    sigma_c = np.sqrt(np.sum(contact**2, axis=0) / np.maximum(rows - dof, 1.0))
+    sigma_c = np.where(rows > 0, sigma_c, np.array(noise.contact))  # no flush contact: roll, pitch unmeasured
     sigma_f = np.array(noise.floor)
     if spec.floor:
         floor = whitened[3 * n :].reshape(n, 6) * sigma_f

@@ -48,11 +48,14 @@ def contact_positions(model: ContactModel, contacts: Contacts) -> FloatArray:
     """Nominal contact point (x, y in m) of each row in its chain's sole frame. Shape (n, 2)."""
     out = np.zeros((len(contacts), 2))
     chains = np.array(contacts.chains)
+    kinds = np.array([k.value for k in contacts.kinds])
     for name, chain in model.chains.items():
-        rows = np.flatnonzero(chains == name)
-        if len(rows):
-            frames = chain.sole_to_contact(contacts.joints[rows], chain.nominal_placements(), np.zeros(3))
-            out[rows] = frames[:, :2, 3]
+        for kind in set(contacts.kinds):
+            rows = np.flatnonzero((chains == name) & (kinds == kind.value))
+            if len(rows):
+                placements = chain.nominal_placements()
+                frames = chain.sole_to_contact(contacts.joints[rows], placements, np.zeros(3), kind)
+                out[rows] = frames[:, :2, 3]
     return out
 
 

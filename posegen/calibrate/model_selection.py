@@ -8,7 +8,9 @@ and takes ``fold_iterations`` Levenberg-Marquardt steps, at that fit's noise.
 
 Score: the mean over held-out contacts of sum_c (e_c / u_c)^2, with u = (1 mm, 0.1 deg,
 0.1 deg) the units the experiment design weighs in, averaged over the chains (each
-chain counts alike, however many rows it has). Its standard error is that of one
+chain counts alike, however many rows it has). It counts measured rows: three times the
+mean of (e_c / u_c)^2 over the rows measured, which is the above for flush contacts and
+weighs a point contact (its height only) as one row, not three. Its standard error is that of one
 repetition: the spread of the fold scores over the square root of their number, per
 chain, combined over the chains and averaged over the seeds.
 
@@ -53,6 +55,7 @@ from posegen.model import (
     Observations,
     Spec,
     candidate_spec,
+    masked,
     spec_for_rows,
     start_point,
 )
@@ -118,7 +121,7 @@ def cross_validate(
     folds: Sequence[Fold],
     iterations: int,
 ) -> list[FloatArray]:
-    """Predicted contact residuals (t, 3) of each fold's held-out rows.
+    """Predicted contact residuals (t, 3) of each fold's held-out rows, NaN where a contact measures nothing.
 
     A region fold's fit takes ``iterations`` Gauss-Newton steps from the fit on all rows,
     with that fit's Jacobian frozen; a session fold (whose plane is unknown in training)
@@ -140,7 +143,7 @@ def cross_validate(
             sessions = set(test.contacts.sessions)
             planes = plane_spec(model, sessions)
             x = model.x_of(fit(model, test, planes, full.noise, start_point_planes(model, test, x))[0])
-        out.append(model.evaluate(x, test, floor=False).contact)
+        out.append(masked(model.evaluate(x, test, floor=False).contact, test.contacts.kinds))
     return out
 
 
@@ -153,7 +156,7 @@ def start_point_planes(model: CalibrationModel, observations: Observations, x: F
     return out
 
 
-LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT)
+LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT, Kind.CONTACT_POINT)
 ANGLE_KINDS = (Kind.JOINT_OFFSET, Kind.AXIS_TILT, Kind.FRAME_ROTATION, Kind.CONTACT_TILT)
 
 
@@ -162,6 +165,23 @@ def largest_deviations(model: CalibrationModel, delta: FloatArray) -> tuple[floa
     lengths = np.abs(delta[model.columns(LENGTH_KINDS)])
     angles = np.abs(delta[model.columns(ANGLE_KINDS)])
     return float(lengths.max(initial=0.0) * 1e3), float(np.degrees(angles.max(initial=0.0)))
+
+
+def fold_loss(predicted: FloatArray) -> tuple[float, int]:
+    """Sum of (e_c / u_c)^2 over the measured rows of (t, 3) residuals (NaN: not measured), and their number."""
+    measured = np.isfinite(predicted)
+    return float(np.sum(np.where(measured, predicted / SCORE_UNITS, 0.0) ** 2)), int(measured.sum())
+
+
+def column_stats(errors: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Mean absolute and RMS of each column of (t, 3) residuals over its measured rows (NaN: none). Shapes (3,)."""
+    measured = np.isfinite(errors)
+    count = measured.sum(axis=0)
+    values = np.where(measured, errors, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_abs = np.where(count > 0, np.abs(values).sum(axis=0) / count, np.nan)
+        rms = np.where(count > 0, np.sqrt((values**2).sum(axis=0) / count), np.nan)
+    return mean_abs, rms
 
 
 def score_folds(
@@ -182,18 +202,19 @@ def score_folds(
         chain_scores, chain_var = [], []
         for chain in chains:
             mine = [p for f, p in zip(folds, predicted, strict=True) if f.seed == seed and f.chain == chain]
-            losses = [np.sum((p / SCORE_UNITS) ** 2, axis=1) for p in mine]
-            chain_scores.append(float(np.mean(np.concatenate(losses))))
-            fold_means = np.array([np.mean(loss) for loss in losses])
+            losses = [fold_loss(p) for p in mine]  # (sum, measured rows) per fold
+            chain_scores.append(3.0 * sum(v for v, _ in losses) / max(sum(m for _, m in losses), 1))
+            fold_means = np.array([3.0 * v / max(m, 1) for v, m in losses])
             chain_var.append(float(np.var(fold_means, ddof=1) / len(fold_means)) if len(fold_means) > 1 else 0.0)
             errors[chain].append(np.vstack(mine))
         seed_scores.append(float(np.mean(chain_scores)))
         seed_se.append(float(np.sqrt(np.sum(chain_var)) / len(chains)))
     per_chain = {}
     for chain in chains:
-        mean_abs = np.mean([np.mean(np.abs(e), axis=0) for e in errors[chain]], axis=0)
-        rms = np.mean([np.sqrt(np.mean(e**2, axis=0)) for e in errors[chain]], axis=0)
-        score = np.mean([np.mean(np.sum((e / SCORE_UNITS) ** 2, axis=1)) for e in errors[chain]])
+        stats = [column_stats(e) for e in errors[chain]]
+        mean_abs = np.mean([m for m, _ in stats], axis=0)
+        rms = np.mean([r for _, r in stats], axis=0)
+        score = np.mean([3.0 * v / max(m, 1) for v, m in (fold_loss(e) for e in errors[chain])])
         per_chain[chain] = ChainError(
             (float(mean_abs[0]), float(mean_abs[1]), float(mean_abs[2])),
             (float(rms[0]), float(rms[1]), float(rms[2])),

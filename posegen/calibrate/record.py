@@ -3,8 +3,9 @@
 Besides ``calibration.yaml`` (:mod:`posegen.calibrate.report`), a calibration writes::
 
     residuals.csv    one row per contact: set (training | outlier | held_out), label,
-                     chain, session, height/roll/pitch residuals before and after
-                     (mm, deg), then the joint angles (rad, one column per joint)
+                     chain, session, kind (flush | point), height/roll/pitch residuals
+                     before and after (mm, deg; a point contact's roll and pitch are
+                     empty: not measured), then the joint angles (rad, one per joint)
     posterior.npz    the fitted directions' names (parameter kinds, :mod:`posegen.model.kinds`),
                      their posterior covariance (f, f), the singular values of the
                      noise-whitened regressor (f,) and the condition numbers of the
@@ -29,8 +30,8 @@ from posegen.calibrate.calibration import Calibration, held_out_residuals
 from posegen.calibrate.estimation import frozen_jacobian
 from posegen.errors import InputError, reason
 from posegen.io import load_yaml_file, write_atomic
-from posegen.model import Contacts
-from posegen.robot import FloatArray
+from posegen.model import Contacts, masked
+from posegen.robot import ContactKind, FloatArray
 
 CALIBRATION_FILE = "calibration.yaml"
 CALIBRATION_FORMAT = "posegen-calibration"
@@ -58,8 +59,9 @@ class ContactResidual:
     chain: str
     session: str
     joints: FloatArray  # (nj,) rad, in ``joint_names`` order
-    before: FloatArray  # (3,) height (m), roll, pitch (rad): nominal model, fitted plane
+    before: FloatArray  # (3,) height (m), roll, pitch (rad): nominal model, fitted plane; NaN: not measured
     after: FloatArray  # (3,) the same, calibrated model
+    kind: ContactKind = ContactKind.FLUSH
 
 
 @dataclass(frozen=True)
@@ -100,8 +102,8 @@ def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> li
     """Every training contact (fitted or left out) and every held-out one, with its residuals."""
     model, train = calibration.model, calibration.train
     observations = model.observations(train)
-    before = model.evaluate(calibration.before.x, observations, floor=False).contact
-    after = model.evaluate(calibration.after.x, observations, floor=False).contact
+    before = masked(model.evaluate(calibration.before.x, observations, floor=False).contact, train.kinds)
+    after = masked(model.evaluate(calibration.after.x, observations, floor=False).contact, train.kinds)
     kept = set(calibration.kept)
     rows = [
         ContactResidual(
@@ -112,6 +114,7 @@ def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> li
             joints=train.joints[i].copy(),
             before=before[i],
             after=after[i],
+            kind=train.kinds[i],
         )
         for i in range(len(train))
     ]
@@ -124,8 +127,9 @@ def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> li
                 chain=held_out.chains[i],
                 session=held_out.sessions[i],
                 joints=held_out.joints[i].copy(),
-                before=judged["before"][i],
-                after=judged["after"][i],
+                before=masked(judged["before"][i : i + 1], held_out.kinds[i : i + 1])[0],
+                after=masked(judged["after"][i : i + 1], held_out.kinds[i : i + 1])[0],
+                kind=held_out.kinds[i],
             )
             for i in range(len(held_out))
         )
@@ -157,15 +161,15 @@ def write_record(calibration: Calibration, held_out: Contacts | None, out_dir: P
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     writer.writerow(
-        ["set", "label", "chain", "session"]
+        ["set", "label", "chain", "session", "kind"]
         + [f"{c}_before" for c in COMPONENTS]
         + [f"{c}_after" for c in COMPONENTS]
         + list(names)
     )
     for row in contact_residuals(calibration, held_out):
         writer.writerow(
-            [row.set.value, row.label, row.chain, row.session]
-            + [repr(float(v)) for v in np.concatenate([row.before, row.after]) * np.tile(DISPLAY, 2)]
+            [row.set.value, row.label, row.chain, row.session, row.kind.value]
+            + [_cell(v) for v in np.concatenate([row.before, row.after]) * np.tile(DISPLAY, 2)]
             + [repr(float(v)) for v in row.joints]
         )
     write_atomic(out_dir / RESIDUALS_FILE, buffer.getvalue())
@@ -181,28 +185,35 @@ def write_record(calibration: Calibration, held_out: Contacts | None, out_dir: P
     write_atomic(out_dir / POSTERIOR_FILE, packed.getvalue())
 
 
+def _cell(value: float) -> str:
+    """A residual as written (full precision); empty when not measured."""
+    return repr(float(value)) if np.isfinite(value) else ""
+
+
 def _read_residuals(path: Path) -> tuple[tuple[str, ...], tuple[ContactResidual, ...]]:
     try:
         with path.open(newline="") as handle:
             rows = list(csv.reader(handle))
         header, body = rows[0], rows[1:]
-        first = 4 + 2 * len(COMPONENTS)
+        named = 5 if header[4] == "kind" else 4  # tables before point contacts have no kind column
+        first = named + 2 * len(COMPONENTS)
         joint_names = tuple(header[first:])
         contacts = []
         for line, row in enumerate(body, start=2):
             if len(row) != len(header):
                 raise ValueError(f"line {line}: {len(row)} fields, expected {len(header)}")
-            values = np.array([float(v) for v in row[4:]])
-            shown = values[: first - 4] / np.tile(DISPLAY, 2)
+            values = np.array([float(v) if v else np.nan for v in row[named:]])
+            shown = values[: first - named] / np.tile(DISPLAY, 2)
             contacts.append(
                 ContactResidual(
                     set=ContactSet(row[0]),
                     label=row[1],
                     chain=row[2],
                     session=row[3],
-                    joints=values[first - 4 :],
+                    joints=values[first - named :],
                     before=shown[:3],
                     after=shown[3:],
+                    kind=ContactKind(row[4]) if named == 5 else ContactKind.FLUSH,
                 )
             )
     except (OSError, IndexError, ValueError, csv.Error) as exc:

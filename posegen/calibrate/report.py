@@ -21,41 +21,44 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
-from posegen.calibrate.model_selection import RULE, CvResult
+from posegen.calibrate.model_selection import RULE, CvResult, column_stats
 from posegen.calibrate.plots import plot_cross_validation, plot_parameters, plot_residuals
 from posegen.calibrate.record import CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
 from posegen.calibrate.urdf_export import calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
-from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas
-from posegen.robot import FloatArray
+from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas, masked
+from posegen.robot import ContactKind, FloatArray
 
-LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT)
-
-
-def _shown(values: Sequence[float] | FloatArray, digits: int = 4) -> dict[str, float]:
-    return {c: round(float(v), digits) for c, v in zip(COMPONENTS, np.asarray(values) * DISPLAY, strict=True)}
+LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT, Kind.CONTACT_POINT)
 
 
-def residual_stats(residuals: FloatArray) -> dict[str, dict[str, float]]:
-    """RMS and mean absolute of (n, 3) residuals, in mm and deg."""
+def _shown(values: Sequence[float] | FloatArray, digits: int = 4) -> dict[str, float | None]:
+    """Components in mm and deg; None for a component no contact measures (roll, pitch of point contacts)."""
     return {
-        "mean_abs": _shown(np.mean(np.abs(residuals), axis=0)),
-        "rms": _shown(np.sqrt(np.mean(residuals**2, axis=0))),
+        c: round(float(v), digits) if np.isfinite(v) else None
+        for c, v in zip(COMPONENTS, np.asarray(values, dtype=float) * DISPLAY, strict=True)
     }
+
+
+def residual_stats(residuals: FloatArray, kinds: Sequence[ContactKind]) -> dict[str, dict[str, float | None]]:
+    """RMS and mean absolute of (n, 3) residuals over the rows the contacts (of these kinds) measure, mm and deg."""
+    mean_abs, rms = column_stats(masked(residuals, kinds))
+    return {"mean_abs": _shown(mean_abs), "rms": _shown(rms)}
 
 
 def residual_tables(calibration: Calibration, held_out: Contacts | None) -> dict[str, Any]:
     """Training and held-out residual statistics, before and after."""
     model = calibration.model
     observations = model.observations(calibration.train.subset(list(calibration.kept)))
+    kinds = observations.contacts.kinds
     training = {
-        name: residual_stats(model.evaluate(fitted.x, observations, floor=False).contact)
+        name: residual_stats(model.evaluate(fitted.x, observations, floor=False).contact, kinds)
         for name, fitted in (("before", calibration.before), ("after", calibration.after))
     }
     tables: dict[str, Any] = {"training": {**training, "contacts": len(observations)}}
     if held_out is not None:
         for protocol, by_model in held_out_residuals(calibration, held_out).items():
-            tables[f"held_out_{protocol}"] = {k: residual_stats(v) for k, v in by_model.items()}
+            tables[f"held_out_{protocol}"] = {k: residual_stats(v, held_out.kinds) for k, v in by_model.items()}
             tables[f"held_out_{protocol}"]["contacts"] = len(held_out)
     return tables
 
@@ -286,18 +289,24 @@ def write_calibration(
     if held_out is not None:
         res = held_out_residuals(calibration, held_out)["training_plane"]
         title = "Held-out residuals (plane from training)"
-        plot_residuals(res["before"], res["after"], title, out_dir / "residuals.png")
+        kinds = held_out.kinds  # a point contact's roll and pitch (not measured) are not drawn
+        plot_residuals(masked(res["before"], kinds), masked(res["after"], kinds), title, out_dir / "residuals.png")
     else:
         observations = model.observations(calibration.train.subset(list(calibration.kept)))
+        kinds = observations.contacts.kinds
         plot_residuals(
-            model.evaluate(calibration.before.x, observations, floor=False).contact,
-            model.evaluate(calibration.after.x, observations, floor=False).contact,
+            masked(model.evaluate(calibration.before.x, observations, floor=False).contact, kinds),
+            masked(model.evaluate(calibration.after.x, observations, floor=False).contact, kinds),
             "Training residuals",
             out_dir / "residuals.png",
         )
     write_record(calibration, held_out, out_dir)
     write_atomic(out_dir / "calibration.yaml", dump_yaml(report))
     return report
+
+
+def _cell(value: float | None) -> str:
+    return f"{value:>7.2f}" if value is not None else f"{'-':>7}"
 
 
 def format_table(report: dict[str, Any]) -> str:
@@ -311,6 +320,6 @@ def format_table(report: dict[str, Any]) -> str:
             m, r = table[model]["mean_abs"], table[model]["rms"]
             lines.append(
                 f"{key:<28}{table['contacts']:>6}  {model:<7}"
-                + "".join(f"{m[c]:>7.2f}{r[c]:>7.2f}" for c in COMPONENTS)
+                + "".join(f"{_cell(m[c])}{_cell(r[c])}" for c in COMPONENTS)
             )
     return "\n".join(lines)

@@ -7,8 +7,9 @@
 * **Bad rows.** A robust fit (a Cauchy loss on each posture's normalised residual,
   by iteratively reweighted least squares) cannot be pulled far by one bad row, so that
   row keeps a large residual. Each row's residual is studentised (divided by the noise
-  and by sqrt(1 - leverage) of the weighted fit) and flagged above the chi (3 dof)
-  bound at which a clean set of n rows shows any with probability ``false_alarm``
+  and by sqrt(1 - leverage) of the weighted fit) and flagged above the chi bound
+  (3 dof for a flush contact, 1 for a point contact, 6 more with the floor equations)
+  at which a clean set of n rows shows any with probability ``false_alarm``
   (Bonferroni). The caller drops flagged rows, re-estimates the noise and re-selects
   the model without them, and screens again, until nothing more is flagged.
 """
@@ -21,7 +22,7 @@ import numpy as np
 import scipy.stats
 
 from posegen.calibrate.estimation import Noise, fit, frozen_jacobian
-from posegen.model import CalibrationModel, Observations, Spec
+from posegen.model import CalibrationModel, Observations, Spec, row_counts, row_mask
 from posegen.robot import FloatArray
 
 CAUCHY_SCALE = 2.385  # Cauchy constant of 95 % efficiency, per degree of freedom of a row
@@ -42,6 +43,16 @@ class Flag:
 def chi_threshold(n: int, false_alarm: float, dof: int = 3) -> float:
     """Normalised residual above which one of n rows is flagged (Bonferroni over n rows)."""
     return float(np.sqrt(scipy.stats.chi2.ppf(1.0 - false_alarm / max(n, 1), dof)))
+
+
+def row_dof(observations: Observations, floor: bool) -> FloatArray:
+    """Degrees of freedom of each row's residual: its contact's measured rows, 6 more with the floor. Shape (n,)."""
+    return np.asarray(row_counts(observations.contacts.kinds) + (6 if floor else 0), dtype=float)
+
+
+def chi_thresholds(dof: FloatArray, false_alarm: float) -> FloatArray:
+    """:func:`chi_threshold` of each row, given its degrees of freedom (n,). Shape (n,)."""
+    return np.array([chi_threshold(len(dof), false_alarm, int(d)) for d in dof])
 
 
 def feet_offsets(model: CalibrationModel, observations: Observations) -> FloatArray:
@@ -75,12 +86,15 @@ def robust_residuals(
 ) -> tuple[FloatArray, FloatArray, Noise]:
     """Studentised residual of each row under a Cauchy-weighted fit (n,), the fit's parameters, its noise.
 
-    A row's residual has 3 degrees of freedom (its contact), 9 with the floor equations.
+    A row's residual has 3 degrees of freedom (a flush contact; 1 for a point contact), 6
+    more with the floor equations (:func:`row_dof`).
     """
     n = len(observations)
     weights = np.ones(n)
     x = start
     comps = 9 if spec.floor else 3
+    dof = row_dof(observations, spec.floor)  # (n,)
+    measured = np.hstack([row_mask(observations.contacts.kinds), np.ones((n, comps - 3), dtype=bool)])  # (n, comps)
     studentised = np.zeros(n)
     for _ in range(ROBUST_ITERATIONS):
         delta, _ = fit(model, observations, spec, noise, x, weights=weights)
@@ -95,9 +109,10 @@ def robust_residuals(
         leverage = np.einsum("ij,jk,ik->i", flat, np.linalg.pinv(information), flat).reshape(n, comps)
         scaled = (raw / sigma) ** 2 / np.clip(1.0 - leverage, 0.05, 1.0)  # (n, comps)
         studentised = np.sqrt(scaled.sum(axis=1))
-        # noise of the well-fitting rows: weighted, leverage-corrected mean square
-        mean_square = (weights[:, None] * raw**2 / np.clip(1.0 - leverage, 0.05, 1.0)).sum(axis=0) / weights.sum()
-        rms = np.sqrt(mean_square)
+        # noise of the well-fitting rows: weighted, leverage-corrected mean square over the measured rows
+        weight_rows = (weights[:, None] * measured).sum(axis=0)  # (comps,)
+        mean_square = (weights[:, None] * raw**2 / np.clip(1.0 - leverage, 0.05, 1.0)).sum(axis=0)
+        rms = np.where(weight_rows > 0, np.sqrt(mean_square / np.maximum(weight_rows, 1e-300)), sigma)
         noise = Noise.of(rms[:3], rms[3:] if spec.floor else np.array(noise.floor))
-        weights = 1.0 / (1.0 + studentised**2 / (comps * CAUCHY_SCALE**2))
+        weights = 1.0 / (1.0 + studentised**2 / (dof * CAUCHY_SCALE**2))
     return studentised, x, noise

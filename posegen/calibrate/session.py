@@ -22,7 +22,7 @@ import numpy as np
 
 from posegen.calibrate.simulation import Perturbation, perturbed_robot, settle_true
 from posegen.errors import InfeasibleError
-from posegen.model import CalibrationModel, Contacts
+from posegen.model import CalibrationModel, Contacts, planned_kinds
 from posegen.robot import FloatArray, Scene, SegmentType, route_arrays
 
 TORQUE_ARM_M = 0.1  # torque noise = force noise x this lever
@@ -154,8 +154,14 @@ def simulate_session(
     """
     chains = tuple(c.chain for c in motion.contacts)
     labels = tuple(c.label for c in motion.contacts)
-    planned = Contacts(np.array([c.posture for c in motion.contacts]), chains, (session,) * len(chains), labels)
-    model, theta = perturbed_robot(scene, chains, [session], perturbation, seed)
+    planned = Contacts(
+        np.array([c.posture for c in motion.contacts]),
+        chains,
+        (session,) * len(chains),
+        labels,
+        planned_kinds(scene, chains),
+    )
+    model, theta = perturbed_robot(scene, chains, [session], perturbation, seed, planned.kinds_by_chain())
     settled, converged = settle_true(model, theta, planned, stand=False)  # the legs follow the route
     if not np.all(converged):
         label = planned.labels[int(np.flatnonzero(~converged)[0])]

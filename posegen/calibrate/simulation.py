@@ -19,15 +19,15 @@ those angles plus noise.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from posegen.errors import InfeasibleError, InputError
-from posegen.model import CalibrationModel, Contacts, Group, Kind, Parameter, Unit
-from posegen.robot import FloatArray, Scene
+from posegen.model import LIMIT_TOLERANCE_RAD, CalibrationModel, Contacts, Group, Kind, Parameter, Unit
+from posegen.robot import ContactKind, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
 CONTACT_TOLERANCE = 1e-11  # m or rad: the true contact and floor closure are exact to this
@@ -106,12 +106,12 @@ def settle_true(
     def residuals(rows: NDArray[np.intp], values: FloatArray, jacobian: bool) -> tuple[FloatArray, FloatArray]:
         """Contact and floor residuals of some postures (m, 3 or 9) and, gravity torques held, joint derivatives."""
         posture = planned.subset(rows)
-        observations = model.observations(Contacts(values[rows], posture.chains, posture.sessions, posture.labels))
+        observations = model.observations(posture.at(values[rows]))
         if not jacobian:
             out = model.evaluate(x, observations, floor=floor is not None)
             blocks = [out.contact] + ([out.floor] if floor is not None else [])  # floor: less its session's
             return np.concatenate(blocks, axis=1), np.zeros(0)
-        bent = Contacts(model.deflected(x, observations), posture.chains, posture.sessions, posture.labels)
+        bent = posture.at(model.deflected(x, observations))
         theta = model.theta(x)
         res, _, d_joints = model.contact.derivatives(theta, bent)
         blocks, jacs = [res], [d_joints]
@@ -159,13 +159,21 @@ def settle_true(
         active[rows] = np.abs(res).max(axis=1) >= CONTACT_TOLERANCE
         active[stalled] = False
     converged = np.abs(residual).max(axis=1) < 1e-9
-    return Contacts(joints, planned.chains, planned.sessions, planned.labels), converged
+    return planned.at(joints), converged
 
 
 def perturbed_robot(
-    scene: Scene, chains: Sequence[str], sessions: Sequence[str], perturbation: Perturbation, seed: int
+    scene: Scene,
+    chains: Sequence[str],
+    sessions: Sequence[str],
+    perturbation: Perturbation,
+    seed: int,
+    kinds: Mapping[str, Sequence[ContactKind]] | None = None,
 ) -> tuple[CalibrationModel, FloatArray]:
     """The true robot of a simulation: its model (with the perturbation's compliance groups) and parameters.
+
+    ``kinds`` (chain -> contact kinds) gives the contact parameters the true robot has;
+    None: the kind ``pool`` plans for each chain.
 
     Raises:
         InputError: A compliance group that the config does not define.
@@ -181,7 +189,7 @@ def perturbed_robot(
                 f"compliance groups {unknown or '(none)'} are not in calibration.compliance: {', '.join(configured)}"
             )
         groups = {g: configured[g] for g in names}
-    model = CalibrationModel(scene, sorted(set(chains)), sorted(set(sessions)), groups)
+    model = CalibrationModel(scene, sorted(set(chains)), sorted(set(sessions)), groups, kinds)
     return model, true_parameters(model, perturbation, seed)
 
 
@@ -206,8 +214,11 @@ def simulate(
         InfeasibleError: No posture can be reached.
 
     """
-    model, x = perturbed_robot(scene, planned.chains, planned.sessions, perturbation, seed)
+    model, x = perturbed_robot(scene, planned.chains, planned.sessions, perturbation, seed, planned.kinds_by_chain())
     settled, converged = settle_true(model, x, planned)
+    # a joint the true robot would have to take past its limits (a knee stretched backwards) cannot be recorded
+    beyond = (settled.joints < scene.lower - LIMIT_TOLERANCE_RAD) | (settled.joints > scene.upper + LIMIT_TOLERANCE_RAD)
+    converged = converged & ~beyond.any(axis=1)
     if not np.any(converged):
         raise InfeasibleError("no planned posture stands and touches the table on the perturbed robot")
     for i in np.flatnonzero(~converged):
@@ -215,4 +226,4 @@ def simulate(
     settled = settled.subset(np.flatnonzero(converged))
     rng = np.random.default_rng([seed, 1])
     noisy = settled.joints + rng.normal(0.0, perturbation.encoder_noise_rad, settled.joints.shape)
-    return Contacts(noisy, settled.chains, settled.sessions, settled.labels), model, x
+    return settled.at(noisy), model, x

@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from posegen.errors import InputError
 from posegen.model import ContactModel, offset_matrix, placement_matrix
-from posegen.robot import FloatArray
+from posegen.robot import ContactKind, FloatArray
 
 
 def _format(values: FloatArray) -> str:
@@ -66,9 +66,12 @@ def calibrated_urdf(urdf_text: str, model: ContactModel, theta: FloatArray) -> s
                 parent_link = joint.find("parent")
                 assert parent_link is not None
                 parent_frame = pin_model.frames[pin_model.getFrameId(parent_link.get("link"))]
-                if element.name == chain.elements[-1].name:  # gripper: absorb the contact offsets
+                c_nom = chain.contact_nominal
+                if element.name == chain.elements[-1].name and model.kinds[chain.chain] == (ContactKind.FLUSH,):
+                    # gripper: absorb the flush contact offsets (with point contacts too, they
+                    # would move the point: the offsets stay in calibration.yaml)
+                    assert c_nom is not None
                     offsets = theta[model.contact_columns(chain.contact_frame)]
-                    c_nom = chain.contact_nominal
                     placement = placement @ c_nom @ offset_matrix(*offsets) @ np.linalg.inv(c_nom)
             # origin = (parent link in parent joint frame)^-1 * placement in parent joint frame
             _set_origin(joint, np.linalg.inv(parent_frame.placement.homogeneous) @ placement)

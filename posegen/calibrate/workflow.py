@@ -13,11 +13,18 @@ from posegen.arguments import check_seed, check_size
 from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
-from posegen.errors import ArgumentError
-from posegen.io import OutputKind, check_writable, claim_output, write_yaml
-from posegen.model import CalibrationModel, Contacts, read_measurements, write_measurements
+from posegen.errors import ArgumentError, InputError
+from posegen.io import OutputKind, check_writable, claim_output, read_yaml, write_yaml
+from posegen.model import (
+    MEASUREMENT_FORMAT,
+    CalibrationModel,
+    Contacts,
+    planned_kinds,
+    read_measurements,
+    write_measurements,
+)
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Scene, load_config, load_plan
+from posegen.robot import FloatArray, Scene, load_config, load_plan, scene_for
 
 TRUTH_FORMAT = "posegen-truth"
 
@@ -43,7 +50,7 @@ def simulate_plan_file(
     plan_path: str,
     output: str,
     *,
-    config_path: str,
+    config_path: str | None,
     seed: int,
     error_mm: float,
     error_deg: float,
@@ -56,7 +63,7 @@ def simulate_plan_file(
     Args:
         plan_path: Pool or selection file.
         output: Measurement file to write; the truth goes beside it (``*.truth.yaml``).
-        config_path: Scene config.
+        config_path: Scene config; None: the one saved in the plan.
         seed: Seed of the robot's errors and of the encoder noise.
         error_mm: Sigma of placement length errors (mm).
         error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
@@ -80,14 +87,15 @@ def simulate_plan_file(
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
     check_writable(measurements)
     check_writable(truth)
-    scene = Scene(load_config(config_path))
-    check_compliance(scene, compliance_rad_per_knm)
     plan, _ = load_plan(plan_path)
+    scene = scene_for(plan.provenance, config_path)  # None: the config saved in the plan
+    check_compliance(scene, compliance_rad_per_knm)
     scene.check_made_for(plan.provenance, plan_path)
     plan.check_joints(scene.joint_names, plan_path)
     plan.check_limits(scene.joint_names, scene.lower, scene.upper, plan_path)
     chains = tuple(p.chain for p in plan.postures)
-    planned = Contacts(plan.joints(), chains, (session,) * len(chains), tuple(p.spot for p in plan.postures))
+    spots = tuple(p.spot for p in plan.postures)
+    planned = Contacts(plan.joints(), chains, (session,) * len(chains), spots, planned_kinds(scene, chains))
     with claim_output(measurements, beside=(truth,)):
         recorded, model, x = simulate(scene, planned, perturbation, seed)
         prov = scene.provenance(seed)
@@ -173,7 +181,7 @@ def calibrate_files(
     held_out: Sequence[str],
     output: str,
     settings: Settings,
-    config_path: str,
+    config_path: str | None,
     progress: ProgressCallback = ignore_progress,
 ) -> Calibrated:
     """Calibrate from measurement files and write the calibration folder.
@@ -183,7 +191,8 @@ def calibrate_files(
         held_out: Held-out files, judged but not fitted; may be empty.
         output: Output folder.
         settings: How to calibrate (its seed is recorded in the provenance).
-        config_path: Scene config.
+        config_path: Scene config; None: the one saved in the first measurement file
+            that has one (posegen's format; recorded CSV files have none).
         progress: Told when each step starts.
 
     Raises:
@@ -195,13 +204,47 @@ def calibrate_files(
         raise ArgumentError("give at least one training measurement file")
     out_dir = Path(output)
     check_writable(out_dir, OutputKind.FOLDER)
-    scene = Scene(load_config(config_path))
+    scene = Scene(load_config(config_path)) if config_path else _saved_scene([*measurements, *held_out])
     check_candidates(scene, settings)
     rejected: list[str] = []
     train = read_contacts(measurements, scene, rejected)
     validation = read_contacts(held_out, scene, rejected) if held_out else None
+    if validation is not None:
+        _check_trained(train, validation)
     sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
     with claim_output(out_dir, OutputKind.FOLDER):
         calibration = calibrate(scene, train, sessions, settings, progress)
         report = write_calibration(calibration, validation, out_dir, settings.seed, rejected)
     return Calibrated(report=report, training_contacts=len(train))
+
+
+def _check_trained(train: Contacts, held_out: Contacts) -> None:
+    """Every held-out chain and contact kind has training contacts (its contact parameters are fitted there).
+
+    Raises:
+        InputError: A held-out chain, or a chain's contact kind, that training lacks.
+
+    """
+    trained = train.kinds_by_chain()
+    for chain, kinds in held_out.kinds_by_chain().items():
+        missing = [k.value for k in kinds if k not in trained.get(chain, ())]
+        if missing:
+            raise InputError(
+                f"held-out {' and '.join(missing)} contacts of chain '{chain}': the training files have none "
+                "(the contact's parameters are fitted on training contacts of its kind)"
+            )
+
+
+def _saved_scene(items: Sequence[str]) -> Scene:
+    """The scene saved in the first measurement file that has one.
+
+    Raises:
+        InputError: No file carries a config (recorded CSV files do not).
+
+    """
+    for item in items:
+        path = item.partition("@")[0]
+        if Path(path).suffix.lower() in (".yaml", ".yml"):
+            data = read_yaml(path, MEASUREMENT_FORMAT)
+            return scene_for(data.get("provenance", {}), None)
+    raise InputError("the measurement files carry no scene config (recorded CSV files do not): give --config")

@@ -15,7 +15,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("measurements", nargs="+", help="measurement files (posegen YAML or CSV), FILE[@SESSION]")
     parser.add_argument("--validate", nargs="*", default=[], help="held-out measurement files, FILE[@SESSION]")
-    parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
+    parser.add_argument(
+        "--config",
+        default=None,
+        help=f"scene config (default: the one saved in the measurement files; for CSV files {DEFAULT_CONFIG})",
+    )
     parser.add_argument(
         "--prior-scale",
         type=positive_size,
@@ -46,7 +50,8 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     with ProgressBar(args.quiet) as bar:
-        calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, args.config, bar)
+        config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
+        calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar)
     report = calibrated.report
     model = report["model"]
     chosen = report["model_selection"]["chosen"]
@@ -76,3 +81,8 @@ def run(args: argparse.Namespace) -> int:
         f"parameters.png, residuals.png, cross_validation.png, {report_path.name})"
     )
     return 0
+
+
+def _any_posegen_file(items: list[str]) -> bool:
+    """Whether a measurement file is posegen's (YAML, with its scene config) rather than a recorded CSV."""
+    return any(not item.partition("@")[0].lower().endswith(".csv") for item in items)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import DEFAULT_CONFIG, JOINT_STATES_TOPIC, name, positive_size, seed, size
+from posegen.cli.options import JOINT_STATES_TOPIC, name, positive_size, seed, size
 
 NAME = "simulate"
 HELP = "contacts of a perturbed robot at planned postures, or its recorded run of a route (--bag)"
@@ -13,7 +13,7 @@ HELP = "contacts of a perturbed robot at planned postures, or its recorded run o
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("postures", help="pool or selection file; with --bag, a route file")
-    parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
+    parser.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
     parser.add_argument("--seed", type=seed, default=0, help="seed of the robot errors and noise (default 0)")
     parser.add_argument("--error-mm", type=size, default=2.0, help="sigma of length errors (default 2 mm)")
     parser.add_argument(

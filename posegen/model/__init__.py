@@ -1,7 +1,8 @@
 """The calibration model that selection and identification share.
 
 Parametric sole-to-contact kinematics of each chain, the plane-constrained contact
-model with its analytic Jacobian, the parameters and their names, noise and prior
+model (flush and point contacts) with its analytic Jacobian, which rows each contact
+kind measures, the parameters and their names, noise and prior
 weights, initial plane estimates, the settle step of a force-controlled contact,
 identifiability (base parameters by QR, structural base parameters, O1), and the
 experiment design (one information matrix per candidate posture) that selection solves
@@ -9,7 +10,8 @@ and the route's repair consults.
 """
 
 from posegen.model.calibration_model import CalibrationModel, Evaluation, Observations, body_parts, start_point
-from posegen.model.contact_model import ContactModel, Contacts
+from posegen.model.contact_model import ContactModel, Contacts, planned_kinds
+from posegen.model.contact_rows import ROWS, masked, row_counts, row_mask
 from posegen.model.design import RIDGE, SINGULAR, Design, build_design
 from posegen.model.floor_model import FLOOR_FIELDS, SESSION_FIELDS, FloorModel
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
@@ -24,7 +26,7 @@ from posegen.model.measurements import (
     read_measurements,
     write_measurements,
 )
-from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter, Unit
+from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, POINT_FIELDS, Group, Parameter, Unit
 from posegen.model.planes import initial_planes, level_planes
 from posegen.model.prior import (
     ROBOT_KINDS,
@@ -55,9 +57,11 @@ __all__ = [
     "NOISE_FLOOR",
     "OFFSET_FIELDS",
     "PLACEMENT_FIELDS",
+    "POINT_FIELDS",
     "RANK_TOLERANCE",
     "RIDGE",
     "ROBOT_KINDS",
+    "ROWS",
     "SESSION_FIELDS",
     "SINGULAR",
     "STRUCTURAL_POSTURES",
@@ -92,15 +96,19 @@ __all__ = [
     "kind_sigmas",
     "level_planes",
     "level_postures",
+    "masked",
     "measurements_to_dict",
     "observability_o1",
     "offset_matrix",
     "placement_derivatives",
     "placement_matrix",
+    "planned_kinds",
     "prior_scale",
     "prior_sigmas",
     "read_csv",
     "read_measurements",
+    "row_counts",
+    "row_mask",
     "rpy_matrix",
     "settle",
     "settle_contacts",

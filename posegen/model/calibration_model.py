@@ -6,7 +6,8 @@ compliance per group of joints (rad/N m), then the second sole's x, y (m) and ya
 (rad) per session. Two measurement kinds read it:
 
 * contacts: height (m), roll and pitch (rad) of each contact frame in its session's
-  plane, zero at a flush contact;
+  plane, zero at a flush contact (a point contact: its height only, the other two rows
+  zero);
 * floors: the second sole's pose in the first sole's frame, less (x, y, 0, 0, 0, yaw)
   of its session, zero when both soles are flat on one floor.
 
@@ -33,7 +34,7 @@ from posegen.model.floor_model import SESSION_FIELDS, FloorModel
 from posegen.model.kinds import Direction, Kind, Part, kind_basis
 from posegen.model.kinematics import ChainModel
 from posegen.model.planes import initial_planes
-from posegen.robot import FloatArray, Indices, Scene, gravity_torques
+from posegen.robot import ContactKind, FloatArray, Indices, Scene, gravity_torques
 
 
 @dataclass(frozen=True)
@@ -87,10 +88,15 @@ class CalibrationModel:
     """
 
     def __init__(
-        self, scene: Scene, chains: Sequence[str], sessions: Sequence[str], compliance: Mapping[str, Sequence[str]]
+        self,
+        scene: Scene,
+        chains: Sequence[str],
+        sessions: Sequence[str],
+        compliance: Mapping[str, Sequence[str]],
+        kinds: Mapping[str, Sequence[ContactKind]] | None = None,
     ) -> None:
         self.scene = scene
-        self.contact = ContactModel(scene, chains, sessions)
+        self.contact = ContactModel(scene, chains, sessions, kinds)
         self.floor: FloorModel | None
         try:
             self.floor = FloorModel(self.contact)
@@ -156,7 +162,7 @@ class CalibrationModel:
         """Residuals of the contacts and (if ``floor``) the floors, and their derivatives w.r.t. x if ``jacobian``."""
         contacts = observations.contacts
         n = len(contacts)
-        bent = Contacts(self.deflected(x, observations), contacts.chains, contacts.sessions, contacts.labels)
+        bent = contacts.at(self.deflected(x, observations))
         theta = self.theta(x)
         floor_offset = np.zeros((n, 6))
         sessions = np.array(contacts.sessions)

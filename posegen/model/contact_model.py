@@ -1,15 +1,20 @@
 """The plane-constrained measurement model of one or more chains and table sessions.
 
 Parameters (a flat vector, named): every placement of every chain (shared placements,
-such as the torso's, appear once), each chain's contact offsets, and one plane per
-table session. Residuals of a set of contacts: (n, 3) height (m), roll, pitch (rad) of
-each contact frame in its session's plane frame.
+such as the torso's, appear once), each chain's contact parameters for each contact
+kind it makes (a flush contact frame's z, roll, pitch offsets; a contact point's x, y,
+z), and one plane per table session. Residuals of a set of contacts: (n, 3) per contact,
+height (m), roll, pitch (rad) of a flush contact frame in its session's plane frame, or
+height of a point above the plane less its tip radius and two zero rows: a point
+contact measures one number (:mod:`posegen.model.contact_rows` says which rows are real).
+The zero rows keep one layout for every design formula: their Jacobian is zero too.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,18 +29,25 @@ from posegen.model.kinematics import (
     tilt_measurement,
     tilt_measurement_jacobian,
 )
-from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter
-from posegen.robot import FloatArray, Indices, Scene
+from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, POINT_FIELDS, Group, Parameter
+from posegen.robot import ContactKind, FloatArray, Indices, Scene
 
 
 @dataclass(frozen=True)
 class Contacts:
-    """Recorded (or simulated) flush contacts."""
+    """Recorded (or simulated) contacts, flush or point."""
 
     joints: FloatArray  # (n, nj) rad, in the scene's joint order
     chains: tuple[str, ...]  # chain in contact, per contact
     sessions: tuple[str, ...]  # table session (one plane each), per contact
     labels: tuple[str, ...]  # e.g. target spot or source row, per contact
+    kinds: tuple[ContactKind, ...] = dataclass_field(default=())  # per contact; () means every contact is flush
+
+    def __post_init__(self) -> None:
+        if not self.kinds:
+            object.__setattr__(self, "kinds", (ContactKind.FLUSH,) * len(self.chains))
+        if len(self.kinds) != len(self.chains):
+            raise ValueError(f"{len(self.kinds)} contact kinds for {len(self.chains)} contacts")
 
     def __len__(self) -> int:
         return len(self.chains)
@@ -48,6 +60,7 @@ class Contacts:
             chains=tuple(self.chains[i] for i in idx),
             sessions=tuple(self.sessions[i] for i in idx),
             labels=tuple(self.labels[i] for i in idx),
+            kinds=tuple(self.kinds[i] for i in idx),
         )
 
     def concat(self, other: Contacts) -> Contacts:
@@ -57,16 +70,60 @@ class Contacts:
             chains=self.chains + other.chains,
             sessions=self.sessions + other.sessions,
             labels=self.labels + other.labels,
+            kinds=self.kinds + other.kinds,
         )
+
+    def at(self, joints: FloatArray) -> Contacts:
+        """The same contacts at other joint angles (n, nj) (not copied)."""
+        return Contacts(joints, self.chains, self.sessions, self.labels, self.kinds)
+
+    def kinds_by_chain(self) -> dict[str, tuple[ContactKind, ...]]:
+        """Chain -> the contact kinds its rows make (in ContactKind order)."""
+        out: dict[str, set[ContactKind]] = {}
+        for chain, kind in zip(self.chains, self.kinds, strict=True):
+            out.setdefault(chain, set()).add(kind)
+        return {c: tuple(k for k in ContactKind if k in kinds) for c, kinds in out.items()}
+
+
+def planned_kinds(scene: Scene, chains: Sequence[str]) -> tuple[ContactKind, ...]:
+    """The kind of contact ``pool`` plans for each chain (its ``contact_kind``), per contact."""
+    return tuple(scene.chain(c).contact_kind for c in chains)
 
 
 class ContactModel:
     """Measurement model of contacts of some chains at some table sessions."""
 
-    def __init__(self, scene: Scene, chains: Sequence[str], sessions: Sequence[str]) -> None:
+    def __init__(
+        self,
+        scene: Scene,
+        chains: Sequence[str],
+        sessions: Sequence[str],
+        kinds: Mapping[str, Sequence[ContactKind]] | None = None,
+    ) -> None:
+        """Build the model.
+
+        Args:
+            scene: Scene.
+            chains: Chains measured.
+            sessions: Table sessions (one plane each).
+            kinds: Chain -> the contact kinds it makes (contact parameters for each);
+                a chain not named makes the kind ``pool`` plans for it.
+
+        Raises:
+            ConfigError: A chain declares no contact of a kind it is given.
+
+        """
         self.scene = scene
         self.chains = {c: ChainModel(scene, c) for c in dict.fromkeys(chains)}
         self.sessions = tuple(dict.fromkeys(sessions))
+        given = dict(kinds or {})
+        self.kinds = {  # chain -> its contact kinds, in ContactKind order
+            c: tuple(k for k in ContactKind if k in set(given.get(c, (scene.chain(c).contact_kind,))))
+            for c in self.chains
+        }
+        for name, model in self.chains.items():
+            for kind in self.kinds[name]:
+                model.tip_nominal(kind)  # raises when the chain declares no such contact
         params: list[Parameter] = []
         nominal: list[float] = []
         seen: set[str] = set()
@@ -78,14 +135,15 @@ class ContactModel:
                 for field, value in zip(PLACEMENT_FIELDS, element.nominal, strict=True):
                     params.append(Parameter.placement(element.name, field))
                     nominal.append(float(value))
-        for model in self.chains.values():
-            for field in OFFSET_FIELDS:
-                params.append(Parameter.contact(model.contact_frame, field))
-                nominal.append(0.0)
+        for name, model in self.chains.items():
+            if ContactKind.FLUSH in self.kinds[name]:
+                params.extend(Parameter.contact(model.contact_frame, f) for f in OFFSET_FIELDS)
+            if ContactKind.POINT in self.kinds[name]:
+                params.extend(Parameter.point(model.point_frame, f) for f in POINT_FIELDS)
+        nominal.extend([0.0] * (len(params) - len(nominal)))
         for session in self.sessions:
-            for field in OFFSET_FIELDS:
-                params.append(Parameter.plane(session, field))
-                nominal.append(0.0)
+            params.extend(Parameter.plane(session, f) for f in OFFSET_FIELDS)
+            nominal.extend([0.0] * len(OFFSET_FIELDS))
         self.parameters = tuple(params)
         self.index = {p.name: i for i, p in enumerate(params)}  # parameter name -> column
         self._columns = {p: i for i, p in enumerate(params)}
@@ -124,6 +182,17 @@ class ContactModel:
         """Columns of a contact frame's three offsets, in OFFSET_FIELDS order."""
         return list(self._blocks[Group.CONTACT, frame])
 
+    def point_columns(self, frame: str) -> list[int]:
+        """Columns of a contact point's three coordinates, in POINT_FIELDS order."""
+        return list(self._blocks[Group.POINT, frame])
+
+    def tip_columns(self, chain: str, kind: ContactKind) -> list[int]:
+        """Columns of a chain's contact parameters of one kind."""
+        model = self.chains[chain]
+        if kind == ContactKind.POINT:
+            return self.point_columns(model.point_frame)
+        return self.contact_columns(model.contact_frame)
+
     def plane_columns(self, session: str) -> list[int]:
         """Columns of a session's plane (z, roll, pitch), in OFFSET_FIELDS order."""
         return list(self._blocks[Group.PLANE, session])
@@ -132,7 +201,7 @@ class ContactModel:
         return {name: theta[self.placement_columns(name)] for name in model.placement_names}
 
     def residuals(self, theta: FloatArray, contacts: Contacts) -> FloatArray:
-        """Height (m), roll, pitch (rad) of each contact frame in its plane frame. Shape (n, 3)."""
+        """Height (m), roll, pitch (rad) of each contact in its plane frame (a point's: height, 0, 0). Shape (n, 3)."""
         return self._evaluate(theta, contacts, jacobian=False, joints=False)[0]
 
     def jacobian(self, theta: FloatArray, contacts: Contacts) -> tuple[FloatArray, FloatArray]:
@@ -153,30 +222,45 @@ class ContactModel:
         res = np.zeros((n, 3))
         jac = np.zeros((n, 3, self.size if jacobian else 0))
         d_joints = np.zeros((n, 3, contacts.joints.shape[1])) if joints else None
-        chains = np.array(contacts.chains)
-        sessions = np.array(contacts.sessions)
-        for name, model in self.chains.items():
-            for session in self.sessions:
-                rows = np.flatnonzero((chains == name) & (sessions == session))
-                if len(rows) == 0:
-                    continue
-                out = self._evaluate_block(theta, model, session, contacts.joints[rows], jacobian, joints)
-                res[rows] = out[0]
-                if jacobian:
-                    jac[rows] = out[1]
-                if d_joints is not None:
-                    d_joints[rows] = out[2]
         unknown = set(contacts.chains) - set(self.chains) or set(contacts.sessions) - set(self.sessions)
         if unknown:
             raise ValueError(f"contacts of chains/sessions the model does not have: {sorted(unknown)}")
+        chains = np.array(contacts.chains)
+        sessions = np.array(contacts.sessions)
+        kinds = np.array([k.value for k in contacts.kinds])
+        for name, model in self.chains.items():
+            for kind in ContactKind:
+                mine = (chains == name) & (kinds == kind.value)
+                if not mine.any():
+                    continue
+                if kind not in self.kinds[name]:
+                    raise ValueError(f"{kind.value} contacts of chain '{name}': the model has no such contact")
+                for session in self.sessions:
+                    rows = np.flatnonzero(mine & (sessions == session))
+                    if len(rows) == 0:
+                        continue
+                    out = self._evaluate_block(theta, model, session, kind, contacts.joints[rows], jacobian, joints)
+                    res[rows] = out[0]
+                    if jacobian:
+                        jac[rows] = out[1]
+                    if d_joints is not None:
+                        d_joints[rows] = out[2]
         return res, jac, d_joints
 
     def _evaluate_block(
-        self, theta: FloatArray, model: ChainModel, session: str, joints: FloatArray, jacobian: bool, by_joint: bool
+        self,
+        theta: FloatArray,
+        model: ChainModel,
+        session: str,
+        kind: ContactKind,
+        joints: FloatArray,
+        jacobian: bool,
+        by_joint: bool,
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         placements = self._placements(theta, model)
-        contact = theta[self.contact_columns(model.contact_frame)]
-        elements, tip = model.transforms(joints, placements, contact)
+        tip_columns = self.tip_columns(model.chain, kind)
+        contact = theta[tip_columns]
+        elements, tip = model.transforms(joints, placements, contact, kind=kind)
         plane = offset_matrix(*theta[self.plane_columns(session)])
         plane_inv = rigid_inverse(plane)
         n = joints.shape[0]
@@ -185,7 +269,11 @@ class ContactModel:
             prefixes.append(prefixes[-1] @ t)
         sole_to_contact = prefixes[-1] @ tip  # (n, 4, 4)
         frames = plane_inv @ sole_to_contact
-        res = tilt_measurement(frames)
+        point = kind == ContactKind.POINT
+        measured = _point_rows if point else tilt_measurement_jacobian
+        res: FloatArray = np.zeros((n, 3)) if point else tilt_measurement(frames)
+        if point:
+            res[:, 0] = frames[:, 2, 3] - model.point_radius_m
         if not jacobian:
             return res, np.zeros((n, 3, 0)), np.zeros((n, 3, 0))
         jac = np.zeros((n, 3, self.size))
@@ -197,21 +285,32 @@ class ContactModel:
             u = w @ prefixes[k]  # (n, 4)
             d_e = element_derivatives(element, elements[k], placements[element.name])  # (n, 6, 4, 4)
             d_row = np.einsum("ni,npij,njk->npk", u, d_e, suffix)  # (n, 6, 4)
-            jac[:, :, self.placement_columns(element.name)] += tilt_measurement_jacobian(frames[:, 2], d_row)
+            jac[:, :, self.placement_columns(element.name)] += measured(frames[:, 2], d_row)
             if d_joints is not None and element.joint is not None:
                 d_row = np.einsum("ni,nij,njk->nk", u, joint_derivative(element, elements[k]), suffix)[:, None]
-                d_joints[:, :, element.joint] += tilt_measurement_jacobian(frames[:, 2], d_row)[:, :, 0]
+                d_joints[:, :, element.joint] += measured(frames[:, 2], d_row)[:, :, 0]
             suffix = elements[k] @ suffix
-        # contact offsets: tip = C_nom Off(z, roll, pitch)
-        offset = _offset_derivatives(contact)  # (3, 4, 4)
+        # contact parameters: tip = C_nom Off(z, roll, pitch) (flush), C_nom Trans(x, y, z) (point)
+        offset = _TRANSLATIONS if point else _offset_derivatives(contact)  # (3, 4, 4)
         u = w @ prefixes[-1]  # (n, 4)
-        d_row = np.einsum("ni,pij->npj", u, model.contact_nominal @ offset)
-        jac[:, :, self.contact_columns(model.contact_frame)] += tilt_measurement_jacobian(frames[:, 2], d_row)
+        d_row = np.einsum("ni,pij->npj", u, model.tip_nominal(kind) @ offset)
+        jac[:, :, tip_columns] += measured(frames[:, 2], d_row)
         # plane: frames = P^-1 T -> d frames = -P^-1 dP frames
         d_plane = _offset_derivatives(theta[self.plane_columns(session)])
         d_row = -np.einsum("i,pij,njk->npk", w, d_plane, frames)
-        jac[:, :, self.plane_columns(session)] += tilt_measurement_jacobian(frames[:, 2], d_row)
+        jac[:, :, self.plane_columns(session)] += measured(frames[:, 2], d_row)
         return res, jac, (d_joints if d_joints is not None else np.zeros((n, 3, 0)))
+
+
+_TRANSLATIONS = np.zeros((3, 4, 4))  # derivatives of Trans(x, y, z) w.r.t. x, y, z
+_TRANSLATIONS[[0, 1, 2], [0, 1, 2], 3] = 1.0
+
+
+def _point_rows(row: FloatArray, d_row: FloatArray) -> FloatArray:
+    """Derivative of a point contact's rows (height, 0, 0) given the frame's third row's (n, p, 4). Shape (n, 3, p)."""
+    out = np.zeros((d_row.shape[0], 3, d_row.shape[1]))
+    out[:, 0] = d_row[:, :, 3]
+    return out
 
 
 def _offset_derivatives(offset: FloatArray) -> FloatArray:

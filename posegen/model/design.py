@@ -5,7 +5,9 @@ searches solve it, and the route stage's repair consults it when a selected post
 cannot be reached. Each posture's information is I_i = A_i^T A_i with A_i
 its (3, nb) base regressor: the measurement Jacobian with respect to the base parameters
 of both chains (shared torso once, one table session), rows scaled by the measurement
-noise. The regressors are whitened by the whole pool's information (A_i <- A_i R^-1 with
+noise. A point contact's A_i has one non-zero row (its height; I_i has rank 1), a flush
+contact's three: the formulas hold for both, and what counts rows counts the measured
+ones (:attr:`Design.rows`). The regressors are whitened by the whole pool's information (A_i <- A_i R^-1 with
 R^T R = sum_i I_i): log-det differences and every design criterion below are unchanged,
 and the numbers stay well conditioned near saturation.
 """
@@ -16,14 +18,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from posegen.errors import InfeasibleError
-from posegen.model.contact_model import ContactModel, Contacts
+from posegen.model.contact_model import ContactModel, Contacts, planned_kinds
+from posegen.model.contact_rows import row_counts
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters
 from posegen.model.planes import initial_planes
 from posegen.model.structural import structural_base
 from posegen.model.weights import DEFAULT_NOISE, NOISE_FLOOR
-from posegen.robot import FloatArray, Scene
+from posegen.robot import ContactKind, FloatArray, Scene
 
 SESSION = "plan"
 SINGULAR = 1e-12  # |R_ii| below this times the largest: the set does not identify every parameter
@@ -38,6 +42,7 @@ class Design:
     regressors: FloatArray  # (n, 3, nb) whitened, noise-scaled base regressor of each posture
     log_det_pool: float  # log det of the unwhitened information of the whole pool
     base_names: tuple[str, ...]  # (nb,) the base parameters
+    rows: NDArray[np.int_]  # (n,) measured rows of each posture: 3 (flush contact) or 1 (point contact)
 
     @property
     def size(self) -> int:
@@ -48,6 +53,19 @@ class Design:
     def n_params(self) -> int:
         """Number of base parameters, nb."""
         return int(self.regressors.shape[2])
+
+    def measured(self, rows: Sequence[int]) -> int:
+        """Number of measured rows of a set of postures."""
+        return int(self.rows[list(rows)].sum())
+
+    def fewest(self, ranking: Sequence[int] | None = None) -> int:
+        """Fewest postures with as many measured rows as base parameters: the top of ``ranking``, or any.
+
+        ceil(nb / 3) for flush contacts, nb for point contacts.
+        """
+        counts = self.rows[list(ranking)] if ranking is not None else np.sort(self.rows)[::-1]
+        enough = np.flatnonzero(np.cumsum(counts) >= self.n_params)
+        return int(enough[0]) + 1 if len(enough) else len(counts) + 1
 
     def stacked(self, rows: Sequence[int]) -> FloatArray:
         """Stacked whitened regressor of some postures. Shape (3 k, nb)."""
@@ -60,7 +78,7 @@ class Design:
             -inf when the set does not identify every base parameter.
 
         """
-        if 3 * len(rows) < self.n_params:
+        if self.measured(rows) < self.n_params:
             return -np.inf
         r = np.linalg.qr(self.stacked(rows), mode="r")
         diag = np.abs(np.diag(r))
@@ -142,6 +160,7 @@ def build_design(
     chains: Sequence[str],
     noise: Sequence[float] = DEFAULT_NOISE,
     base: BaseParameters | None = None,
+    kinds: Sequence[ContactKind] | None = None,
 ) -> tuple[Design, BaseParameters]:
     """Information of each candidate posture, in the base parameters of its chains.
 
@@ -151,6 +170,7 @@ def build_design(
         chains: Chain in contact at each posture.
         noise: Measurement noise (m, rad, rad) scaling the rows.
         base: Base parameters to use; None: structural base of these postures.
+        kinds: Contact kind of each posture; None: what ``pool`` plans for its chain.
 
     Raises:
         InfeasibleError: No candidate, or the candidates do not identify the base parameters.
@@ -159,8 +179,9 @@ def build_design(
     n = len(chains)
     if n == 0:
         raise InfeasibleError("the pool is empty: nothing to select from")
-    contacts = Contacts(np.asarray(joints, dtype=float), tuple(chains), (SESSION,) * n, ("",) * n)
-    model = ContactModel(scene, sorted(set(chains)), [SESSION])
+    made = tuple(kinds) if kinds is not None else planned_kinds(scene, chains)
+    contacts = Contacts(np.asarray(joints, dtype=float), tuple(chains), (SESSION,) * n, ("",) * n, made)
+    model = ContactModel(scene, sorted(set(chains)), [SESSION], contacts.kinds_by_chain())
     if base is None:
         base = structural_base(model, contacts)
     theta = initial_planes(model, contacts, model.nominal())
@@ -174,7 +195,8 @@ def build_design(
     flat = regressors.reshape(-1, nb)  # a view: whitened in place below
     r = _r_factor(flat)
     diag = np.abs(np.diag(r))
-    if 3 * n < nb or np.any(diag <= RANK_TOLERANCE * diag.max()):
+    measured = row_counts(contacts.kinds)
+    if measured.sum() < nb or np.any(diag <= RANK_TOLERANCE * diag.max()):
         rank = int(np.sum(diag > RANK_TOLERANCE * diag.max()))
         raise InfeasibleError(
             f"the pool is rank deficient: its {n} postures identify {rank} of the {nb} base parameters; "
@@ -188,6 +210,7 @@ def build_design(
             regressors=whitened,
             log_det_pool=float(2.0 * np.sum(np.log(diag))),
             base_names=tuple(model.parameters[i].name for i in base.columns),
+            rows=measured,
         ),
         base,
     )

@@ -4,7 +4,8 @@ Placements are stored as URDF xyz rpy, but manufacturing tolerances are stated p
 physical kind: a link translation (m, in the parent frame), a joint offset (the encoder
 zero: a rotation about the joint axis), an axis tilt (a rotation perpendicular to the
 axis: bearing seats), the rotation of a fixed frame (a sole or the gripper's mount),
-the contact frame's height and tilt in the gripper frame, and a joint compliance
+the contact frame's height and tilt in the gripper frame, a contact point's position in
+its point frame, and a joint compliance
 (rad/N m). Each placement's rpy deviation is mapped to the rotation it makes in the
 joint's own frame, split along these directions. Table planes and the floor's
 session constants have no prior (where the table and the feet are is not known).
@@ -25,8 +26,8 @@ import numpy as np
 
 from posegen.model.contact_model import ContactModel
 from posegen.model.kinematics import rpy_derivatives, rpy_matrix
-from posegen.model.parameters import OFFSET_FIELDS
-from posegen.robot import FloatArray
+from posegen.model.parameters import OFFSET_FIELDS, POINT_FIELDS
+from posegen.robot import ContactKind, FloatArray
 
 
 class Kind(str, enum.Enum):
@@ -38,6 +39,7 @@ class Kind(str, enum.Enum):
     FRAME_ROTATION = "frame_rotation"  # rad, a fixed frame (sole, gripper mount)
     CONTACT_HEIGHT = "contact_height"  # m, contact frame along the gripper normal
     CONTACT_TILT = "contact_tilt"  # rad, contact frame roll and pitch
+    CONTACT_POINT = "contact_point"  # m, a contact point's x, y, z in its point frame
     COMPLIANCE = "compliance"  # rad/N m, a joint's deflection under its gravity torque
     PLANE = "plane"  # a table session's plane: no prior
     FLOOR = "floor"  # a session's second-sole x, y, yaw: no prior
@@ -54,7 +56,7 @@ class Part(str, enum.Enum):
     LEG = "leg"  # sole up to the root
     TORSO = "torso"  # shared by every chain
     ARM = "arm"  # one chain's own, down to the gripper mount
-    CONTACT = "contact"  # the contact frame
+    CONTACT = "contact"  # the contact frame or point
     SCENE = "scene"  # planes, floor constants
     JOINT = "joint"  # compliance groups
 
@@ -143,10 +145,14 @@ def kind_basis(
                 rpy = to_rpy @ axis
                 entries = {c: float(v) for c, v in zip(cols[3:], rpy, strict=True)}
                 add(Direction(kind, part, element.name, label), entries)
-    for chain in model.chains.values():
-        for col, field in zip(model.contact_columns(chain.contact_frame), OFFSET_FIELDS, strict=True):
-            kind = Kind.CONTACT_HEIGHT if field == "z" else Kind.CONTACT_TILT
-            add(Direction(kind, Part.CONTACT, chain.contact_frame, field), {col: 1.0})
+    for name, chain in model.chains.items():
+        if ContactKind.FLUSH in model.kinds[name]:
+            for col, field in zip(model.contact_columns(chain.contact_frame), OFFSET_FIELDS, strict=True):
+                kind = Kind.CONTACT_HEIGHT if field == "z" else Kind.CONTACT_TILT
+                add(Direction(kind, Part.CONTACT, chain.contact_frame, field), {col: 1.0})
+        if ContactKind.POINT in model.kinds[name]:
+            for col, field in zip(model.point_columns(chain.point_frame), POINT_FIELDS, strict=True):
+                add(Direction(Kind.CONTACT_POINT, Part.CONTACT, chain.point_frame, field), {col: 1.0})
     for session in model.sessions:
         for col, field in zip(model.plane_columns(session), OFFSET_FIELDS, strict=True):
             add(Direction(Kind.PLANE, Part.SCENE, session, field), {col: 1.0})

@@ -2,13 +2,15 @@
 
 A chain is read from the scene's pinocchio model: the sole frame, the joints up to the
 root (traversed against the URDF direction), the joints down to the gripper, the
-gripper frame and posegen's contact frame. Every placement carries the six URDF
-parameters (px, py, pz in m; phix, phiy, phiz in rad, URDF rpy: R = Rz Ry Rx); the
-contact frame adds three (z, roll, pitch offsets in the gripper frame) and each table
-session a plane (z, roll, pitch in the sole frame).
+gripper frame and the contact's tip: posegen's flush contact frame, or the chain's point
+frame. Every placement carries the six URDF parameters (px, py, pz in m; phix, phiy, phiz
+in rad, URDF rpy: R = Rz Ry Rx); a flush contact frame adds three (z, roll, pitch offsets
+in the gripper frame), a contact point three (its x, y, z in the point frame), and each
+table session a plane (z, roll, pitch in the sole frame).
 
 The measurement of a flush contact is the contact frame's height, roll and pitch in the
-plane frame, zero at every recorded contact.
+plane frame, zero at every recorded contact; that of a point contact is the point's
+height above the plane less the tip's radius (one number: the hand's orientation is free).
 
 Everything is vectorised over postures: shapes ``(n, ...)`` with n postures.
 """
@@ -21,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError
-from posegen.robot import FloatArray, Scene, contact_placement
+from posegen.robot import ContactKind, FloatArray, Scene
 
 
 def rpy_matrix(phi: FloatArray) -> FloatArray:
@@ -65,6 +67,13 @@ def offset_matrix(z: float, roll: float, pitch: float) -> FloatArray:
     return placement_matrix(np.array([0.0, 0.0, z, roll, pitch, 0.0]))
 
 
+def translation_matrix(xyz: FloatArray) -> FloatArray:
+    """Transform Trans(x, y, z) (a contact point's offset). Shape (4, 4)."""
+    out = np.eye(4)
+    out[:3, 3] = xyz
+    return out
+
+
 @dataclass(frozen=True)
 class Element:
     """One placement of the chain, possibly followed by a revolute joint."""
@@ -82,7 +91,7 @@ def _axis(joint: pin.JointModel) -> FloatArray:
         if short.endswith(letter):
             return np.eye(3)[axis]
     if "RevoluteUnaligned" in short:
-        return np.array(joint.axis, dtype=float)
+        return np.array(joint.extract().axis, dtype=float)  # the generic JointModel hides the axis
     raise ConfigError(f"joint type {short} is not supported in a calibration chain (revolute joints only)")
 
 
@@ -96,7 +105,11 @@ class ChainModel:
     Attributes:
         chain: Chain name.
         elements: Placements from the sole to the gripper frame.
-        contact_nominal: Nominal contact frame in the gripper frame, (4, 4).
+        contact_nominal: Nominal flush contact frame in the gripper frame, (4, 4); None
+            when the chain declares no flush contact.
+        point_nominal: Nominal point frame in the gripper frame, (4, 4); None when the
+            chain declares no point contact.
+        point_radius_m: The point's tip radius (its centre's height at a contact).
         placement_names: Names of the placements, in chain order.
 
     """
@@ -124,8 +137,13 @@ class ChainModel:
             )
         elements.append(Element(cfg.gripper_frame, _xyz_rpy(grip.placement), False, None, None))
         self.elements = tuple(elements)
-        self.contact_nominal = contact_placement(model, cfg).homogeneous
+        flush = scene.contact_placements.get(chain)
+        point = scene.point_placements.get(chain)
+        self.contact_nominal = None if flush is None else np.array(flush.homogeneous)
+        self.point_nominal = None if point is None else np.array(point.homogeneous)
         self.contact_frame = cfg.contact_frame
+        self.point_frame = cfg.point_frame
+        self.point_radius_m = cfg.point_radius_m
         self.placement_names = tuple(e.name for e in elements)
 
     @property
@@ -133,19 +151,49 @@ class ChainModel:
         """Indices (in Scene.joint_names) of the chain's joints, sole to gripper."""
         return [e.joint for e in self.elements if e.joint is not None]
 
+    def frame(self, kind: ContactKind) -> str:
+        """The frame a contact of this kind constrains (flush contact frame or point frame)."""
+        return self.point_frame if kind == ContactKind.POINT else self.contact_frame
+
+    def tip_nominal(self, kind: ContactKind) -> FloatArray:
+        """Nominal tip frame of a contact kind in the gripper frame. Shape (4, 4).
+
+        Raises:
+            ConfigError: The chain declares no contact of this kind.
+
+        """
+        tip = self.point_nominal if kind == ContactKind.POINT else self.contact_nominal
+        if tip is None:
+            needed = "point_frame" if kind == ContactKind.POINT else "fingertip_frames"
+            raise ConfigError(f"chains.{self.chain}.{needed}: missing (a {kind.value} contact of this chain needs it)")
+        return tip
+
+    def tip(self, contact: FloatArray, kind: ContactKind = ContactKind.FLUSH) -> FloatArray:
+        """Gripper-to-tip transform at contact parameters (flush: z, roll, pitch; point: x, y, z). Shape (4, 4)."""
+        if kind == ContactKind.POINT:
+            return self.tip_nominal(kind) @ translation_matrix(contact)
+        return self.tip_nominal(kind) @ offset_matrix(*contact)
+
     def transforms(
-        self, joints: FloatArray, placements: dict[str, FloatArray], contact: FloatArray, legs_only: bool = False
+        self,
+        joints: FloatArray,
+        placements: dict[str, FloatArray],
+        contact: FloatArray,
+        legs_only: bool = False,
+        kind: ContactKind = ContactKind.FLUSH,
     ) -> tuple[list[FloatArray], FloatArray]:
         """Per-element transforms and the contact offset.
 
         Args:
             joints: (n, nj) joint angles, rad.
             placements: Placement name -> (6,) parameters.
-            contact: (3,) contact offsets (z m, roll rad, pitch rad).
-            legs_only: Only the elements from the sole up to the root (traversed in reverse).
+            contact: (3,) contact parameters (flush: z m, roll rad, pitch rad; point: x, y, z m).
+            legs_only: Only the elements from the sole up to the root (traversed in reverse);
+                the tip is then the identity.
+            kind: The contact's kind.
 
         Returns:
-            A list of (n, 4, 4) element transforms and the (4, 4) gripper-to-contact transform.
+            A list of (n, 4, 4) element transforms and the (4, 4) gripper-to-tip transform.
 
         """
         n = joints.shape[0]
@@ -160,11 +208,17 @@ class ChainModel:
                 rot = _rotations(e.axis, joints[:, e.joint])  # (n, 4, 4)
                 t = rigid_inverse(m @ rot) if e.reverse else m @ rot
             out.append(t)
-        return out, self.contact_nominal @ offset_matrix(*contact)
+        return out, np.eye(4) if legs_only else self.tip(contact, kind)
 
-    def sole_to_contact(self, joints: FloatArray, placements: dict[str, FloatArray], contact: FloatArray) -> FloatArray:
-        """Contact frame in the sole frame. Shape (n, 4, 4)."""
-        elements, tip = self.transforms(joints, placements, contact)
+    def sole_to_contact(
+        self,
+        joints: FloatArray,
+        placements: dict[str, FloatArray],
+        contact: FloatArray,
+        kind: ContactKind = ContactKind.FLUSH,
+    ) -> FloatArray:
+        """Contact (flush) or point frame, at its offset, in the sole frame. Shape (n, 4, 4)."""
+        elements, tip = self.transforms(joints, placements, contact, kind=kind)
         total = elements[0]
         for t in elements[1:]:
             total = total @ t

@@ -9,11 +9,15 @@ Two inputs are read as they are:
       provenance: {...}
       joint_names: [...]
       contacts:
-        - {chain: left, session: day1, label: contact_03, joints: [rad, ...]}
+        - {chain: left, session: day1, kind: flush, label: contact_03, joints: [rad, ...]}
+
+  ``kind`` is ``flush`` or ``point`` (a point contact measures its height only); a
+  contact without one makes the kind its chain's ``contact_kind`` plans.
 
 * recorded CSV files, one contact per row: ``gripper, <recorded gripper name>, handle,
   <target spot>, joint_states, <angles>``, with a header row holding ``joint_names``
   followed by the names of the angles (leading or trailing empty fields are tolerated).
+  Each contact is of the kind its chain's ``contact_kind`` plans.
 
 Every angle is checked against the URDF limits widened by a tolerance: a shifted column
 shows up as text or as an angle far out of range. Such a CSV row is reported (file,
@@ -33,8 +37,8 @@ import numpy as np
 
 from posegen.errors import InputError, reason, unknown_name
 from posegen.io import read_text_file, read_yaml, write_yaml
-from posegen.model.contact_model import Contacts
-from posegen.robot import Scene
+from posegen.model.contact_model import Contacts, planned_kinds
+from posegen.robot import ContactKind, Scene
 
 LOG = logging.getLogger(__name__)
 
@@ -147,7 +151,8 @@ def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TO
         raise InputError(f"{path}: no usable data row ({len(rejected)} rejected){first}")
     for message in rejected:
         LOG.warning("row left out: %s", message)
-    contacts = Contacts(np.array(joints), tuple(chains), (session,) * len(chains), tuple(labels))
+    made = tuple(chains)
+    contacts = Contacts(np.array(joints), made, (session,) * len(chains), tuple(labels), planned_kinds(scene, made))
     return Recording(contacts, tuple(rejected))
 
 
@@ -186,7 +191,8 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         raise InputError(f"{path}: 'joint_names' must be a list of names")
     _check_names(scene, names, path)
     chains_known = {c.name for c in scene.chains}
-    joints, chains, sessions, labels = [], [], [], []
+    kinds_known = ", ".join(k.value for k in ContactKind)
+    joints, chains, sessions, labels, kinds = [], [], [], [], []
     for i, item in enumerate(raw):
         where = f"{path}: contact {i}"
         try:
@@ -196,6 +202,12 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
             raise InputError(f"{where}: malformed ({reason(exc)})") from exc
         if chain not in chains_known:
             raise InputError(f"{where}: unknown chain '{chain}'; valid chains: {', '.join(sorted(chains_known))}")
+        kind = str(item.get("kind", scene.chain(chain).contact_kind.value))
+        if kind not in {k.value for k in ContactKind}:
+            raise InputError(f"{where}: unknown contact kind '{kind}'; valid kinds: {kinds_known}")
+        if ContactKind(kind) not in scene.chain(chain).kinds:
+            declared = ", ".join(k.value for k in scene.chain(chain).kinds)
+            raise InputError(f"{where}: chain '{chain}' makes no {kind} contact in this config (it makes: {declared})")
         if len(values) != len(names):
             raise InputError(f"{where}: expected {len(names)} angles, got {len(values)}")
         _check_angles(scene, names, values, where, LIMIT_TOLERANCE_RAD)
@@ -203,7 +215,8 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         chains.append(chain)
         sessions.append(session or str(item.get("session", path.stem)))
         labels.append(f"{path.name}:{i}:{item.get('label', 'row')}")
-    return Recording(Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels)), ())
+        kinds.append(ContactKind(kind))
+    return Recording(Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels), tuple(kinds)), ())
 
 
 def measurements_to_dict(scene: Scene, contacts: Contacts, provenance: dict[str, Any]) -> dict[str, Any]:
@@ -214,8 +227,10 @@ def measurements_to_dict(scene: Scene, contacts: Contacts, provenance: dict[str,
         "provenance": provenance,
         "joint_names": list(scene.joint_names),
         "contacts": [
-            {"chain": c, "session": s, "label": lbl, "joints": [float(v) for v in j]}
-            for c, s, lbl, j in zip(contacts.chains, contacts.sessions, contacts.labels, contacts.joints, strict=True)
+            {"chain": c, "session": s, "kind": k.value, "label": lbl, "joints": [float(v) for v in j]}
+            for c, s, k, lbl, j in zip(
+                contacts.chains, contacts.sessions, contacts.kinds, contacts.labels, contacts.joints, strict=True
+            )
         ],
     }
 

@@ -1,9 +1,10 @@
 """The scalar parameters of the calibration model: what each one is, its unit and its name.
 
 A parameter is a field of a robot placement (px, py, pz in m; phix, phiy, phiz in rad,
-URDF rpy), of a chain's contact frame (z in m; roll, pitch in rad) or of a table
-session's plane (the same three). Its name, the text artefacts and users see, is made
-here and nowhere else: ``<placement>.<field>``, ``<contact frame>.<field>`` and
+URDF rpy), of a chain's flush contact frame (z in m; roll, pitch in rad), of a chain's
+contact point (x, y, z in m, in its point frame) or of a table session's plane (z, roll,
+pitch). Its name, the text artefacts and users see, is made here and nowhere else:
+``<placement>.<field>``, ``<contact frame>.<field>``, ``<point frame>.<field>`` and
 ``plane@<session>.<field>``.
 """
 
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 
 PLACEMENT_FIELDS = ("px", "py", "pz", "phix", "phiy", "phiz")
 OFFSET_FIELDS = ("z", "roll", "pitch")  # a contact frame's or a plane's offset
+POINT_FIELDS = ("x", "y", "z")  # a contact point's position in its point frame
 
 
 class Unit(str, enum.Enum):
@@ -27,7 +29,8 @@ class Group(str, enum.Enum):
     """What a parameter describes."""
 
     PLACEMENT = "placement"  # a joint or frame placement of the robot
-    CONTACT = "contact"  # the contact frame in the gripper frame
+    CONTACT = "contact"  # the flush contact frame in the gripper frame
+    POINT = "point"  # the contact point in its point frame
     PLANE = "plane"  # the table plane of a session, in the sole frame
 
 
@@ -37,7 +40,7 @@ class Parameter:
 
     group: Group
     owner: str  # the placement (joint or frame), the contact frame, or the table session
-    field: str  # one of PLACEMENT_FIELDS, or of OFFSET_FIELDS for contacts and planes
+    field: str  # one of PLACEMENT_FIELDS, of OFFSET_FIELDS (contacts, planes) or of POINT_FIELDS
 
     @classmethod
     def placement(cls, name: str, field: str) -> Parameter:
@@ -50,14 +53,19 @@ class Parameter:
         return cls(Group.CONTACT, frame, field)
 
     @classmethod
+    def point(cls, frame: str, field: str) -> Parameter:
+        """A coordinate of the contact point of point frame ``frame``."""
+        return cls(Group.POINT, frame, field)
+
+    @classmethod
     def plane(cls, session: str, field: str) -> Parameter:
         """A field of the table plane of ``session``."""
         return cls(Group.PLANE, session, field)
 
     @property
     def unit(self) -> Unit:
-        """M for translations and offset heights, rad for angles."""
-        length = ("px", "py", "pz") if self.group == Group.PLACEMENT else ("z",)
+        """M for translations, offset heights and point coordinates, rad for angles."""
+        length = {Group.PLACEMENT: ("px", "py", "pz"), Group.POINT: POINT_FIELDS}.get(self.group, ("z",))
         return Unit.LENGTH if self.field in length else Unit.ANGLE
 
     @property

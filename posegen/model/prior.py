@@ -38,6 +38,7 @@ def kind_sigmas(prior: PriorConfig) -> dict[Kind, float]:
         Kind.FRAME_ROTATION: float(np.deg2rad(prior.frame_rotation_deg)),
         Kind.CONTACT_HEIGHT: prior.contact_height_mm * 1e-3,
         Kind.CONTACT_TILT: float(np.deg2rad(prior.contact_tilt_deg)),
+        Kind.CONTACT_POINT: prior.contact_point_mm * 1e-3,
         Kind.COMPLIANCE: prior.compliance_rad_per_knm * 1e-3,
         Kind.PLANE: np.inf,
         Kind.FLOOR: np.inf,

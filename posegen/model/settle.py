@@ -2,8 +2,9 @@
 
 A force-controlled contact ends flush with the table. Given parameters ``theta``, each
 contact's own arm and torso joints move by the smallest amount (Gauss-Newton,
-minimum-norm steps) that makes its contact frame flush with its session's plane; both
-soles stay on the floor. Simulation (the true robot's contacts) and the structural base
+minimum-norm steps) that makes its contact frame flush with its session's plane (a
+point contact: its point at its tip radius above the plane); both soles stay on the
+floor. Simulation (the true robot's contacts) and the structural base
 parameters (contacts shaped like real ones) both settle contacts.
 """
 
@@ -48,7 +49,7 @@ def settle(model: ContactModel, theta: FloatArray, contacts: Contacts) -> tuple[
     joints = contacts.joints.copy()
 
     def residuals(values: FloatArray) -> FloatArray:
-        return model.residuals(theta, Contacts(values, contacts.chains, contacts.sessions, contacts.labels))
+        return model.residuals(theta, contacts.at(values))
 
     res = residuals(joints)  # (n, 3)
     for _ in range(MAX_STEPS):
@@ -65,4 +66,4 @@ def settle(model: ContactModel, theta: FloatArray, contacts: Contacts) -> tuple[
         res = residuals(joints)
     # No limit check: like the real robot's, a settled joint may read a little past the URDF limit.
     converged = np.all(np.abs(res) < 1e-9, axis=1)
-    return Contacts(joints, contacts.chains, contacts.sessions, contacts.labels), converged
+    return contacts.at(joints), converged

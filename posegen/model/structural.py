@@ -20,7 +20,7 @@ from posegen.model.planes import initial_planes, level_planes
 from posegen.model.settle import settle
 from posegen.model.weights import DEFAULT_NOISE, UNIT_PRIOR_LENGTH_M, prior_scale, weights_for
 
-STRUCTURAL_POSTURES = 100  # generated per (chain, session) pair
+STRUCTURAL_POSTURES = 100  # generated per (chain, session, contact kind)
 
 
 def structural_base(
@@ -31,14 +31,14 @@ def structural_base(
     seed: int = 0,
     floor_sigma: tuple[float, ...] | None = None,
 ) -> BaseParameters:
-    """Base parameters of the (chain, session) pairs present in ``contacts``.
+    """Base parameters of the (chain, session, contact kind) triples present in ``contacts``.
 
     Args:
         model: Measurement model.
-        contacts: Contacts whose (chain, session) pairs, joints and heights the
+        contacts: Contacts whose (chain, session, kind) triples, joints and heights the
             regressor's postures are drawn around.
         noise: Measurement noise (m, rad, rad) scaling the regressor's rows.
-        postures: Postures generated per (chain, session) pair.
+        postures: Postures generated per (chain, session, kind) triple.
         seed: Seed of the generated postures.
         floor_sigma: With the floor equations (noise of x, y, z in m, roll, pitch, yaw in
             rad): their rows join the regressor, x, y and yaw less their session's mean
@@ -70,16 +70,17 @@ def base_at(
     scale = prior_scale(model, weights_for(1.0, noise))
     scale[~np.isfinite(scale)] = UNIT_PRIOR_LENGTH_M
     planes = model.columns(Group.PLANE)
-    robot = np.concatenate([model.columns(Group.PLACEMENT), model.columns(Group.CONTACT)])
+    robot = np.concatenate([model.columns(Group.PLACEMENT), model.columns(Group.CONTACT), model.columns(Group.POINT)])
     return base_parameters(regressor, scale, [planes, robot])
 
 
 def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -> Contacts:
-    """Random standing contacts of each (chain, session) pair of ``contacts``.
+    """Random standing contacts of each (chain, session, kind) of ``contacts``.
 
     Shaped like real ones, because the regressor's rank depends on it: both soles on
     the floor (the stance closure ties the two legs), and every contact flush with a
-    level plane at its session's mean contact height (one height per session removes
+    level plane (a point contact: its point on it, the hand free to turn, as a point
+    contact's hand is) at its session's mean contact height (one height per session removes
     combinations that varying heights would show). Each is a training contact with
     every joint perturbed at random (legs by up to 0.3 rad, the rest by up to 0.5 rad),
     the second leg closed onto its sole and the contact settled by the smallest arm and
@@ -91,16 +92,10 @@ def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -
     spread = np.full(len(scene.joint_names), 0.5)
     spread[legs] = 0.3
     theta = level_planes(model, initial_planes(model, contacts, model.nominal()))  # at the measured heights
-    pairs = sorted(set(zip(contacts.chains, contacts.sessions, strict=True)))
+    keys = list(zip(contacts.chains, contacts.sessions, contacts.kinds, strict=True))
     parts: list[Contacts] = []
-    for chain, session in pairs:
-        seeds = contacts.joints[
-            [
-                i
-                for i, (c, s) in enumerate(zip(contacts.chains, contacts.sessions, strict=True))
-                if (c, s) == (chain, session)
-            ]
-        ]
+    for chain, session, kind in sorted(set(keys)):
+        seeds = contacts.joints[[i for i, key in enumerate(keys) if key == (chain, session, kind)]]
         found = 0
         for _attempt in range(50):
             samples = []
@@ -112,9 +107,8 @@ def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -
                     samples.append(closed)
             if not samples:
                 continue
-            batch = Contacts(
-                np.array(samples), (chain,) * len(samples), (session,) * len(samples), ("",) * len(samples)
-            )
+            m = len(samples)
+            batch = Contacts(np.array(samples), (chain,) * m, (session,) * m, ("",) * m, (kind,) * m)
             settled, converged = settle(model, theta, batch)
             keep = np.flatnonzero(converged)[: n - found]
             parts.append(settled.subset(keep))

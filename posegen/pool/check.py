@@ -54,8 +54,7 @@ def _measure(state: tuple[Scene, CollisionChecker], postures: Sequence[Posture])
         excess = found.excess(scene)
         details = {
             Invariant.SOLE: f"sole {found.sole_position_error_m:.2e} m, {found.sole_angle_error_rad:.2e} rad",
-            Invariant.CONTACT: f"height {found.contact_height_m:.2e} m, roll {found.contact_roll_rad:.2e} rad, "
-            f"pitch {found.contact_pitch_rad:.2e} rad",
+            Invariant.CONTACT: found.contact_detail(),
             Invariant.COM: f"CoM margin {found.com_margin_m:.4f} m",
             Invariant.JOINT_LIMITS: f"joint-limit margin {found.joint_limit_margin_rad:.4f} rad",
         }

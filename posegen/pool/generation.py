@@ -23,7 +23,7 @@ from posegen.parallel import Backend, Job, ProcessBackend
 from posegen.pool.checkpoint import Checkpoint, Outcome, run_key
 from posegen.pool.sampler import PostureSampler, rejection_counts
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import Config, Pool, Posture, Scene
+from posegen.robot import Config, Pool, Posture, Scene, check_for_planning
 
 LOG = logging.getLogger(__name__)
 
@@ -75,6 +75,7 @@ def generate_pool(
             how many samples were attempted.
 
     Raises:
+        ConfigError: The reference posture or the table fails a planning check.
         InfeasibleError: No feasible posture in the first samples, or acceptance too low.
         InputError: A checkpoint of a different run is in the way.
         BackendError: A worker cannot run the job (another version or robot model).
@@ -84,6 +85,7 @@ def generate_pool(
         raise InfeasibleError(f"--n must be a positive number of postures, got {n}")
     check_seed(seed)
     scene = Scene(config)
+    check_for_planning(scene)  # soles, balance and reach of the reference posture: cheap, before any sample
     model_sha = scene.files.sha256()
     key = run_key(config, seed, model_sha)
     checkpoint = Checkpoint(checkpoint_path, key, len(scene.joint_names)) if checkpoint_path else None
@@ -105,7 +107,8 @@ def generate_pool(
             if accepted == 0 and len(outcomes) >= PROBE_SAMPLES:
                 raise InfeasibleError(
                     f"no feasible posture in the first {len(outcomes)} samples "
-                    f"(rejections: {rejection_counts(outcomes)}); is the table within reach?"
+                    f"(rejections: {rejection_counts(outcomes)}); "
+                    "is the table (table.top_center_m) within the arms' reach?"
                 )
             if len(outcomes) >= max_samples:
                 raise InfeasibleError(

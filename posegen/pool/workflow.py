@@ -11,7 +11,18 @@ from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import POOL_FORMAT, Pool, Verification, load_config, pool_from_dict, scene_for, write_pool
+from posegen.robot import (
+    POOL_FORMAT,
+    CollisionChecker,
+    Pool,
+    Scene,
+    Verification,
+    check_for_planning,
+    load_config,
+    pool_from_dict,
+    scene_for,
+    write_pool,
+)
 
 
 def generate_pool_file(
@@ -31,8 +42,9 @@ def generate_pool_file(
     started (one it resumed is kept).
 
     Raises:
-        PosegenError: Bad arguments or config, an output that cannot be written or is
-            being written, an infeasible scene, or a checkpoint of another run.
+        PosegenError: Bad arguments or config (a reference posture unfit for planning
+            included), an output that cannot be written or is being written, an
+            infeasible scene, or a checkpoint of another run.
 
     """
     check_count(n, "--n")
@@ -43,6 +55,8 @@ def generate_pool_file(
     checkpoint = path.with_name(path.name + ".partial.jsonl")
     with claim_output(path, beside=(checkpoint, sidecar_path(path))):
         config = load_config(config_path)
+        scene = Scene(config)
+        check_for_planning(scene, CollisionChecker(scene, convex=True))
         resuming = checkpoint.exists()
         try:
             pool = generate_pool(config, n, seed, workers, checkpoint, progress)

@@ -8,9 +8,10 @@ selection, route).
 """
 
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
+from posegen.robot.chain_config import ChainConfig, ContactKind
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
+from posegen.robot.collision_matrix import PairSurvey
 from posegen.robot.config import (
-    ChainConfig,
     Config,
     MarginConfig,
     RecordingConfig,
@@ -23,6 +24,8 @@ from posegen.robot.config import (
     parse_config,
 )
 from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf
+from posegen.robot.draft import Draft
+from posegen.robot.draft_text import survey_config_pairs, write_draft
 from posegen.robot.feasibility import (
     SOLE_ANGLE_TOL_RAD,
     SOLE_POSITION_TOL_M,
@@ -71,6 +74,7 @@ from posegen.robot.trajectory import (
     route_arrays,
     stamp,
 )
+from posegen.robot.validation import check_for_planning
 from posegen.robot.verification import EXAMPLES, Verification, Worst, WorstSoFar, summarize, worst_case
 
 __all__ = [
@@ -95,10 +99,13 @@ __all__ = [
     "ChainConfig",
     "CollisionChecker",
     "Config",
+    "ContactKind",
+    "Draft",
     "FloatArray",
     "Indices",
     "Invariant",
     "MarginConfig",
+    "PairSurvey",
     "Pool",
     "Posture",
     "PriorConfig",
@@ -120,6 +127,7 @@ __all__ = [
     "Worst",
     "WorstSoFar",
     "assess",
+    "check_for_planning",
     "contact_in_table",
     "contact_placement",
     "convex_hull_clockwise",
@@ -141,8 +149,10 @@ __all__ = [
     "scene_for",
     "stamp",
     "summarize",
+    "survey_config_pairs",
     "tilt_angles",
     "worst_case",
+    "write_draft",
     "write_pool",
     "yaw_rotation",
 ]

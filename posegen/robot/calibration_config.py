@@ -28,6 +28,7 @@ class PriorConfig:
     frame_rotation_deg: float = 0.1  # a fixed frame (sole, gripper mount)
     contact_height_mm: float = 1.0  # contact frame along the gripper normal
     contact_tilt_deg: float = 0.1  # contact frame roll and pitch
+    contact_point_mm: float = 1.0  # a point contact's tip centre in its point frame
     compliance_rad_per_knm: float = 0.1  # joint deflection per kN m of gravity torque
 
 

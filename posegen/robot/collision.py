@@ -15,6 +15,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from posegen.robot.bounds import BoundingSpheres
+from posegen.robot.collision_geometry import add_self_pairs, carrying_links, link_of, robot_geometry
 from posegen.robot.geometry import FloatArray
 from posegen.robot.scene import Scene
 
@@ -37,27 +38,17 @@ class Proximity:
 class CollisionChecker:
     """Self, table and floor collisions of a scene's robot.
 
-    The soles' links may touch the floor; a chain's fingertips may touch the table when
-    that chain is in contact (``contact_chain``), never otherwise.
+    The soles' links may touch the floor; the links carrying a chain's contact points
+    (fingertips, point frame) may touch the table when that chain is in contact
+    (``contact_chain``), never otherwise.
     """
 
     def __init__(self, scene: Scene, convex: bool = True) -> None:
         self.scene = scene
         model = scene.model
-        geom = pin.buildGeomFromUrdfString(
-            model, scene.urdf_xml, pin.COLLISION, package_dirs=list(scene.files.package_dirs)
-        )
-        if convex:
-            for obj in geom.geometryObjects:
-                if isinstance(obj.geometry, coal.BVHModelBase):
-                    # A true hull (qhull). buildConvexRepresentation would wrap the raw,
-                    # non-convex mesh, and coal's hill-climbing support function then
-                    # overestimates distances (seen: 10 mm reported for a 1 mm gap).
-                    obj.geometry.buildConvexHull(True, "Qt")
-                    obj.geometry = obj.geometry.convex
+        geom = robot_geometry(model, scene.urdf_xml, scene.files.package_dirs, scene.config.collision, convex)
         n_robot = len(geom.geometryObjects)
-        geom.addAllCollisionPairs()
-        pin.removeCollisionPairs(model, geom, str(scene.files.srdf), False)
+        add_self_pairs(model, geom, str(scene.files.srdf), scene.config.collision)
 
         size = scene.table.size_m
         table_placement = pin.SE3(scene.table_pose) * pin.SE3(np.eye(3), np.array([0.0, 0.0, -size[2] / 2]))
@@ -66,7 +57,7 @@ class CollisionChecker:
             TABLE: (coal.Box(*size), table_placement),
             FLOOR: (coal.Box(FLOOR_SIZE_M, FLOOR_SIZE_M, FLOOR_THICKNESS_M), floor_placement),
         }
-        frame_of = [str(model.frames[o.parentFrame].name) for o in geom.geometryObjects]
+        frame_of = link_of(model, geom)
         floor_ok = set(scene.stance.floor_contact_frames)
         for name, (shape, placement) in obstacles.items():
             obj = pin.GeometryObject(name, 0, 0, placement, shape)
@@ -80,7 +71,8 @@ class CollisionChecker:
         table_index = self._names.index(TABLE)
         self._exempt: dict[str | None, list[int]] = {None: []}
         for chain in scene.chains:
-            tips = set(chain.fingertip_frames)
+            touching = (*chain.fingertip_frames, *((chain.point_frame,) if chain.point_frame else ()))
+            tips = carrying_links(model, touching, set(frame_of))
             self._exempt[chain.name] = [
                 k
                 for k, p in enumerate(geom.collisionPairs)

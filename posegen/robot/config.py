@@ -16,12 +16,28 @@ from typing import Any, TypeVar
 from posegen.arguments import is_finite_number
 from posegen.errors import ConfigError
 from posegen.io import load_yaml_file
+from posegen.robot.additions import (
+    CollisionConfig,
+    FrameConfig,
+    additions_to_dict,
+    read_collision,
+    read_frames,
+    read_velocity_limits,
+)
 from posegen.robot.calibration_config import CalibrationConfig, calibration_to_dict, parse_calibration
+from posegen.robot.chain_config import CHAIN_DEFAULTS, ChainConfig, read_chain
+from posegen.robot.config_reader import Reader
+
+PACKAGE_URI = "package://"
 
 
 @dataclass(frozen=True)
 class RobotSource:
-    """Where the robot model comes from: an example-robot-data name or URDF/SRDF paths."""
+    """Where the robot model comes from: an example-robot-data name or URDF/SRDF paths.
+
+    With ``example_robot_data``, ``srdf`` may name another SRDF than the loader's (some
+    loaders have none): a path, or a ``package://`` URI resolved in the package dirs.
+    """
 
     example_robot_data: str | None = None
     urdf: str | None = None
@@ -30,29 +46,15 @@ class RobotSource:
 
 
 @dataclass(frozen=True)
-class ChainConfig:
-    """One foot-to-gripper chain (one arm)."""
-
-    name: str
-    sole_frame: str
-    gripper_frame: str  # the link the fingertips are rigidly attached to
-    fingertip_frames: tuple[str, ...]
-    fingertip_length_m: float  # from a fingertip link origin to its end, along -z of gripper_frame
-    contact_frame: str  # name given to the contact frame that posegen adds to the model
-    spot_y_range_m: tuple[float, float]  # table-frame y range of the spots this arm serves
-    recorded_as: str = ""  # the name recordings give this gripper (e.g. "talos/left_gripper")
-    wrench_topic: str = ""  # rosbag2 topic of this wrist's force/torque sensor (geometry_msgs/WrenchStamped)
-
-
-@dataclass(frozen=True)
 class StanceConfig:
     """Both feet flat on the floor at the poses of a reference posture."""
 
-    reference_posture: str  # SRDF group state, e.g. half_sitting
+    reference_posture: str  # an SRDF group state; "" for every joint at 0
     sole_frames: tuple[str, str]  # the first is the anchor the floating base is solved from
     foot_x_m: tuple[float, float]  # sole rectangle along the sole frame's x
     foot_y_m: tuple[float, float]  # sole rectangle along the sole frame's y
     floor_contact_frames: tuple[str, ...]  # links allowed to touch the floor
+    reference_joints: dict[str, float] = dataclasses.field(default_factory=dict)  # rad, overriding the state
 
 
 @dataclass(frozen=True)
@@ -131,6 +133,9 @@ class Config:
     recording: RecordingConfig = RecordingConfig()
     calibration: CalibrationConfig = dataclasses.field(default_factory=CalibrationConfig)
     source_path: str = ""
+    frames: tuple[FrameConfig, ...] = ()  # declared frames, added to the description at load
+    velocity_limits: dict[str, float] = dataclasses.field(default_factory=dict)  # rad/s, overriding the URDF's
+    collision: CollisionConfig = dataclasses.field(default_factory=CollisionConfig)
 
     def chain(self, name: str) -> ChainConfig:
         """Return the chain called ``name``.
@@ -156,10 +161,19 @@ class Config:
         chains = {}
         for chain in self.chains:
             fields = dataclasses.asdict(chain)
+            fields["contact_kind"] = chain.contact_kind.value
+            for key in ("contact_kind", "point_frame", "point_radius_m", "point_cone_deg"):
+                if fields[key] == CHAIN_DEFAULTS[key] or not chain.point_frame:
+                    del fields[key]  # a flush-only chain saves as before
             chains[fields.pop("name")] = fields
+        stance = dataclasses.asdict(self.stance)
+        if not stance["reference_joints"]:
+            del stance["reference_joints"]  # only what a config says: older artefacts stay identical
+        robot = {"source": source, "locked_joints": dict(self.locked_joints)}
+        robot.update(additions_to_dict(self.frames, self.velocity_limits, self.collision))
         data = {
-            "robot": {"source": source, "locked_joints": dict(self.locked_joints)},
-            "stance": dataclasses.asdict(self.stance),
+            "robot": robot,
+            "stance": stance,
             "chains": chains,
             "table": dataclasses.asdict(self.table),
             "margins": dataclasses.asdict(self.margins),
@@ -179,72 +193,6 @@ def _plain(value: Any) -> Any:
     return value
 
 
-class _Reader:
-    """Reads typed fields from a nested mapping, with the key path in every error."""
-
-    def __init__(self, data: Any, where: str) -> None:
-        if not isinstance(data, dict):
-            raise ConfigError(f"{where or 'config'}: expected a mapping, got {type(data).__name__}")
-        self.data = data
-        self.where = where
-
-    def _path(self, key: str) -> str:
-        return f"{self.where}.{key}" if self.where else key
-
-    def raw(self, key: str, default: Any = ...) -> Any:
-        if key not in self.data:
-            if default is ...:
-                raise ConfigError(f"{self._path(key)}: missing")
-            return default
-        return self.data[key]
-
-    def sub(self, key: str) -> _Reader:
-        return _Reader(self.raw(key), self._path(key))
-
-    def text(self, key: str, default: Any = ...) -> str:
-        value = self.raw(key, default)
-        if not isinstance(value, str) or not value:
-            raise ConfigError(f"{self._path(key)}: expected a non-empty string, got {value!r}")
-        return value
-
-    def optional_text(self, key: str) -> str | None:
-        return None if self.raw(key, None) is None else self.text(key)
-
-    def number(self, key: str, default: Any = ..., minimum: float | None = None) -> float:
-        value = self.raw(key, default)
-        if not is_finite_number(value):
-            raise ConfigError(f"{self._path(key)}: expected a finite number, got {value!r}")
-        if minimum is not None and value < minimum:
-            raise ConfigError(f"{self._path(key)}: must be >= {minimum}, got {value}")
-        return float(value)
-
-    def integer(self, key: str, default: Any = ..., minimum: int = 1, maximum: int = 1_000_000) -> int:
-        value = self.raw(key, default)
-        if isinstance(value, bool) or not isinstance(value, int) or not minimum <= value <= maximum:
-            raise ConfigError(f"{self._path(key)}: expected an integer from {minimum} to {maximum}, got {value!r}")
-        return value
-
-    def numbers(self, key: str, length: int | None = None, default: Any = ...) -> tuple[float, ...]:
-        value = self.raw(key, default)
-        ok = isinstance(value, list) and all(is_finite_number(v) for v in value)
-        if not ok or (length is not None and len(value) != length) or not value:
-            size = f"{length} " if length is not None else ""
-            raise ConfigError(f"{self._path(key)}: expected a list of {size}finite numbers, got {value!r}")
-        return tuple(float(v) for v in value)
-
-    def texts(self, key: str, default: Any = ...) -> tuple[str, ...]:
-        value = self.raw(key, default)
-        if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
-            raise ConfigError(f"{self._path(key)}: expected a list of names, got {value!r}")
-        return tuple(value)
-
-    def interval(self, key: str) -> tuple[float, float]:
-        low, high = self.numbers(key, 2)
-        if low >= high:
-            raise ConfigError(f"{self._path(key)}: expected [low, high] with low < high")
-        return low, high
-
-
 def parse_config(data: Any, source_path: str = "") -> Config:
     """Build a :class:`Config` from plain data (a parsed YAML document).
 
@@ -252,7 +200,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         ConfigError: A field is missing, of the wrong type or out of range.
 
     """
-    top = _Reader(data, "")
+    top = Reader(data, "")
     robot = top.sub("robot")
     src = robot.sub("source")
     base = Path(source_path).parent if source_path else Path.cwd()
@@ -260,7 +208,9 @@ def parse_config(data: Any, source_path: str = "") -> Config:
     def absolute(value: str | None) -> str | None:  # relative paths are relative to the config file
         if value is not None and "\0" in value:
             raise ConfigError(f"robot.source: {value!r} is not a valid path")
-        return None if value is None else str((base / value).resolve())
+        if value is None or value.startswith(PACKAGE_URI):  # package:// is resolved with the package dirs
+            return value
+        return str((base / value).resolve())
 
     source = RobotSource(
         example_robot_data=src.optional_text("example_robot_data"),
@@ -272,6 +222,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         raise ConfigError("robot.source: give either example_robot_data or urdf (with srdf)")
     if source.urdf is not None and source.srdf is None:
         raise ConfigError("robot.source.srdf: missing (needed with urdf)")
+    robot.keys_within(("source", "locked_joints", "frames", "velocity_limits_rad_s", "collision"))
     locked = robot.raw("locked_joints", {})
     if not isinstance(locked, dict) or not all(is_finite_number(v) for v in locked.values()):
         raise ConfigError("robot.locked_joints: expected a mapping joint name -> angle (rad)")
@@ -281,35 +232,18 @@ def parse_config(data: Any, source_path: str = "") -> Config:
     if len(soles) != 2:
         raise ConfigError("stance.sole_frames: expected exactly two sole frames")
     stance = StanceConfig(
-        reference_posture=st.text("reference_posture"),
+        reference_posture=str(st.raw("reference_posture", "") or ""),
         sole_frames=(soles[0], soles[1]),
         foot_x_m=st.interval("foot_x_m"),
         foot_y_m=st.interval("foot_y_m"),
         floor_contact_frames=st.texts("floor_contact_frames"),
+        reference_joints=st.angles("reference_joints"),
     )
 
     chains_raw = top.raw("chains")
     if not isinstance(chains_raw, dict) or not chains_raw:
         raise ConfigError("chains: expected a mapping chain name -> chain settings")
-    chains = []
-    for name, _ in chains_raw.items():
-        ch = top.sub("chains").sub(str(name))
-        tips = ch.texts("fingertip_frames")
-        if len(tips) < 3:
-            raise ConfigError(f"chains.{name}.fingertip_frames: a flush contact needs 3 fingertips")
-        chains.append(
-            ChainConfig(
-                name=str(name),
-                sole_frame=ch.text("sole_frame"),
-                gripper_frame=ch.text("gripper_frame"),
-                fingertip_frames=tips,
-                fingertip_length_m=ch.number("fingertip_length_m", minimum=0.0),
-                contact_frame=ch.text("contact_frame"),
-                spot_y_range_m=ch.interval("spot_y_range_m"),
-                recorded_as=ch.text("recorded_as", str(name)),
-                wrench_topic=ch.text("wrench_topic") if ch.raw("wrench_topic", "") else "",
-            )
-        )
+    chains = [read_chain(top.sub("chains").sub(str(name)), str(name)) for name in chains_raw]
 
     tb = top.sub("table")
     size = tb.numbers("size_m", 3)
@@ -358,13 +292,16 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         recording=recording,
         calibration=parse_calibration(top.raw("calibration", None)),
         source_path=source_path,
+        frames=read_frames(robot),
+        velocity_limits=read_velocity_limits(robot),
+        collision=read_collision(robot),
     )
 
 
 _Section = TypeVar("_Section", RouteConfig, RecordingConfig)
 
 
-def _section(top: _Reader, key: str, defaults: _Section) -> _Section:
+def _section(top: Reader, key: str, defaults: _Section) -> _Section:
     """An optional section of numbers and flags; absent keys keep their defaults."""
     if key not in top.data:
         return defaults

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from posegen.robot.chain_config import ContactKind
 from posegen.robot.collision import CollisionChecker, Proximity
 from posegen.robot.geometry import FloatArray, tilt_angles
 from posegen.robot.scene import Scene
@@ -27,7 +28,7 @@ class Invariant(str, enum.Enum):
     """What a contact posture must satisfy."""
 
     SOLE = "sole"  # the non-anchor sole at its fixed pose
-    CONTACT = "contact"  # contact frame flush on the table plane
+    CONTACT = "contact"  # flush: contact frame on the table plane; point: tip on it, tilt within the cone
     COM = "com"  # CoM projection inside the support polygon with margin
     JOINT_LIMITS = "joint_limits"  # within the limits shrunk by the margin
     COLLISION = "collision"  # no pair closer than the collision margin
@@ -47,6 +48,9 @@ class Assessment:
     com_margin_m: float  # signed: negative outside the polygon
     joint_limit_margin_rad: float  # smallest distance of a free joint to a limit (negative outside)
     closest: Proximity | None  # None: collisions not measured here
+    contact_kind: ContactKind = ContactKind.FLUSH
+    contact_tilt_rad: float = 0.0  # angle between the contact frame's z and the table normal
+    cone_rad: float = 0.0  # a point contact's largest tilt (not used by a flush one)
 
     def excess(self, scene: Scene) -> dict[Invariant, float]:
         """Each measured invariant's excess over its bound (> 0: violated), in its unit."""
@@ -56,11 +60,7 @@ class Assessment:
                 self.sole_position_error_m - SOLE_POSITION_TOL_M,
                 self.sole_angle_error_rad - SOLE_ANGLE_TOL_RAD,
             ),
-            Invariant.CONTACT: max(
-                abs(self.contact_height_m) - CONTACT_HEIGHT_TOL_M,
-                abs(self.contact_roll_rad) - CONTACT_ANGLE_TOL_RAD,
-                abs(self.contact_pitch_rad) - CONTACT_ANGLE_TOL_RAD,
-            ),
+            Invariant.CONTACT: self._contact_excess(),
             Invariant.COM: margins.com_m - self.com_margin_m,
             Invariant.JOINT_LIMITS: margins.joint_limit_rad - self.joint_limit_margin_rad - JOINT_LIMIT_TOL_RAD,
         }
@@ -68,14 +68,40 @@ class Assessment:
             found[Invariant.COLLISION] = margins.collision_m - self.closest.distance_m
         return found
 
+    def contact_detail(self) -> str:
+        """The contact's measured figures, as a short text."""
+        if self.contact_kind == ContactKind.POINT:
+            return (
+                f"height {self.contact_height_m:.2e} m, tilt {np.rad2deg(self.contact_tilt_rad):.1f} deg "
+                f"(cone {np.rad2deg(self.cone_rad):.0f} deg)"
+            )
+        return (
+            f"height {self.contact_height_m:.2e} m, roll {self.contact_roll_rad:.2e} rad, "
+            f"pitch {self.contact_pitch_rad:.2e} rad"
+        )
+
+    def _contact_excess(self) -> float:
+        height = abs(self.contact_height_m) - CONTACT_HEIGHT_TOL_M
+        if self.contact_kind == ContactKind.POINT:
+            return max(height, self.contact_tilt_rad - self.cone_rad)
+        return max(
+            height,
+            abs(self.contact_roll_rad) - CONTACT_ANGLE_TOL_RAD,
+            abs(self.contact_pitch_rad) - CONTACT_ANGLE_TOL_RAD,
+        )
+
     def violations(self, scene: Scene) -> dict[Invariant, float]:
         """The violated invariants with their excess over the bound."""
         return {k: v for k, v in self.excess(scene).items() if v > 0}
 
 
 def contact_in_table(scene: Scene, data: pin.Data, chain: str) -> pin.SE3:
-    """Pose of a chain's contact frame in the table frame (after forward kinematics)."""
-    frame = scene.frame_id(scene.chain(chain).contact_frame)
+    """Pose of a chain's planned contact frame in the table frame (after forward kinematics).
+
+    For a point contact, the frame at the tip's centre, its radius above the table.
+    """
+    config = scene.chain(chain)
+    frame = scene.frame_id(config.frame(config.contact_kind))
     return pin.SE3(scene.table_pose).actInv(data.oMf[frame])
 
 
@@ -96,13 +122,15 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
     other = scene.second_sole
     sole_error = pin.SE3(scene.sole_poses[other]).actInv(data.oMf[scene.frame_id(other)])
     contact = contact_in_table(scene, data, chain)
+    config = scene.chain(chain)
+    lift = config.point_radius_m if config.contact_kind == ContactKind.POINT else 0.0
     roll, pitch = tilt_angles(contact.rotation)
     limit_margin = float(scene.limit_margin(joints))  # locked joints may sit on a limit: not counted
     closest = checker.closest(q, chain) if checker is not None else None
     return Assessment(
         sole_position_error_m=float(np.linalg.norm(sole_error.translation)),
         sole_angle_error_rad=float(np.linalg.norm(pin.log3(sole_error.rotation))),
-        contact_height_m=float(contact.translation[2]),
+        contact_height_m=float(contact.translation[2]) - lift,
         contact_roll_rad=roll,
         contact_pitch_rad=pitch,
         contact_xy_table_m=(float(contact.translation[0]), float(contact.translation[1])),
@@ -110,4 +138,7 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
         com_margin_m=scene.com_margin(q, data),
         joint_limit_margin_rad=limit_margin,
         closest=closest,
+        contact_kind=config.contact_kind,
+        contact_tilt_rad=float(np.arccos(np.clip(contact.rotation[2, 2], -1.0, 1.0))),
+        cone_rad=float(np.deg2rad(config.point_cone_deg)),
     )

@@ -1,9 +1,11 @@
 """Gauss-Newton projection of a joint sample onto balanced table contact (placo).
 
 The problem: both soles at their fixed poses, the CoM ground projection inside the
-support polygon with margin, one chain's contact frame flush on the table (height,
-roll, pitch zero; yaw free) near a target spot, joint limits shrunk by a margin, and the
-sample itself as a weak posture task (what keeps the pool diverse).
+support polygon with margin, one chain's contact on the table near a target spot (flush:
+the contact frame's height, roll, pitch zero, yaw free; point: the tip's centre at its
+radius above the table, its tilt only weakly pulled upright and checked against a cone
+afterwards), joint limits shrunk by a margin, and the sample itself as a weak posture
+task (what keeps the pool diverse).
 
 Solving from a random sample with every task hard is infeasible at the first step, so
 the solver runs a soft phase, then a hard phase that makes the equality tasks exact.
@@ -17,12 +19,16 @@ from dataclasses import dataclass
 import numpy as np
 import placo
 
+from posegen.robot.chain_config import ContactKind
 from posegen.robot.description import kinematic_urdf
 from posegen.robot.geometry import FloatArray
 from posegen.robot.scene import Scene
 
 FOOT_WEIGHT = 100.0
 CONTACT_WEIGHT = 100.0
+TILT_WEIGHT = 3e-3  # a point contact's pull toward upright. TALOS on one fingertip, 30 deg cone:
+# 3e-3 gave tilts of 3-23 deg (varied: what identifies the tip's offset) at 17 % acceptance;
+# 1e-2 kept them under 11 deg; 1e-3 let a third of the samples leave the cone.
 SPOT_WEIGHT = 1.0
 POSTURE_WEIGHT = 1e-3
 REGULARIZATION = 1e-4
@@ -54,7 +60,9 @@ class _ChainProblem:
             if scene.locked[i]:
                 self.solver.mask_dof(name)
         self.feet = [self.solver.add_frame_task(f, scene.sole_poses[f]) for f in scene.stance.sole_frames]
-        contact = scene.chain(chain).contact_frame
+        config = scene.chain(chain)
+        self.kind = config.contact_kind
+        contact = config.frame(self.kind)
         table_normal = scene.table_pose[:3, 2].copy()
         self.height = self.solver.add_position_task(contact, scene.table_pose[:3, 3].copy())
         self.height.mask.set_axises("z", "world")
@@ -62,6 +70,9 @@ class _ChainProblem:
         self.spot.mask.set_axises("xy", "world")
         self.spot.configure(f"{chain}_spot", "soft", SPOT_WEIGHT)
         self.flush = self.solver.add_axisalign_task(contact, np.array([0.0, 0.0, 1.0]), table_normal)
+        if self.kind == ContactKind.POINT:  # a weak pull toward the cone's axis; the sample keeps the tilts varied
+            self.flush.configure("tilt", "soft", TILT_WEIGHT)
+        self.lift_m = config.point_radius_m if self.kind == ContactKind.POINT else 0.0  # the tip's centre
         com = self.solver.add_com_polygon_constraint(scene.support_polygon, scene.margins.com_m + COM_BUFFER_M)
         com.configure("com", "hard", 1.0)
         self.posture = self.solver.add_joints_task()
@@ -74,11 +85,12 @@ class _ChainProblem:
         for k, task in enumerate(self.feet):
             task.configure(f"foot_{k}", mode, FOOT_WEIGHT)
         self.height.configure("height", mode, CONTACT_WEIGHT)
-        self.flush.configure("flush", mode, CONTACT_WEIGHT)
+        if self.kind == ContactKind.FLUSH:
+            self.flush.configure("flush", mode, CONTACT_WEIGHT)
 
 
 class Projector:
-    """Projects joint samples onto balanced flush contact, one chain at a time."""
+    """Projects joint samples onto balanced contact, one chain at a time."""
 
     def __init__(self, scene: Scene) -> None:
         self.scene = scene
@@ -115,16 +127,19 @@ class Projector:
         contact = self.robot.get_T_world_frame(problem.contact).tolist()
         normal = self._normal
         position = max(position, abs(sum(normal[i] * (contact[i][3] - target_m[i]) for i in range(3))))
+        if problem.kind == ContactKind.POINT:
+            return position, angle  # a point contact's tilt is free (its cone is checked afterwards)
         cosine = sum(contact[i][2] * normal[i] for i in range(3))
         return position, max(angle, math.acos(min(1.0, max(-1.0, cosine))))
 
     def project(self, joints: FloatArray, chain: str, target_m: FloatArray) -> Projection:
-        """Project a sample onto flush contact of ``chain`` near ``target_m``.
+        """Project a sample onto contact of ``chain`` (its planned kind) near ``target_m``.
 
         Args:
             joints: Sample joint angles (rad), shape (nj,); locked joints are overwritten.
             chain: Name of the chain in contact.
-            target_m: World position of the target spot on the table top, shape (3,).
+            target_m: World position of the target spot on the table top, shape (3,); a
+                point contact's frame goes its tip radius above it.
 
         Returns:
             The projected posture; ``converged`` says whether the equalities hold to
@@ -134,6 +149,7 @@ class Projector:
         scene = self.scene
         sample = np.where(scene.locked, scene.locked_values, joints)
         problem = self._problems[chain]
+        target_m = np.asarray(target_m, dtype=float) + problem.lift_m * scene.table_pose[:3, 2]
         self._set_joints(sample)
         problem.posture.set_joints(dict(zip(scene.joint_names, map(float, sample), strict=True)))
         problem.height.target_world = np.array(target_m, dtype=float)

@@ -15,8 +15,16 @@ import pinocchio as pin
 
 from posegen.errors import ConfigError, InputError, unknown_name
 from posegen.io import provenance, read_text_file
+from posegen.robot.collision_geometry import check_link_names
 from posegen.robot.config import ChainConfig, Config, load_config, parse_config
-from posegen.robot.description import augmented_urdf, frame_id, resolve_robot_files
+from posegen.robot.description import (
+    augmented_urdf,
+    contact_placement,
+    frame_id,
+    locked_configuration,
+    resolve_robot_files,
+    with_declared_frames,
+)
 from posegen.robot.geometry import FloatArray, convex_hull_clockwise, flatten_on_floor, polygon_margin, yaw_rotation
 
 
@@ -65,14 +73,28 @@ class Scene:
             nominal = pin.buildModelFromXML(nominal_text, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
             raise ConfigError(f"cannot load URDF {self.files.urdf}: {exc}") from exc
+        declared_text = with_declared_frames(nominal_text, nominal, config.frames)
+        declared = pin.buildModelFromXML(declared_text, pin.JointModelFreeFlyer())
         for chain in self.chains:
-            for frame in (chain.sole_frame, chain.gripper_frame, *chain.fingertip_frames):
-                frame_id(nominal, frame)
-            if nominal.existFrame(chain.contact_frame):
+            for field, frames in (
+                ("sole_frame", [chain.sole_frame]),
+                ("gripper_frame", [chain.gripper_frame]),
+                ("fingertip_frames", chain.fingertip_frames),
+                ("point_frame", [chain.point_frame] if chain.point_frame else []),
+            ):
+                for frame in frames:
+                    _named_frame(declared, frame, f"chains.{chain.name}.{field}")
+            if chain.fingertip_frames and declared.existFrame(chain.contact_frame):
                 raise ConfigError(f"chains.{chain.name}.contact_frame '{chain.contact_frame}' already exists")
-        for frame in (*self.stance.sole_frames, *self.stance.floor_contact_frames):
-            frame_id(nominal, frame)
-        self.urdf_xml = augmented_urdf(nominal_text, nominal, config)
+        for field, frames in (
+            ("sole_frames", self.stance.sole_frames),
+            ("floor_contact_frames", self.stance.floor_contact_frames),
+        ):
+            for frame in frames:
+                _named_frame(declared, frame, f"stance.{field}")
+        check_link_names(declared, config.collision)
+        held = locked_configuration(declared, config.locked_joints)  # fingertips are read with the fingers locked
+        self.urdf_xml = augmented_urdf(declared_text, declared, config, held)
         self.model = pin.buildModelFromXML(self.urdf_xml, pin.JointModelFreeFlyer())
         self._data = self.model.createData()  # scratch space of configuration()
         self._closing: tuple[int, list[int], np.ndarray] | None = None  # see close_stance
@@ -84,31 +106,37 @@ class Scene:
         self._v_index = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in self.joint_names])
         self.lower = self.model.lowerPositionLimit[self._q_index].copy()
         self.upper = self.model.upperPositionLimit[self._q_index].copy()
-        self.velocity_limit = self.model.velocityLimit[self._v_index].copy()
         self.locked = np.zeros(len(self.joint_names), dtype=bool)  # (nj,) held during sampling
         self.locked_values = np.zeros(len(self.joint_names))  # (nj,) rad, where locked
         for name, value in config.locked_joints.items():
-            i = self.joint_index(name)
+            i = self._joint(name, "robot.locked_joints")
             if not self.lower[i] <= value <= self.upper[i]:
                 raise ConfigError(
                     f"robot.locked_joints.{name}: {value} rad is outside [{self.lower[i]}, {self.upper[i]}]"
                 )
             self.locked[i] = True
             self.locked_values[i] = value
+        self.velocity_limit = self._velocity_limits()
+        held = self.model_configuration(self.locked_values)
+        self.contact_placements = {  # flush contact frames in their gripper frames
+            chain.name: contact_placement(self.model, chain, held) for chain in self.chains if chain.fingertip_frames
+        }
+        self.point_placements = {  # point frames in their gripper frames, the fingers locked
+            chain.name: self._placement_in(chain.gripper_frame, chain.point_frame, held)
+            for chain in self.chains
+            if chain.point_frame
+        }
 
         read_text_file(self.files.srdf, ConfigError)  # a clear error for a binary or unreadable SRDF
         try:
             pin.loadReferenceConfigurations(self.model, str(self.files.srdf), False)
         except (RuntimeError, ValueError) as exc:
             raise ConfigError(f"cannot read SRDF {self.files.srdf}: {str(exc).strip().splitlines()[0]}") from exc
-        refs = self.model.referenceConfigurations
-        postures = {str(e.key()): np.array(e.data()) for e in refs}
-        if self.stance.reference_posture not in postures:
-            raise ConfigError(unknown_name("reference posture", self.stance.reference_posture, postures))
-        self.reference = postures[self.stance.reference_posture][self._q_index].copy()
+        reference = self._reference_configuration()
+        self.reference = reference[self._q_index].copy()
 
         data = self.model.createData()
-        pin.framesForwardKinematics(self.model, data, postures[self.stance.reference_posture])
+        pin.framesForwardKinematics(self.model, data, reference)
         self.sole_poses = {
             f: flatten_on_floor(data.oMf[self.model.getFrameId(f)].homogeneous) for f in self.stance.sole_frames
         }
@@ -133,6 +161,52 @@ class Scene:
             for i, x in enumerate(table.spots_x_m)
             for j, y in enumerate(table.spots_y_m)
         )
+
+    def _joint(self, name: str, field: str) -> int:
+        if name not in self.joint_names:
+            raise ConfigError(unknown_name("joint", name, self.joint_names) + f" ({field})")
+        return self.joint_names.index(name)
+
+    def _velocity_limits(self) -> FloatArray:
+        """URDF velocity limits (rad/s) with the config's overrides. Shape (nj,).
+
+        A free joint needs a positive limit. A locked one never moves: a missing limit
+        (0 in some URDFs) is replaced by the largest free one, so that it never binds.
+        """
+        limit = self.model.velocityLimit[self._v_index].copy()
+        for name, value in self.config.velocity_limits.items():
+            limit[self._joint(name, "robot.velocity_limits_rad_s")] = value
+        missing = [n for i, n in enumerate(self.joint_names) if not self.locked[i] and not limit[i] > 0]
+        if missing:
+            raise ConfigError(
+                f"robot.velocity_limits_rad_s: the URDF gives no velocity limit (0 rad/s) for {', '.join(missing)}; "
+                "declare one for each, or lock the joint"
+            )
+        free = limit[~self.locked]
+        limit[self.locked & ~(limit > 0)] = float(free.max()) if len(free) else 1.0
+        return np.asarray(limit)
+
+    def _reference_configuration(self) -> FloatArray:
+        """The reference posture: an SRDF state (or every joint at 0) with the config's overrides."""
+        postures = {str(e.key()): np.array(e.data()) for e in self.model.referenceConfigurations}
+        name = self.stance.reference_posture
+        if name and name not in postures:
+            raise ConfigError(unknown_name("reference posture", name, postures) + " (stance.reference_posture)")
+        q = postures[name].copy() if name else pin.neutral(self.model)
+        for joint, value in self.stance.reference_joints.items():
+            q[self._q_index[self._joint(joint, "stance.reference_joints")]] = value
+        return np.asarray(q)
+
+    def _placement_in(self, parent: str, frame: str, q: FloatArray) -> pin.SE3:
+        data = self.model.createData()
+        pin.framesForwardKinematics(self.model, data, q)
+        return data.oMf[self.frame_id(parent)].actInv(data.oMf[self.frame_id(frame)])
+
+    def model_configuration(self, joints: FloatArray) -> FloatArray:
+        """The model's configuration with these joint angles and the base at the origin. Shape (nq,)."""
+        q = pin.neutral(self.model)
+        q[self._q_index] = joints
+        return np.asarray(q)
 
     @property
     def anchor_sole(self) -> str:
@@ -292,6 +366,11 @@ class Scene:
     def velocity_indices(self) -> FloatArray:
         """Indices of the actuated joints in the velocity vector. Shape (nj,)."""
         return self._v_index.copy()
+
+
+def _named_frame(model: pin.Model, name: str, field: str) -> None:
+    if not model.existFrame(name):
+        raise ConfigError(unknown_name("frame", name, (f.name for f in model.frames)) + f" ({field})")
 
 
 def scene_for(recorded: dict[str, Any], config_path: str | None) -> Scene:

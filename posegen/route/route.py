@@ -36,7 +36,7 @@ import numpy as np
 from posegen.errors import InfeasibleError
 from posegen.parallel import Backend, Job, ProcessBackend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Posture, Scene, SegmentType
+from posegen.robot import FloatArray, Posture, Scene, SegmentType, check_for_planning
 from posegen.route.ordering import Order, order_postures, rest_to_rest_time
 from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer
 from posegen.route.repair import (
@@ -109,6 +109,7 @@ def plan_route(
 
     """
     local = Planner(scene, seed)
+    check_for_planning(scene, local.space.checker)
     start = local.start
     if start is None or not local.space.is_valid(start, None):
         raise InfeasibleError("the start posture (reference posture) is not balanced and collision-free")

@@ -4,8 +4,9 @@ After a calibration, a chain whose predicted held-out error is too large needs m
 contacts. The design starts from the information already measured: the given
 contacts' whitened regressor in the free directions of the calibration's model, plus
 the prior of those directions (a Bayesian design, so no base-parameter reduction is
-needed). A pool posture adds its own 3 rows (its chain's contact, in the table session
-its chain was measured in; with the floor equations, 6 more).
+needed). A pool posture adds its own rows (its chain's contact, in the table session
+its chain was measured in: 3 for a flush contact, 1 for a point contact, whose other two
+are zero; with the floor equations, 6 more).
 
 The criterion is the one the user cares about: the mean posterior variance of the
 weakest chain's contact measurement (height, roll, pitch, in design units of 1 mm and
@@ -23,7 +24,15 @@ import numpy as np
 
 from posegen.errors import InputError, reason
 from posegen.io import read_yaml
-from posegen.model import DEFAULT_NOISE, CalibrationModel, Contacts, candidate_spec, spec_for_rows, start_point
+from posegen.model import (
+    DEFAULT_NOISE,
+    CalibrationModel,
+    Contacts,
+    candidate_spec,
+    planned_kinds,
+    spec_for_rows,
+    start_point,
+)
 from posegen.robot import CandidateConfig, FloatArray, Scene, parse_candidate
 
 FLOOR_SIGMA = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))
@@ -75,18 +84,21 @@ def follow_up(
 
     """
     all_chains = sorted(set(chains) | set(given.chains))
-    model = CalibrationModel(scene, all_chains, sorted(set(given.sessions)), scene.calibration.compliance)
-    spec = spec_for_rows(
-        model, candidate_spec(model, candidate, scene.calibration.prior, prior_scale), set(given.sessions)
-    )
-    free = list(spec.free)
-    basis = model.basis[:, free]
     pool = Contacts(
         np.asarray(joints, dtype=float),
         tuple(chains),
         tuple(_session_of(c, given) for c in chains),
         ("",) * len(chains),
+        planned_kinds(scene, chains),
     )
+    kinds = given.concat(pool).kinds_by_chain()
+    compliance = scene.calibration.compliance
+    model = CalibrationModel(scene, all_chains, sorted(set(given.sessions)), compliance, kinds)
+    spec = spec_for_rows(
+        model, candidate_spec(model, candidate, scene.calibration.prior, prior_scale), set(given.sessions)
+    )
+    free = list(spec.free)
+    basis = model.basis[:, free]
     x = start_point(model, model.observations(given))
     sigma = np.array(noise, dtype=float)
 

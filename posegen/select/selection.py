@@ -1,7 +1,8 @@
 """Posture selection: IROC, DETMAX baseline and exact k-posture designs.
 
 IROC (as in the 2025 TALOS paper): continuous D-optimal weights, postures ranked by
-weight, the top k stacked from k0 = ceil(nb / 3) with O1(k) = det(I(q_k))^(1/(2 nb)) /
+weight, the top k stacked from k0 (the fewest with nb measured rows: ceil(nb / 3) flush
+contacts, nb point contacts) with O1(k) = det(I(q_k))^(1/(2 nb)) /
 sqrt(k); the selection is where O1 stops rising. ``select_k`` finds an exact design of
 a given size: the best of greedy, the IROC top-k and the best DETMAX run, each polished
 by Fedorov exchange, so it never scores below either baseline.
@@ -47,7 +48,7 @@ def iroc(design: Design, fractions: Sequence[float] = (0.9, 0.95), tolerance: fl
     """
     weights = d_optimal_weights(design, tolerance)
     ranking = tuple(int(i) for i in np.argsort(-weights.weights, kind="stable"))
-    k0 = -(-design.n_params // 3)
+    k0 = design.fewest(ranking)
     support = int(np.sum(weights.weights > SUPPORT_WEIGHT))
     curve = _o1_curve(design, ranking, k0)
     positive = [(k, v) for k, v in curve if v > 0]

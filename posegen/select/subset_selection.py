@@ -88,9 +88,12 @@ def subset_of(design: Design, rows: Sequence[int]) -> Subset:
 
 
 def _check_k(design: Design, k: int) -> None:
-    minimum = -(-design.n_params // 3)
+    minimum = design.fewest()
     if not minimum <= k <= design.size:
-        raise InfeasibleError(f"k = {k}: choose between {minimum} (ceil(nb / 3)) and {design.size} (the pool)")
+        raise InfeasibleError(
+            f"k = {k}: choose between {minimum} (the fewest postures with nb = {design.n_params} measured rows) "
+            f"and {design.size} (the pool)"
+        )
 
 
 def greedy(design: Design, k: int, start: Sequence[int] = ()) -> Subset:

@@ -41,10 +41,13 @@ def describe(contact: ContactResidual, k: int, n: int) -> str:
     """One line about contact ``k`` of ``n`` and its residuals (mm, deg)."""
 
     def shown(r: FloatArray) -> str:
+        if not np.all(np.isfinite(r[1:])):  # a point contact measures its height only
+            return f"{r[0] * 1e3:+.2f} mm"
         return f"{r[0] * 1e3:+.2f} mm, {np.rad2deg(r[1]):+.3f} / {np.rad2deg(r[2]):+.3f} deg"
 
     return (
-        f"contact {k + 1}/{n}: {contact.label} ({contact.set.value}, {contact.chain}, {contact.session})\n"
+        f"contact {k + 1}/{n}: {contact.label} ({contact.set.value}, {contact.chain}, {contact.session}, "
+        f"{contact.kind.value})\n"
         f"before {shown(contact.before)} | after {shown(contact.after)}"
     )
 
@@ -75,7 +78,7 @@ class CalibrationView(SteppedView):
     def _residual_arrows(self, server: viser.ViserServer) -> tuple[viser.ArrowsHandle, viser.ArrowsHandle]:
         scene = self._artefact.calibrated
         data = scene.model.createData()
-        frames = {c.name: scene.frame_id(c.contact_frame) for c in scene.chains}
+        frames = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.chains}
         normal = scene.table_pose[:3, 2]
         top = scene.table_pose[:3, 3]
         bases = []

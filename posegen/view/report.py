@@ -90,7 +90,13 @@ def _summary(report: dict[str, Any], artefact: CalibrationArtefact) -> str:
 
 
 def _components(values: dict[str, Any]) -> str:
-    return " / ".join(f"{values.get(c, '')}" for c in COMPONENTS) + " (mm / deg / deg)"
+    shown = (values.get(c, "") for c in COMPONENTS)
+    return " / ".join("-" if v is None else f"{v}" for v in shown) + " (mm / deg / deg)"
+
+
+def _number(value: float | None) -> str:
+    """Three decimals; "-" for a component nothing measured (roll and pitch of point contacts)."""
+    return "-" if value is None else f"{value:.3f}"
 
 
 def _residual_tables(report: dict[str, Any]) -> str:
@@ -98,7 +104,7 @@ def _residual_tables(report: dict[str, Any]) -> str:
     for key, result in (report.get("residuals") or {}).items():
         for model in ("before", "after"):
             mean, rms = result[model]["mean_abs"], result[model]["rms"]
-            shown = (f"{mean[c]:.3f} / {rms[c]:.3f}" for c in COMPONENTS)
+            shown = (f"{_number(mean[c])} / {_number(rms[c])}" for c in COMPONENTS)
             rows.append((key.replace("_", " "), model, result.get("contacts", ""), *shown))
     header = ("set", "model", "contacts", "height (mm)", "roll (deg)", "pitch (deg)")
     return table(header, rows, names=2) + '<p class="muted">mean absolute / RMS</p>'

@@ -94,7 +94,7 @@ class RouteView:
     def _swept_path(self, server: viser.ViserServer) -> None:
         scene, route = self._artefact.scene, self._artefact
         data = scene.model.createData()
-        frames = {c.name: scene.frame_id(c.contact_frame) for c in scene.chains}
+        frames = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.chains}
         lines, colours, holds, hold_rgb = [], [], [], []
         palette = chain_colours(scene)
         for seg, chain in zip(route.segments, self._chains, strict=True):

@@ -65,7 +65,8 @@ def test_table_out_of_reach(tmp_path, capsys):
     path = bad_config(tmp_path, lambda d: d["table"].update(top_center_m=[2.5, 0.0, 0.7]))
     out = tmp_path / "pool.yaml"
     argv = ["pool", "--n", "3", "--workers", "1", "--config", path, "-o", str(out), "-q"]
-    assert "within reach" in assert_fails_cleanly(argv, out, capsys)
+    err = assert_fails_cleanly(argv, out, capsys)
+    assert "table.top_center_m: out of reach of chain" in err
 
 
 def test_nonpositive_n(tmp_path, capsys):
@@ -248,3 +249,31 @@ def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
     (swap,) = header["substitutions"]
     assert swap["pool_id"] == 9 and swap["substitute_pool_id"] not in rows and not header["skipped"]
     assert [p["pool_id"] for p in header["postures"]].count(swap["substitute_pool_id"]) == 1
+
+
+def test_robot_init_unknown_name(tmp_path, capsys):
+    out = tmp_path / "new.yaml"
+    err = assert_fails_cleanly(["robot", "init", "talosfull", "-o", str(out)], out, capsys)
+    assert "did you mean talos_full" in err
+
+
+def test_robot_pairs_prints_the_block_to_paste(capsys):
+    from tests.conftest import ROOT
+
+    config = str(ROOT / "configs" / "talos_full_table.yaml")
+    code, stdout, _ = run(["robot", "pairs", config, "--samples", "20"], capsys)
+    assert code == 0
+    pasted = yaml.safe_load(stdout)
+    assert {frozenset(p[:2]) for p in pasted["disabled_pairs"]} == {
+        frozenset(("gripper_left_inner_double_link", "gripper_left_inner_single_link")),
+        frozenset(("gripper_right_inner_double_link", "gripper_right_inner_single_link")),
+    }
+
+
+def test_reference_posture_in_collision(tmp_path, capsys):
+    bent = {"torso_2_joint": 0.7, "arm_left_1_joint": -1.5}
+    path = bad_config(tmp_path, lambda d: d["stance"].update(reference_joints=bent))
+    out = tmp_path / "pool.yaml"
+    argv = ["pool", "--n", "3", "--workers", "1", "--config", path, "-o", str(out), "-q"]
+    err = assert_fails_cleanly(argv, out, capsys)
+    assert "stance.reference_posture: 'half_sitting' with stance.reference_joints is in collision" in err

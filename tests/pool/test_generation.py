@@ -5,7 +5,7 @@ import pinocchio as pin
 import pytest
 from scipy.spatial import ConvexHull
 
-from posegen.errors import InfeasibleError
+from posegen.errors import ConfigError, InfeasibleError
 from posegen.pool import generate_pool, verify_postures
 from posegen.robot import load_pool, pool_from_dict
 
@@ -135,9 +135,17 @@ def test_pool_file_with_sidecar_round_trip(small_pool, tmp_path):
 def test_table_out_of_reach_is_infeasible(config):
     import dataclasses
 
-    high = dataclasses.replace(config.table, top_center_m=(0.65, 0.0, 2.5))
-    with pytest.raises(InfeasibleError, match="within reach"):
+    high = dataclasses.replace(config.table, top_center_m=(0.65, 0.0, 1.9))  # within the chains' length
+    with pytest.raises(InfeasibleError, match=r"table\.top_center_m\) within the arms' reach"):
         generate_pool(dataclasses.replace(config, table=high), n=5, seed=0, workers=1)
+
+
+def test_table_beyond_the_chains_length_names_the_field(config):
+    import dataclasses
+
+    far = dataclasses.replace(config.table, top_center_m=(0.65, 0.0, 2.5))
+    with pytest.raises(ConfigError, match=r"^table\.top_center_m: out of reach of chain 'left'"):
+        generate_pool(dataclasses.replace(config, table=far), n=5, seed=0, workers=1)
 
 
 def test_nonpositive_n_is_rejected(config):

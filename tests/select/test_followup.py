@@ -77,3 +77,14 @@ def test_the_model_of_a_calibration_is_read_back(calibration_folder, scene):
     assert candidate == calibration.candidate and scale == chosen.prior_scale
     assert noise == pytest.approx(calibration.after.noise.contact, rel=1e-2)  # m, rad (written rounded, mm and deg)
     assert weakest == max(sorted(chosen.chains), key=lambda c: chosen.chains[c].mean_abs[0])
+
+
+def test_point_postures_follow_up_flush_contacts(scene, point_scene, pool_and_given):
+    """A chain whose pool plans point contacts, measured flush so far: its model holds both contacts' parameters."""
+    joints, chains, given = pool_and_given
+    noise = (1e-3, np.deg2rad(0.1), np.deg2rad(0.1))
+    point = follow_up(point_scene, joints, chains, given, CANDIDATE, 10.0, noise, 8, weakest="right")
+    flush = follow_up(scene, joints, chains, given, CANDIDATE, 10.0, noise, 8, weakest="right")
+    before, after = point.height_std_mm["right"]
+    assert after < 0.9 * before
+    assert flush.height_std_mm["right"][1] < after  # 8 flush contacts (3 rows each) tell more than 8 points

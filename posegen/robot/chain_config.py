@@ -1,0 +1,92 @@
+"""One foot-to-hand chain of a config, and the contacts its hand makes (flush or point)."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+from posegen.errors import ConfigError
+from posegen.robot.config_reader import Reader
+
+
+class ContactKind(str, enum.Enum):
+    """How a hand touches the table."""
+
+    FLUSH = "flush"  # three fingertips (or a face) on the plane: height, roll and pitch
+    POINT = "point"  # one fingertip or a round hand: height only
+
+
+@dataclass(frozen=True)
+class ChainConfig:
+    """One foot-to-hand chain (one arm) and the contacts its hand makes.
+
+    A flush contact needs ``fingertip_frames``: posegen adds ``contact_frame`` at their
+    ends' centroid. A point contact needs ``point_frame``: a frame at the centre of the
+    touching tip's rounding, z pointing away from the table at a contact. A chain may
+    declare both (its sessions may mix kinds); ``contact_kind`` is the one ``pool`` plans.
+    """
+
+    name: str
+    sole_frame: str
+    gripper_frame: str  # the link the contact points are rigidly attached to
+    fingertip_frames: tuple[str, ...]
+    fingertip_length_m: float  # from a fingertip link origin to its end, along -z of gripper_frame
+    contact_frame: str  # name given to the flush contact frame that posegen adds to the model
+    spot_y_range_m: tuple[float, float]  # table-frame y range of the spots this arm serves
+    recorded_as: str = ""  # the name recordings give this gripper (e.g. "robot/left_gripper")
+    wrench_topic: str = ""  # rosbag2 topic of this wrist's force/torque sensor (geometry_msgs/WrenchStamped)
+    contact_kind: ContactKind = ContactKind.FLUSH  # what `pool` plans
+    point_frame: str = ""  # the point contact's frame ("": no point contact)
+    point_radius_m: float = 0.0  # the tip's rounding: its centre stays this far above the table
+    point_cone_deg: float = 30.0  # largest tilt of the point frame's z from the table normal
+
+    def frame(self, kind: ContactKind) -> str:
+        """The frame whose pose a contact of this kind constrains."""
+        return self.point_frame if kind == ContactKind.POINT else self.contact_frame
+
+    @property
+    def kinds(self) -> tuple[ContactKind, ...]:
+        """The contact kinds this chain declares."""
+        declared = {ContactKind.FLUSH: bool(self.fingertip_frames), ContactKind.POINT: bool(self.point_frame)}
+        return tuple(kind for kind, present in declared.items() if present)
+
+
+CHAIN_DEFAULTS = {
+    "contact_kind": ContactKind.FLUSH.value,
+    "point_frame": "",
+    "point_radius_m": 0.0,
+    "point_cone_deg": 30.0,
+}
+
+
+def read_chain(ch: Reader, name: str) -> ChainConfig:
+    """One chain: its frames, the contacts its hand makes, the spots it serves."""
+    kinds = ", ".join(k.value for k in ContactKind)
+    kind_name = ch.text("contact_kind", ContactKind.FLUSH.value)
+    if kind_name not in {k.value for k in ContactKind}:
+        raise ConfigError(f"chains.{name}.contact_kind: unknown kind '{kind_name}'; valid kinds: {kinds}")
+    kind = ContactKind(kind_name)
+    point = ch.text("point_frame", "") if "point_frame" in ch.data else ""
+    tips = ch.texts("fingertip_frames", [])
+    if kind == ContactKind.POINT and not point:
+        raise ConfigError(f"chains.{name}.point_frame: missing (needed by contact_kind point)")
+    if (kind == ContactKind.FLUSH or tips) and len(tips) < 3:
+        raise ConfigError(f"chains.{name}.fingertip_frames: a flush contact needs 3 fingertips")
+    cone = ch.number("point_cone_deg", 30.0, minimum=0.0)
+    if cone >= 90.0:
+        raise ConfigError(f"chains.{name}.point_cone_deg: must be below 90 deg, got {cone}")
+    return ChainConfig(
+        name=name,
+        sole_frame=ch.text("sole_frame"),
+        gripper_frame=ch.text("gripper_frame"),
+        fingertip_frames=tips,
+        fingertip_length_m=ch.number("fingertip_length_m", 0.0, minimum=0.0),
+        contact_frame=ch.text("contact_frame") if tips else str(ch.raw("contact_frame", "") or ""),
+        spot_y_range_m=ch.interval("spot_y_range_m"),
+        recorded_as=ch.text("recorded_as", name),
+        wrench_topic=ch.text("wrench_topic") if ch.raw("wrench_topic", "") else "",
+        contact_kind=kind,
+        point_frame=point,
+        point_radius_m=ch.number("point_radius_m", 0.0, minimum=0.0),
+        point_cone_deg=cone,
+    )
