@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import positive
+from posegen.cli.options import positive, seed
 
 NAME = "robot"
 HELP = "set up a robot: draft its config (init), re-find its collision pairs (pairs)"
@@ -25,14 +25,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     init.add_argument("-o", "--output", required=True, help="config file to write (e.g. configs/NAME_table.yaml)")
     init.add_argument("--srdf", default=None, help="SRDF to use instead of the loader's (path or package:// URI)")
     init.add_argument("--samples", type=positive, default=400, help="random postures for collision pairs (400)")
-    init.add_argument("--seed", type=int, default=0, help="seed of those postures (default 0)")
+    init.add_argument("--seed", type=seed, default=0, help="seed of those postures (default 0)")
     pairs = actions.add_parser(
         "pairs",
         help="re-find the collision pairs to disable for a config and print the block to paste",
     )
     pairs.add_argument("config", help="scene config")
     pairs.add_argument("--samples", type=positive, default=400, help="random postures (default 400)")
-    pairs.add_argument("--seed", type=int, default=0, help="seed of those postures (default 0)")
+    pairs.add_argument("--seed", type=seed, default=0, help="seed of those postures (default 0)")
+    for action in (init, pairs):
+        action.add_argument("-q", "--quiet", action="store_true", help="no progress output")
 
 
 def run(args: argparse.Namespace) -> int:

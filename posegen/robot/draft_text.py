@@ -8,7 +8,7 @@ from typing import Any
 import yaml
 
 from posegen.errors import ConfigError
-from posegen.io import write_atomic
+from posegen.io import claim_output, write_atomic
 from posegen.robot.additions import Capsule, DisabledPair
 from posegen.robot.collision_matrix import PairSurvey, survey_scene_pairs
 from posegen.robot.config import load_config, parse_config
@@ -119,17 +119,19 @@ def write_draft(robot: str, output: str, srdf: str | None = None, samples: int =
 
     Raises:
         ConfigError: Unknown robot, or a structure that is not two legs and two arms.
+        OutputError: ``output`` cannot be written, or another posegen is writing it.
 
     """
-    draft = draft_robot(robot, srdf, samples, seed)
-    text = render_draft(draft, seed)
-    config = parse_config(yaml.safe_load(text), output)
-    try:
-        check_for_planning(Scene(config))
-        verdict = "the draft loads as a scene (names, soles, balance, reach checked)"
-    except ConfigError as exc:
-        verdict = f"the draft does not load yet: {exc}"
-    write_atomic(output, text)
+    with claim_output(output):  # checked and locked before any work
+        draft = draft_robot(robot, srdf, samples, seed)
+        text = render_draft(draft, seed)
+        config = parse_config(yaml.safe_load(text), output)
+        try:
+            check_for_planning(Scene(config))
+            verdict = "the draft loads as a scene (names, soles, balance, reach checked)"
+        except ConfigError as exc:
+            verdict = f"the draft does not load yet: {exc}"
+        write_atomic(output, text)
     return dataclasses.replace(draft, notes=(*draft.notes, verdict))
 
 

@@ -309,7 +309,23 @@ TABLE = [
     F("measure", "binary config", "{bag}", "--config", "{binary}", "-o", "{out}/m.yaml"),
     F("measure", "empty --session", "{bag}", "--session", " ", "-o", "{out}/m.yaml"),
     *bad_outputs("measure", "{bag}"),
-    # robot init (issue 12): one row per bad input, as above
+    # robot init and robot pairs (issue 12), and configs whose additions to the description are wrong
+    F("robot", "init: unknown robot", "init", "nonsense", "-o", "{out}/c.yaml", expect="valid example-robot-data"),
+    F("robot", "init: missing --srdf", "init", "talos", "--srdf", "{out}/nothing.srdf", "-o", "{out}/c.yaml"),
+    F("robot", "init: --samples 0", "init", "talos", "--samples", "0", "-o", "{out}/c.yaml"),
+    F("robot", "init: negative --seed", "init", "talos", "--seed", "-1", "-o", "{out}/c.yaml"),
+    F("robot", "init: no name", "init", "-o", "{out}/c.yaml"),
+    *bad_outputs("robot", "init", "talos"),
+    F("robot", "pairs: missing config", "pairs", "{out}/nothing.yaml"),
+    F("robot", "pairs: binary config", "pairs", "{binary}"),
+    F("robot", "pairs: --samples 0", "pairs", "{config}", "--samples", "0"),
+    F("robot", "pairs: a frame on a link the robot lacks", "pairs", "{bad_frame_config}", expect="no_such_link"),
+    F("robot", "unknown action", "nonsense"),
+    F("pool", "a frame on a link the robot lacks", "--n", "3", "--config", "{bad_frame_config}", "-o", "{out}/p.yaml"),
+    F("pool", "a malformed frame", "--n", "3", "--config", "{malformed_frame_config}", "-o", "{out}/p.yaml"),
+    F("pool", "a disabled pair of an unknown link", "--n", "3", "--config", "{bad_pair_config}", "-o", "{out}/p.yaml"),
+    F("pool", "a point frame the robot lacks", "--n", "3", "--config", "{bad_point_config}", "-o", "{out}/p.yaml"),
+    F("calibrate", "a contact kind the chain does not make", "{point_measurements}", *C, "-o", "{out}/cal"),
 ]
 
 
@@ -411,6 +427,17 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     put("kneeling_measurements.yaml", measurements_to_dict(scene, bent, scene.provenance(0)))
     one_spot = Contacts(clean, chains, ("s",) * 12, ("spot",) * 12)
     put("one_spot_measurements.yaml", measurements_to_dict(scene, one_spot, scene.provenance(0)))
+    frames = config["robot"] | {"frames": {"tip": {"parent": "no_such_link", "xyz_m": [0.0, 0.0, 0.0]}}}
+    put("bad_frame_config.yaml", config | {"robot": frames})
+    frames = config["robot"] | {"frames": {"tip": {"parent": "arm_left_7_link", "xyz_m": [0.0, 0.0]}}}
+    put("malformed_frame_config.yaml", config | {"robot": frames})
+    pairs = {"disabled_pairs": [["arm_left_7_link", "no_such_link", "user"]]}
+    put("bad_pair_config.yaml", config | {"robot": config["robot"] | {"collision": pairs}})
+    point = _config_data()
+    point["chains"]["left"] |= {"contact_kind": "point", "point_frame": "no_such_tip"}
+    put("bad_point_config.yaml", point)
+    as_points = measurements | {"contacts": [c | {"kind": "point"} for c in measurements["contacts"]]}
+    put("point_measurements.yaml", as_points)  # the default config declares no point contact
     rigid = _config_data()
     rigid["calibration"] = {"compliance": {}, "candidates": {"offsets": {"fit": ["*.joint_offset"]}}}
     put("rigid_config.yaml", rigid)
