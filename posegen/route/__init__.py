@@ -9,7 +9,7 @@ the independent check of every exported point.
 
 from posegen.route.check import MIN_DT_S, RouteInvariant, verify_route
 from posegen.route.export import route_arrays_of, route_header, write_route
-from posegen.route.free_motion import FreeMotion, Method, plan_free, via_sequences
+from posegen.route.free_motion import FreeMotion, Method, free_motions, plan_free, raised_midpoints, via_sequences
 from posegen.route.motion import Vertical, follow, straight, through, vertical_paths
 from posegen.route.ordering import Order, order_postures, rest_to_rest_time, transfer_times
 from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer, start_posture
@@ -46,6 +46,7 @@ __all__ = [
     "corners",
     "export_route_bag",
     "follow",
+    "free_motions",
     "hold",
     "insertion_places",
     "order_postures",
@@ -55,6 +56,7 @@ __all__ = [
     "plan_route",
     "plan_stop",
     "plan_transfer",
+    "raised_midpoints",
     "ranked_substitutes",
     "rest_to_rest_time",
     "route_arrays_of",

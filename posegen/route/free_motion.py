@@ -3,10 +3,13 @@
 In order, the first that gives a path wins:
 
 1. the straight line in the stance space;
-2. straight lines through via states: the lifts above the two contacts (up, across,
-   down), the start posture, and their combinations (a lift, then the start posture,
-   then the other lift); a straight joint-space line between two high states can dip
-   a hand into the table, and going through the start posture avoids that;
+2. straight lines through via states: the midpoint of the two ends raised by half or
+   all of the lifts above the two contacts (one corner instead of two), the lifts
+   themselves (up, across, down), the start posture, and their combinations (a lift,
+   then the start posture, then the other lift); a straight joint-space line between
+   two high states can dip a hand into the table, and going through the start posture
+   avoids that. Up to ``VIA_CANDIDATES`` via paths are returned, for the caller to keep
+   the one that times fastest (a shorter detour is not always a faster one);
 3. OMPL's RRTConnect with the configured budget of state checks;
 4. RRTConnect again with four times that budget and another random stream.
 
@@ -39,6 +42,8 @@ SEARCH_STEP_RAD = 0.05  # OMPL's validity-checking resolution while searching
 SIMPLIFY_STEPS = 100  # vertex-reduction attempts when shortening OMPL's path
 LARGER_BUDGET = 4  # the last attempt's budget, in multiples of the configured one
 STREAMS = 1 << 12  # random streams a call may choose from
+VIA_CANDIDATES = 2  # via paths returned (the first that work, in ladder order)
+RAISE_FRACTIONS = (0.5, 1.0)  # of the lifts, added to the midpoint of a free motion's ends
 
 
 class Method(str, enum.Enum):
@@ -78,6 +83,40 @@ def via_sequences(
     return unique
 
 
+def raised_midpoints(
+    space: StanceSpace,
+    start: FloatArray,
+    goal: FloatArray,
+    start_high: FloatArray | None,
+    goal_high: FloatArray | None,
+) -> list[FloatArray]:
+    """Valid via states halfway between two ends, raised by fractions of their lifts.
+
+    The midpoint of ``start`` and ``goal`` plus ``f`` times the mean of the lifts
+    (``start_high - start`` and ``goal_high - goal``) for each ``f`` in
+    ``RAISE_FRACTIONS``, the second leg closed; states that cannot be closed or are
+    invalid are left out. Empty unless both lifts exist.
+
+    Args:
+        space: The stance space.
+        start: (nj,) rad.
+        goal: (nj,) rad.
+        start_high: (nj,) ``start``'s contact lifted well above the table, or None.
+        goal_high: (nj,) the same for ``goal``, or None.
+
+    """
+    if start_high is None or goal_high is None:
+        return []
+    middle, lift = (start + goal) / 2, ((start_high - start) + (goal_high - goal)) / 2
+    found = []
+    for fraction in RAISE_FRACTIONS:
+        state = middle + fraction * lift
+        closed = space.joints_of(space.coordinates_of(state), state)
+        if closed is not None and space.is_valid(closed, None):
+            found.append(closed)
+    return found
+
+
 def plan_free(
     space: StanceSpace,
     start: FloatArray,
@@ -87,30 +126,75 @@ def plan_free(
 ) -> FreeMotion | str:
     """A checked free motion from ``start`` to ``goal`` (both valid), or why there is none.
 
+    The first of :func:`free_motions` (the ladder stops at the first that works).
+    """
+    found = free_motions(space, start, goal, vias, stream, via_candidates=1)
+    return found if isinstance(found, str) else found[0]
+
+
+def free_motions(
+    space: StanceSpace,
+    start: FloatArray,
+    goal: FloatArray,
+    vias: Sequence[Sequence[FloatArray]],
+    stream: int,
+    via_candidates: int = VIA_CANDIDATES,
+) -> list[FreeMotion] | str:
+    """Checked free motions from ``start`` to ``goal`` (both valid), or why there is none.
+
     Args:
         space: The stance space.
         start: (nj,) rad.
         goal: (nj,) rad.
-        vias: Via-state sequences to try after the straight line (see :func:`via_sequences`).
+        vias: Via-state sequences to try after the straight line, in order (see
+            :func:`via_sequences` and :func:`raised_midpoints`).
         stream: Chooses OMPL's random streams (derive it from the seed and the segment).
+        via_candidates: At most this many via paths are returned.
+
+    Returns:
+        The straight line alone if it is free; else the first ``via_candidates`` via
+        paths that are free, in the order of ``vias``; else OMPL's path alone.
 
     """
     path = straight(space, start, goal)
     if path is not None:
-        return FreeMotion(tuple(path), Method.STRAIGHT, 0)
+        return [FreeMotion(tuple(path), Method.STRAIGHT, 0)]
+    found: list[FreeMotion] = []
+    tried: list[list[FloatArray]] = []
     for via in vias:
-        path = through(space, [start, *via, goal])
+        corners = _distinct_corners([start, *via, goal])
+        if len(corners) == 2 or any(_same(corners, t) for t in tried):
+            continue  # a via state that is an end (the start posture, from the start posture): seen before
+        tried.append(corners)
+        path = through(space, corners)
         if path is not None:
-            return FreeMotion(tuple(path), Method.VIA, len(via))
+            found.append(FreeMotion(tuple(path), Method.VIA, len(corners) - 2))
+            if len(found) >= via_candidates:
+                break
+    if found:
+        return found
     budget = int(space.scene.route.planning_checks)
     for method, checks, offset in ((Method.OMPL, budget, 0), (Method.OMPL_LARGER, LARGER_BUDGET * budget, 1)):
-        found = _plan_ompl(space, start, goal, checks, (stream + offset * (STREAMS // 2)) % STREAMS)
-        if found is not None:
-            return FreeMotion(tuple(found[0]), method, found[1])
+        planned = _plan_ompl(space, start, goal, checks, (stream + offset * (STREAMS // 2)) % STREAMS)
+        if planned is not None:
+            return [FreeMotion(tuple(planned[0]), method, planned[1])]
     return (
         f"no free motion: straight line and {len(vias)} via sequences blocked, "
         f"OMPL found no checked path in {budget} nor {LARGER_BUDGET * budget} state checks"
     )
+
+
+def _distinct_corners(corners: Sequence[FloatArray]) -> list[FloatArray]:
+    """The corners without those equal to the one before (a zero-length leg would repeat a waypoint)."""
+    kept = [corners[0]]
+    for corner in corners[1:]:
+        if not np.array_equal(corner, kept[-1]):
+            kept.append(corner)
+    return kept
+
+
+def _same(a: Sequence[FloatArray], b: Sequence[FloatArray]) -> bool:
+    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
 
 
 def stream_of(seed: int, *keys: int) -> int:

@@ -11,8 +11,9 @@ their inputs and a loaded robot:
   :mod:`posegen.route.free_motion`), shortcut, its corners blended (also where it meets
   the verticals, within their upper half), and the approach straight down, all timed
   at once (:mod:`posegen.route.timing`) with the near-table velocity scale on the
-  vertical parts and the free one elsewhere. The robot stops only in contact and at the
-  pre-contact pose, where go-to-contact starts.
+  vertical parts and the free one elsewhere. When the free motion needs via states,
+  each via path found is timed so, and the fastest is kept. The robot stops only in
+  contact and at the pre-contact pose, where go-to-contact starts.
 
 Each job's result depends only on its inputs (the seed is one of them), so jobs can run
 on any worker in any order (a :class:`posegen.parallel.Job`).
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posegen.robot import CollisionChecker, Config, FloatArray, Projector, Scene, SegmentType, StanceSpace
-from posegen.route.free_motion import Method, plan_free, stream_of, via_sequences
+from posegen.route.free_motion import FreeMotion, Method, free_motions, raised_midpoints, stream_of, via_sequences
 from posegen.route.motion import vertical_paths
 from posegen.route.smoothing import blend_corners, shortcut
 from posegen.route.timing import Timed, parameterize
@@ -105,15 +106,30 @@ def plan_stop(planner: Planner, request: tuple[int, tuple[float, ...], str]) -> 
 def plan_transfer(planner: Planner, request: tuple[Stop | None, Stop | None]) -> Transfer | str:
     """The transfer between two stops (None: the start posture), or why there is none."""
     source, target = request
-    scene, space = planner.scene, planner.space
+    space = planner.space
     assert planner.start is not None
     a = source.approach[0] if source else planner.start
     b = target.approach[0] if target else planner.start
-    vias = via_sequences(source.lift if source else None, target.lift if target else None, planner.start)
+    lifts = (source.lift if source else None, target.lift if target else None)
+    vias = [[m] for m in raised_midpoints(space, a, b, *lifts)] + via_sequences(*lifts, planner.start)
     keys = (source.node if source else START, target.node if target else START)
-    found = plan_free(space, a, b, vias, stream_of(planner.seed, *keys))
+    found = free_motions(space, a, b, vias, stream_of(planner.seed, *keys))
     if isinstance(found, str):
         return found
+    best: Transfer | None = None
+    for motion in found:
+        transfer = _timed_transfer(planner, motion, source, target, keys)
+        if best is None or transfer.timed.times[-1] < best.timed.times[-1]:
+            best = transfer
+    assert best is not None
+    return best
+
+
+def _timed_transfer(
+    planner: Planner, found: FreeMotion, source: Stop | None, target: Stop | None, keys: tuple[int, int]
+) -> Transfer:
+    """Release, a free motion (shortcut unless straight) and approach, corners blended, timed at once."""
+    scene, space = planner.scene, planner.space
     free = list(found.waypoints)
     if found.method != Method.STRAIGHT:
         free = shortcut(space, free, np.random.default_rng([planner.seed, *(k + 1 for k in keys)]))

@@ -1,11 +1,25 @@
-"""Free motions: every waypoint checked, and OMPL's answer independent of what ran before it."""
+"""Free motions: every waypoint checked, OMPL's answer independent of what ran before it, the fastest via path kept."""
 
 import numpy as np
 import pytest
 
 from posegen.robot import CollisionChecker, Projector, StanceSpace
-from posegen.route import plan_free, start_posture, straight, vertical_paths, via_sequences
-from posegen.route.free_motion import _plan_ompl
+from posegen.route import (
+    Method,
+    Planner,
+    free_motions,
+    plan_free,
+    plan_stop,
+    plan_transfer,
+    raised_midpoints,
+    start_posture,
+    straight,
+    through,
+    vertical_paths,
+    via_sequences,
+)
+from posegen.route.free_motion import RAISE_FRACTIONS, VIA_CANDIDATES, _plan_ompl, stream_of
+from posegen.route.planner import _timed_transfer
 
 
 @pytest.fixture(scope="module")
@@ -49,3 +63,75 @@ def test_via_sequences_skip_missing_lifts_and_duplicates(scene):
     assert via_sequences(None, None, home) == [[home]]
     sequences = via_sequences(lift, None, home)
     assert len(sequences) == 3 and sequences[0] == [lift]
+
+
+@pytest.fixture(scope="module")
+def detour(scene, example_pool):
+    """Two stops of the example pool whose straight line is blocked and that have two via paths."""
+    planner = Planner(scene, seed=0)
+    stops = [
+        plan_stop(planner, (i, tuple(example_pool.postures[i].joints), example_pool.postures[i].chain)) for i in (9, 10)
+    ]
+    assert not any(isinstance(s, str) for s in stops)
+    return planner, stops
+
+
+def test_raised_midpoints_are_valid_states_halfway_between_the_ends_and_up(detour):
+    planner, (a, b) = detour
+    space, start, goal = planner.space, a.approach[0], b.approach[0]
+    found = raised_midpoints(space, start, goal, a.lift, b.lift)
+    assert found  # this pair has them
+    lift = ((a.lift - start) + (b.lift - goal)) / 2
+    expected = [space.coordinates_of((start + goal) / 2 + f * lift) for f in RAISE_FRACTIONS]
+    for state in found:
+        assert space.is_valid(state, None)
+        assert any(np.allclose(space.coordinates_of(state), x, atol=1e-12) for x in expected)
+        closed = space.joints_of(space.coordinates_of(state), state)
+        assert closed is not None and np.allclose(closed, state, atol=1e-9)  # the second leg is already closed
+    assert raised_midpoints(space, start, goal, None, b.lift) == []
+
+
+def test_free_motions_returns_the_first_via_paths_each_checked(detour):
+    planner, (a, b) = detour
+    space, start, goal = planner.space, a.approach[0], b.approach[0]
+    vias = [[m] for m in raised_midpoints(space, start, goal, a.lift, b.lift)]
+    vias += via_sequences(a.lift, b.lift, planner.start)
+    found = free_motions(space, start, goal, vias, stream=0, via_candidates=2)
+    assert not isinstance(found, str) and len(found) == 2
+    for motion in found:
+        assert motion.method == Method.VIA
+        path = np.array(motion.waypoints)
+        assert np.array_equal(path[0], start) and np.array_equal(path[-1], goal)
+        assert all(space.is_valid(q, None) for q in path)
+    first = plan_free(space, start, goal, vias, stream=0)
+    assert not isinstance(first, str)
+    assert all(np.array_equal(x, y) for x, y in zip(first.waypoints, found[0].waypoints, strict=True))
+
+
+def test_a_transfer_keeps_its_fastest_via_path(detour):
+    planner, (a, b) = detour
+    space, start, goal = planner.space, a.approach[0], b.approach[0]
+    vias = [[m] for m in raised_midpoints(space, start, goal, a.lift, b.lift)]
+    vias += via_sequences(a.lift, b.lift, planner.start)
+    found = free_motions(space, start, goal, vias, stream=stream_of(planner.seed, a.node, b.node))
+    assert not isinstance(found, str) and len(found) == VIA_CANDIDATES
+    durations = [_timed_transfer(planner, m, a, b, (a.node, b.node)).timed.times[-1] for m in found]
+    assert durations[0] > min(durations)  # here the first via path found is not the fastest
+    transfer = plan_transfer(planner, (a, b))
+    assert not isinstance(transfer, str)
+    assert transfer.timed.times[-1] == min(durations)
+
+
+def test_a_via_state_equal_to_an_end_is_dropped_not_repeated(detour):
+    planner, (a, b) = detour
+    space, start, goal = planner.space, a.approach[0], b.approach[0]
+    ladder = [[m] for m in raised_midpoints(space, start, goal, a.lift, b.lift)]
+    ladder += via_sequences(a.lift, b.lift, planner.start)
+    via = next(v for v in ladder if through(space, [start, *v, goal]) is not None)
+    # each of these is the path start -> via -> goal once a via state equal to an end is dropped
+    vias = [via, [start, *via], [*via, goal], [start, start, *via, goal]]
+    found = free_motions(space, start, goal, vias, stream=0, via_candidates=len(vias))
+    assert not isinstance(found, str) and len(found) == 1 and found[0].method == Method.VIA
+    steps = np.abs(np.diff(np.array(found[0].waypoints), axis=0)).max(axis=1)
+    assert steps.min() > 0.0  # no waypoint repeated
+    assert free_motions(space, start, goal, [[start], [goal]], stream=0, via_candidates=2)[0].method != Method.VIA
