@@ -101,7 +101,7 @@ def route_plan_file(
         summary = _summary(scene, route, len(plan.postures))
         summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
         if substitutes is not None and route.substitutions:
-            rows = [r for v in route.visited if (r := _row(v, n, substitutes))]
+            rows = [r for v in route.visited if (r := _row(v, n, substitutes)) is not None]
             summary["information"] = o1_figures(substitutes, rows)
         provenance = dict(plan.provenance)
         provenance.update(

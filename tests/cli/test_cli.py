@@ -228,7 +228,7 @@ def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
     from tests.conftest import EXAMPLE_POOL
 
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
-    rows = [8, 9, 10]
+    rows = [0, 9, 10]  # pool row 0 among them: a falsy row must still count in the O1 figures
     postures = [{"pool_id": r, "rank": i + 1, "weight": 0.1, **data["postures"][r]} for i, r in enumerate(rows)]
     other = "right" if postures[1]["chain"] == "left" else "left"
     k = scene.joint_index(f"arm_{other}_1_joint")
@@ -249,6 +249,8 @@ def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
     (swap,) = header["substitutions"]
     assert swap["pool_id"] == 9 and swap["substitute_pool_id"] not in rows and not header["skipped"]
     assert [p["pool_id"] for p in header["postures"]].count(swap["substitute_pool_id"]) == 1
+    information = header["summary"]["information"]
+    assert information["rank_routed"] == information["rank_selected"] == 9  # 3 postures x 3 rows, all counted
 
 
 def test_robot_init_unknown_name(tmp_path, capsys):
