@@ -35,6 +35,7 @@ from posegen.calibrate.screening import (
 )
 from posegen.errors import InfeasibleError, InputError
 from posegen.model import (
+    DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
     STRUCTURAL_POSTURES,
     BaseParameters,
@@ -54,7 +55,6 @@ from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
-FLOOR_NOISE = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))
 MAX_ROUNDS = 6  # screening rounds (each re-selects the model) before giving up dropping rows
 
 
@@ -226,7 +226,7 @@ def calibrate(
     kept = [i for i in range(len(train)) if i not in {f.row for f in flags}]
     check_enough(model, train.subset(kept), config, flags)
     usable = list(kept)
-    noise = Noise(DEFAULT_NOISE, FLOOR_NOISE)
+    noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
     seeds = range(settings.seed, settings.seed + config.fold_seeds)
     middle = config.prior_scales[len(config.prior_scales) // 2]
     sessions_in = set(train.subset(usable).sessions)
@@ -275,7 +275,7 @@ def calibrate(
     before = estimate(model, observations, before_spec, after.noise, start_point(model, observations), rounds=1)
     postures = level_postures(model.contact, observations.contacts, settings.structural_postures, settings.seed)
     base = base_at(model.contact, postures, DEFAULT_NOISE)
-    base_with_floor = base_at(model.contact, postures, DEFAULT_NOISE, FLOOR_NOISE).size if model.floor else None
+    base_with_floor = base_at(model.contact, postures, DEFAULT_NOISE, DEFAULT_FLOOR_NOISE).size if model.floor else None
     return Calibration(
         model=model,
         config=config,

@@ -220,7 +220,9 @@ def refit_frozen(
     residual evaluation per step. ``jacobian`` holds these postures' rows and the prior rows.
     """
     per_posture, prior_rows = jacobian
-    matrix = np.vstack([per_posture.reshape(-1, per_posture.shape[2]), prior_rows])
+    f = per_posture.shape[2]
+    # in the order of the residual: every contact row, then every floor row, then the prior
+    matrix = np.vstack([per_posture[:, :3].reshape(-1, f), per_posture[:, 3:].reshape(-1, f), prior_rows])
     factor = scipy.linalg.cho_factor(matrix.T @ matrix)
     free = np.array(spec.free, dtype=int)
     fixed = model.delta_of(start)

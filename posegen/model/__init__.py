@@ -40,6 +40,7 @@ from posegen.model.prior import (
 from posegen.model.settle import settle, settle_contacts
 from posegen.model.structural import STRUCTURAL_POSTURES, base_at, level_postures, structural_base
 from posegen.model.weights import (
+    DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
     NOISE_FLOOR,
     UNIT_PRIOR_ANGLE_RAD,
@@ -50,6 +51,7 @@ from posegen.model.weights import (
 )
 
 __all__ = [
+    "DEFAULT_FLOOR_NOISE",
     "DEFAULT_NOISE",
     "FLOOR_FIELDS",
     "LIMIT_TOLERANCE_RAD",

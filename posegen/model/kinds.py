@@ -44,11 +44,6 @@ class Kind(str, enum.Enum):
     PLANE = "plane"  # a table session's plane: no prior
     FLOOR = "floor"  # a session's second-sole x, y, yaw: no prior
 
-    @property
-    def has_prior(self) -> bool:
-        """Planes and floor constants are free: nothing is known of where the table and feet are."""
-        return self not in (Kind.PLANE, Kind.FLOOR)
-
 
 class Part(str, enum.Enum):
     """Where on the robot (or around it) a direction lies."""

@@ -19,6 +19,8 @@ from posegen.robot import FloatArray
 UNIT_PRIOR_LENGTH_M = 1e-3
 UNIT_PRIOR_ANGLE_RAD = float(np.deg2rad(0.1))
 DEFAULT_NOISE = (1e-3, UNIT_PRIOR_ANGLE_RAD, UNIT_PRIOR_ANGLE_RAD)  # sigma of height (m), roll, pitch (rad)
+DEFAULT_FLOOR_NOISE = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))
+# sigma of the floor rows (second sole's x, y, height in m; roll, pitch, yaw in rad) before they are estimated
 NOISE_FLOOR = (1e-5, float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)))  # no contact is known better
 
 

@@ -127,6 +127,13 @@ def _number(data: dict[str, Any], key: str, default: float, where: str, positive
     return float(value)
 
 
+def _probability(data: dict[str, Any], key: str, default: float, where: str) -> float:
+    value = _number(data, key, default, where)
+    if not value < 1.0:
+        raise ConfigError(f"{where}.{key}: expected a probability between 0 and 1 (exclusive), got {value!r}")
+    return value
+
+
 def _integer(data: dict[str, Any], key: str, default: int, where: str, minimum: int) -> int:
     value = data.get(key, default)
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
@@ -190,7 +197,7 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         fold_seeds=_integer(data, "fold_seeds", defaults.fold_seeds, where, 1),
         fold_iterations=_integer(data, "fold_iterations", defaults.fold_iterations, where, 1),
         target_error_mm=_number(data, "target_error_mm", defaults.target_error_mm, where),
-        outlier_false_alarm=_number(data, "outlier_false_alarm", defaults.outlier_false_alarm, where),
+        outlier_false_alarm=_probability(data, "outlier_false_alarm", defaults.outlier_false_alarm, where),
         feet_tolerance_mm=_number(data, "feet_tolerance_mm", defaults.feet_tolerance_mm, where),
         feet_tolerance_deg=_number(data, "feet_tolerance_deg", defaults.feet_tolerance_deg, where),
         plausible_mm=_number(data, "plausible_mm", defaults.plausible_mm, where),

@@ -25,6 +25,7 @@ import numpy as np
 from posegen.errors import InputError, reason
 from posegen.io import read_yaml
 from posegen.model import (
+    DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
     CalibrationModel,
     Contacts,
@@ -34,8 +35,6 @@ from posegen.model import (
     start_point,
 )
 from posegen.robot import CandidateConfig, FloatArray, Scene, parse_candidate
-
-FLOOR_SIGMA = (1e-4, 1e-4, 1e-4, float(np.deg2rad(0.01)), float(np.deg2rad(0.01)), float(np.deg2rad(0.01)))
 
 
 @dataclass(frozen=True)
@@ -108,7 +107,8 @@ def follow_up(
         contact = np.einsum("nmx,xf->nmf", out.contact_jacobian, basis)
         whitened = [contact / sigma[None, :, None]]
         if spec.floor:
-            whitened.append(np.einsum("nmx,xf->nmf", out.floor_jacobian, basis) / np.array(FLOOR_SIGMA)[None, :, None])
+            floor_sigma = np.array(DEFAULT_FLOOR_NOISE)
+            whitened.append(np.einsum("nmx,xf->nmf", out.floor_jacobian, basis) / floor_sigma[None, :, None])
         return np.concatenate(whitened, axis=1), contact
 
     measured, _ = rows(given)

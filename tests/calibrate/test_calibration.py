@@ -16,11 +16,12 @@ from posegen.calibrate import (
     simulate,
     true_parameters,
 )
-from posegen.calibrate.calibration import FLOOR_NOISE, check_enough, unusable_rows
+from posegen.calibrate.calibration import check_enough, unusable_rows
 from posegen.calibrate.estimation import held_at_urdf
 from posegen.calibrate.simulation import settle_true
 from posegen.errors import InputError
 from posegen.model import (
+    DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
     CalibrationModel,
     Contacts,
@@ -68,7 +69,7 @@ def fit(model, contacts, candidate, floor):
     spec = candidate_spec(model, dataclasses.replace(candidate, floor=floor), PriorConfig(), 10.0)
     observations = model.observations(contacts)
     start = held_at_urdf(model, spec, start_point(model, observations))
-    return estimate(model, observations, spec, Noise(DEFAULT_NOISE, FLOOR_NOISE), start)
+    return estimate(model, observations, spec, Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE), start)
 
 
 @pytest.fixture(scope="module")

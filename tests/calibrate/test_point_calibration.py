@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from posegen.calibrate import Noise, Perturbation, calibrate, estimate, held_out_residuals, simulate
-from posegen.calibrate.calibration import FLOOR_NOISE, check_enough
+from posegen.calibrate.calibration import check_enough
 from posegen.calibrate.estimation import held_at_urdf
 from posegen.calibrate.model_selection import column_stats, fold_loss
 from posegen.calibrate.report import residual_tables
@@ -14,6 +14,7 @@ from posegen.calibrate.screening import chi_thresholds, row_dof
 from posegen.calibrate.simulation import settle_true, true_parameters
 from posegen.errors import InputError
 from posegen.model import (
+    DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
     CalibrationModel,
     ContactModel,
@@ -70,7 +71,7 @@ def test_a_simulated_point_contact_calibration_recovers_the_truth(point_truth):
     spec = candidate_spec(model, OFFSETS, PriorConfig(), 10.0)
     observations = model.observations(train)
     start = held_at_urdf(model, spec, start_point(model, observations))
-    fitted = estimate(model, observations, spec, Noise(DEFAULT_NOISE, FLOOR_NOISE), start)
+    fitted = estimate(model, observations, spec, Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE), start)
     held_out = model.observations(test)
     before = model.evaluate(start, held_out, floor=False).contact[:, 0]
     after = model.evaluate(fitted.x, held_out, floor=False).contact[:, 0]
