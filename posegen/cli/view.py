@@ -5,7 +5,11 @@ from __future__ import annotations
 import argparse
 
 from posegen.cli.options import port
-from posegen.view import DEFAULT_HOST, DEFAULT_PORT
+
+# the viewer's defaults (posegen.view.DEFAULT_PORT, DEFAULT_HOST), spelled here so that the command
+# line does not import the viewer (viser, trimesh: ~1 s) for the commands that do not need it
+DEFAULT_PORT_HELP = 8080
+DEFAULT_HOST_HELP = "127.0.0.1"
 
 NAME = "view"
 HELP = "3D view of a pool, selection, route or calibration folder (live, or one HTML file)"
@@ -15,16 +19,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
     parser.add_argument("artefact", help="pool, selection or route file, or calibration folder")
     parser.add_argument("--html", default=None, help="write one self-contained HTML page here instead of serving")
-    parser.add_argument("--port", type=port, default=DEFAULT_PORT, help=f"live viewer port (default {DEFAULT_PORT})")
+    parser.add_argument("--port", type=port, default=None, help=f"live viewer port (default {DEFAULT_PORT_HELP})")
     parser.add_argument(
-        "--host", default=DEFAULT_HOST, help=f"live viewer address (default {DEFAULT_HOST}: this machine only)"
+        "--host", default=None, help=f"live viewer address (default {DEFAULT_HOST_HELP}: this machine only)"
     )
     parser.add_argument("--config", default=None, help="scene config (default: the one saved in the artefact)")
 
 
 def run(args: argparse.Namespace) -> int:
     """Write the page, or serve the live viewer until Ctrl-C (which ends it normally)."""
-    from posegen.view import open_artefact, serve, write_html_file
+    from posegen.view import DEFAULT_HOST, DEFAULT_PORT, open_artefact, serve, write_html_file
 
     if args.html:
         page = write_html_file(args.artefact, args.html, args.config)
@@ -39,7 +43,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"view: {args.artefact} at {url} (Ctrl-C to stop)", flush=True)
 
     try:
-        serve(artefact, args.host, args.port, ready=ready)
+        host = DEFAULT_HOST if args.host is None else args.host
+        serve(artefact, host, DEFAULT_PORT if args.port is None else args.port, ready=ready)
     except KeyboardInterrupt:
         print("view: stopped")
     return 0

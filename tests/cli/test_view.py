@@ -17,3 +17,22 @@ def test_view_of_a_bad_artefact_fails_cleanly(tmp_path, capsys):
     config.write_text("robot: {}\n")
     err = assert_fails_cleanly(["view", str(config), "--html", str(out)], out, capsys)
     assert "pool, selection or route file, nor a calibration folder" in err
+
+
+def test_the_help_states_the_viewers_defaults():
+    """The command line spells the viewer's defaults (to stay light): they must be the viewer's."""
+    from posegen.cli import view as command
+    from posegen.view import DEFAULT_HOST, DEFAULT_PORT
+
+    assert (command.DEFAULT_PORT_HELP, command.DEFAULT_HOST_HELP) == (DEFAULT_PORT, DEFAULT_HOST)
+
+
+def test_the_command_line_does_not_load_the_viewer_or_the_calibration():
+    """Every command starts without importing viser, the viewer or the calibration stage (~1-2 s)."""
+    import subprocess
+    import sys
+
+    heavy = ("viser", "posegen.view", "posegen.calibrate", "scipy.stats")
+    code = f"import sys, posegen.cli.main; print(sorted(m for m in {heavy!r} if m in sys.modules))"
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert loaded == "[]"
