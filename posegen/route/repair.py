@@ -33,6 +33,10 @@ class Substitutes:
     rows: tuple[int | None, ...]  # the pool row of each selected posture (None: not found in the pool)
     build_design: Callable[[], Design]  # the selection's design of the pool (built on first need)
 
+    def row(self, node: int, selected: int) -> int | None:
+        """The pool row of a route node: nodes below ``selected`` are the selection's, the others substitutes."""
+        return node - selected if node >= selected else self.rows[node]
+
     @functools.cached_property
     def design(self) -> Design:
         """The design, built once."""

@@ -194,9 +194,7 @@ class _Routing:
 
     def row(self, node: int) -> int | None:
         """The pool row of a node, if known."""
-        if node >= len(self.postures):
-            return node - len(self.postures)
-        return self.substitutes.rows[node] if self.substitutes is not None else None
+        return self.substitutes.row(node, len(self.postures)) if self.substitutes is not None else None
 
     def time(self, a: int, b: int) -> float:
         """Rest-to-rest time between two nodes at the free velocity scale, s."""

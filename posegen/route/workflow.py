@@ -101,7 +101,7 @@ def route_plan_file(
         summary = _summary(scene, route, len(plan.postures))
         summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
         if substitutes is not None and route.substitutions:
-            rows = [r for v in route.visited if (r := _row(v, n, substitutes)) is not None]
+            rows = [r for v in route.visited if (r := substitutes.row(v, n)) is not None]
             summary["information"] = o1_figures(substitutes, rows)
         provenance = dict(plan.provenance)
         provenance.update(
@@ -113,10 +113,6 @@ def route_plan_file(
         )
         written = write_route(path, route, route_header(route, nodes, provenance, summary), csv)
     return Routed(route=route, summary=summary, written=tuple(written), planning_s=elapsed, repair=repair)
-
-
-def _row(node: int, n: int, substitutes: Substitutes) -> int | None:
-    return node - n if node >= n else substitutes.rows[node]
 
 
 def _substitutes(
