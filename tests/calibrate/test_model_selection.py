@@ -3,7 +3,7 @@
 import numpy as np
 
 from posegen.calibrate import CvResult, Noise
-from posegen.calibrate.model_selection import ChainError, one_standard_error
+from posegen.calibrate.scoring import ChainError, one_standard_error
 
 NOISE = Noise((1e-3, 1e-3, 1e-3), (1e-4,) * 6)
 

@@ -49,9 +49,9 @@ def test_calibrated_urdf_reproduces_the_calibrated_residuals(calibrated):
     model2 = CalibrationModel(scene2, sorted(model.contact.chains), ["sim"], scene2.calibration.compliance)
     x2 = model2.nominal()
     for kinds in ([Kind.PLANE], [Kind.COMPLIANCE]):
-        x2[model2.columns(kinds)] = calibration.after.x[model.columns(kinds)]
+        x2[model2.columns(kinds)] = calibration.deliverables.urdf.estimate.x[model.columns(kinds)]
     observations = model.observations(recorded)
-    expected = model.evaluate(calibration.after.x, observations, floor=False).contact
+    expected = model.evaluate(calibration.deliverables.urdf.estimate.x, observations, floor=False).contact
     assert model2.evaluate(x2, observations, floor=False).contact == pytest.approx(expected, abs=1e-9)
 
 
