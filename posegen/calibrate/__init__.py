@@ -30,7 +30,7 @@ from posegen.calibrate.record import (
 from posegen.calibrate.report import format_table, residual_stats, write_calibration
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
-from posegen.calibrate.urdf_export import calibrated_urdf
+from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
 from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
 
 __all__ = [
@@ -58,7 +58,9 @@ __all__ = [
     "SimulatedSession",
     "calibrate",
     "calibrate_files",
+    "calibrated_config",
     "calibrated_urdf",
+    "check_exportable",
     "contact_residuals",
     "estimate",
     "fit",
