@@ -35,7 +35,7 @@ from posegen.calibrate.report import format_table, residual_stats, write_calibra
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
-from posegen.calibrate.urdf_export import calibrated_urdf
+from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
 from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
 
 __all__ = [
@@ -71,7 +71,9 @@ __all__ = [
     "apply_offsets",
     "calibrate",
     "calibrate_files",
+    "calibrated_config",
     "calibrated_urdf",
+    "check_exportable",
     "compensate",
     "contact_residuals",
     "estimate",

@@ -31,6 +31,7 @@ from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, ScaleSearch, select_model
 from posegen.calibrate.screening import Flag, Screening, feet_off_the_floor, feet_offsets
+from posegen.calibrate.urdf_export import check_exportable
 from posegen.errors import InfeasibleError, InputError
 from posegen.model import (
     DEFAULT_FLOOR_NOISE,
@@ -232,6 +233,7 @@ def calibrate(
     settings = settings or Settings()
     config, candidates = _settings(scene, settings)
     model = CalibrationModel(scene, sorted(set(train.chains)), sessions, config.compliance, train.kinds_by_chain())
+    check_exportable(model.contact)  # a layout the URDF cannot carry costs milliseconds, not a calibration
     everything = model.observations(train)
     flags = unusable_rows(model, everything, config)
     usable = [i for i in range(len(train)) if i not in {f.row for f in flags}]

@@ -25,7 +25,7 @@ from posegen.calibrate.compliance import COMPLIANCE_FILE, Compliance, Compliance
 from posegen.calibrate.deliverables import Deliverable, DeliverableKind
 from posegen.calibrate.offsets import OFFSETS_FILE, joint_offsets, write_offsets
 from posegen.calibrate.scoring import DELIVERABLE_RULE, CvResult, column_stats
-from posegen.calibrate.urdf_export import calibrated_urdf
+from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
 from posegen.model import Contacts, Kind, masked
 from posegen.robot import FloatArray
@@ -90,12 +90,10 @@ def write_deliverable(calibration: Calibration, deliverable: Deliverable, out_di
     if deliverable.kind == DeliverableKind.COMPENSATED:
         write_compliance(folder / COMPLIANCE_FILE, compliance_of(calibration, deliverable), URDF_FILE, provenance)
     else:
-        config = scene.config.to_dict()
-        config["robot"]["source"] = {
-            "urdf": str((folder / URDF_FILE).resolve()),
-            "srdf": str(scene.files.srdf),
-            "package_dirs": list(scene.files.package_dirs),
-        }
+        theta = calibration.model.theta(deliverable.estimate.x)
+        if deliverable.nominal:
+            theta = calibration.model.contact.nominal()  # the URDF as it is: the config's frames as they are
+        config = calibrated_config(calibration.model.contact, theta, folder / URDF_FILE)
         write_atomic(folder / CONFIG_FILE, dump_yaml(config))
     return urdf
 

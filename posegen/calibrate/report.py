@@ -5,7 +5,8 @@ Output folder::
     calibration.yaml     model selection, predicted error, rows left out, noise, parameters, residuals, provenance
     residuals.csv        every contact's residuals before and after, and its joint angles
     posterior.npz        posterior covariance of the fitted directions, conditioning of their regressor
-    calibrated.urdf      the URDF alone (same links and joints, calibrated origins): any stack loads it
+    calibrated.urdf      the URDF alone: any stack loads it (same links and joints, calibrated origins;
+                         a <link>_mount where a sole or gripper is a moving joint's link)
     calibrated.yaml      a scene config that uses calibrated.urdf
     offsets.yaml         calibrated.urdf as joint angle offsets and placement changes of the nominal URDF
     with_compliance/     the URDF, compliance.yaml and offsets.yaml of a compliant model, when one predicts best

@@ -23,7 +23,7 @@ from posegen.robot.config import (
     load_config,
     parse_config,
 )
-from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf
+from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf, with_declared_frames
 from posegen.robot.draft import Draft
 from posegen.robot.draft_text import survey_config_pairs, write_draft
 from posegen.robot.feasibility import (
@@ -151,6 +151,7 @@ __all__ = [
     "summarize",
     "survey_config_pairs",
     "tilt_angles",
+    "with_declared_frames",
     "worst_case",
     "write_draft",
     "write_pool",
