@@ -1,5 +1,7 @@
 """The one-standard-error rule, plausibility and stability, on made-up scores (no fits)."""
 
+from pathlib import Path
+
 import numpy as np
 
 from posegen.calibrate import CvResult, Noise
@@ -44,3 +46,24 @@ def test_implausible_pairs_never_win():
         result("small", 10.0, 40, 53.0, 2.0),
     ]
     assert pick(results) == ("big", 10.0)
+
+
+def test_the_valley_search_picks_what_the_exhaustive_search_picked(scene, real_data):
+    """On the real recordings, every default candidate: the same model and deliverables as ``make bench`` recorded."""
+    import yaml
+
+    from posegen.calibrate import calibrate
+    from posegen.model import read_measurements
+    from posegen.parallel import ProcessBackend
+
+    recorded = yaml.safe_load((Path(__file__).parent / "real_exhaustive_pick.yaml").read_text())
+    train = read_measurements(real_data / "left_train.csv", scene).contacts.concat(
+        read_measurements(real_data / "right_train.csv", scene).contacts
+    )
+    with ProcessBackend(2) as backend:
+        calibration = calibrate(scene, train, ["left_train", "right_train", "left_validation"], backend=backend)
+    chosen = calibration.selection.chosen
+    assert [chosen.candidate, chosen.prior_scale] == recorded["model"]
+    for deliverable in calibration.deliverables.all():
+        assert [deliverable.candidate.name, deliverable.result.prior_scale] == recorded[deliverable.kind.value]
+    assert {d.kind.value for d in calibration.deliverables.all()} == set(recorded) - {"note", "model"}
