@@ -200,6 +200,35 @@ def _files_of(labels: Sequence[str]) -> str:
     return f" ({shown})"
 
 
+def _select_screened(
+    model: CalibrationModel,
+    everything: Observations,
+    screen: Screening,
+    setup: tuple[CalibrationConfig, list[CandidateConfig]],
+    settings: Settings,
+    progress: ProgressCallback,
+    backend: Backend | None,
+) -> ModelSelection:
+    """Select the model on the rows ``screen`` keeps; screen again with it and, if it flags more, select once more."""
+    config, candidates = setup
+    seeds = range(settings.seed, settings.seed + config.fold_seeds)
+    sessions = set(everything.contacts.subset(screen.kept).sessions)
+    noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
+    for selection_round in range(1, SELECTIONS + 1):
+        check_enough(model, everything.contacts.subset(screen.kept), config, screen.dropped)
+        observations = everything.subset(screen.kept)
+        folds = repeated_folds(model.contact, observations.contacts, config.folds, seeds)
+        selection = select_model(
+            model, observations, config, folds, noise, candidates, progress, backend, settings.search
+        )
+        chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
+        spec = spec_for_rows(model, candidate_spec(model, chosen, config.prior, selection.chosen.prior_scale), sessions)
+        best = selection.estimates[chosen.name, selection.chosen.prior_scale]
+        if selection_round == SELECTIONS or not screen.run(spec, best.noise, best.x):
+            break  # the chosen model flags no new row (or the last selection is made): done
+    return selection
+
+
 def calibrate(
     scene: Scene,
     train: Contacts,
@@ -238,35 +267,19 @@ def calibrate(
     flags = unusable_rows(model, everything, config)
     usable = [i for i in range(len(train)) if i not in {f.row for f in flags}]
     check_enough(model, train.subset(usable), config, flags)
-    seeds = range(settings.seed, settings.seed + config.fold_seeds)
     sessions_in = set(train.subset(usable).sessions)
     middle = sorted(config.prior_scales)[len(config.prior_scales) // 2]
     spec = spec_for_rows(model, candidate_spec(model, candidates[0], config.prior, middle), sessions_in)
     start = held_at_urdf(model, spec, start_point(model, everything.subset(usable)))
     screen = Screening(model, everything, train.labels, usable, config, settings.drop_outliers)
-    noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
-    screen.run(spec, noise, start)
-    selection: ModelSelection | None = None
-    for selection_round in range(1, SELECTIONS + 1):
-        kept = screen.kept
-        check_enough(model, train.subset(kept), config, [*flags, *screen.dropped])
-        observations = everything.subset(kept)
-        folds = repeated_folds(model.contact, observations.contacts, config.folds, seeds)
-        selection = select_model(
-            model, observations, config, folds, noise, candidates, progress, backend, settings.search
-        )
-        chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
-        scale = selection.chosen.prior_scale
-        spec = spec_for_rows(model, candidate_spec(model, chosen, config.prior, scale), sessions_in)
-        best = selection.estimates[chosen.name, selection.chosen.prior_scale]
-        if selection_round == SELECTIONS or not screen.run(spec, best.noise, best.x):
-            break  # the chosen model flags no new row (or the last selection is made): done
-    assert selection is not None
+    screen.run(spec, Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE), start)
+    selection = _select_screened(model, everything, screen, (config, candidates), settings, progress, backend)
     flags.extend(screen.flags)
     for flag in screen.flags:
         LOG.warning("bad row %s: studentised residual %.1f", flag.label, flag.value)
     kept = screen.kept
     chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
+    spec = spec_for_rows(model, candidate_spec(model, chosen, config.prior, selection.chosen.prior_scale), sessions_in)
     observations = everything.subset(kept)
     after = selection.estimates[chosen.name, selection.chosen.prior_scale]
     sides = tuple(model.columns([Kind.CONTACT_HEIGHT, Kind.CONTACT_TILT, Kind.CONTACT_POINT, Kind.PLANE]))

@@ -1,7 +1,7 @@
 """A calibrated URDF as offsets of the nominal one, in the forms robot stacks take.
 
-Many stacks keep their vendor's URDF and take a calibration as numbers per joint (TALOS's
-description package, for one, takes six per joint: ``<joint>_x_offset`` ...). For every
+Many stacks keep their vendor's URDF and take a calibration as numbers per joint (some
+description packages take six per joint: ``<joint>_x_offset`` ...). For every
 joint whose origin the calibration moved, ``offsets.yaml`` gives:
 
 * ``angle_offset_rad`` (revolute and continuous joints): what the joint's driver adds to
@@ -12,7 +12,10 @@ joint whose origin the calibration moved, ``offsets.yaml`` gives:
   RPY(roll, pitch, yaw)`` (URDF's fixed-axis roll-pitch-yaw).
 
 The nominal URDF with every placement applied, and the angle offsets added to the
-encoders, is the calibrated URDF (:func:`apply_offsets`, tested to 1e-9).
+encoders, is the calibrated URDF (:func:`apply_offsets`, tested to 1e-9). Where the
+calibrated URDF inserts a fixed joint below a moving one (a sole or gripper that is a
+moving joint's own link), the entry says ``inserted: {parent, child}``: the moving joint
+ends at the new empty link ``parent``, and the fixed joint's origin is ``placement``.
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ class JointOffset:
     joint: str
     angle_offset_rad: float  # 0 for a fixed or prismatic joint
     placement: tuple[float, float, float, float, float, float]  # x, y, z m; roll, pitch, yaw rad
+    inserted: tuple[str, str] | None = None  # a fixed joint the calibration adds: (new empty parent link, child link)
 
 
 def _origin(joint: ET.Element) -> FloatArray:
@@ -96,15 +100,18 @@ def joint_offsets(nominal_urdf: str, calibrated_urdf: str) -> list[JointOffset]:
         InputError: The two URDFs do not have the same joints (the differing ones named).
 
     Example:
-        >>> offsets = joint_offsets(Path("talos.urdf").read_text(), Path("calibrated.urdf").read_text())
+        >>> offsets = joint_offsets(Path("robot.urdf").read_text(), Path("calibrated.urdf").read_text())
 
     """
     nominal = _joints(nominal_urdf, "the nominal URDF")
     calibrated = _joints(calibrated_urdf, "the calibrated URDF")
-    if set(nominal) != set(calibrated):
-        differ = sorted(set(nominal) ^ set(calibrated))
+    added = [calibrated[n] for n in calibrated if n not in nominal]
+    if set(nominal) - set(calibrated) or any(j.get("type") != "fixed" for j in added):
+        differ = sorted(
+            (set(nominal) - set(calibrated)) | {str(j.get("name")) for j in added if j.get("type") != "fixed"}
+        )
         raise InputError(f"the calibrated URDF does not have the nominal URDF's joints: {', '.join(differ)}")
-    out = []
+    out = [_inserted(joint) for joint in added]
     for name, joint in nominal.items():
         change = np.linalg.inv(_origin(joint)) @ _origin(calibrated[name])
         angle = 0.0
@@ -117,6 +124,34 @@ def joint_offsets(nominal_urdf: str, calibrated_urdf: str) -> list[JointOffset]:
     return out
 
 
+def _inserted(joint: ET.Element) -> JointOffset:
+    """A fixed joint the calibration inserted below a moving joint: its origin is the whole change."""
+    parent, child = joint.find("parent"), joint.find("child")
+    if parent is None or child is None:
+        raise InputError(f"the calibrated URDF's joint {joint.get('name')} has no parent or child link")
+    origin = _origin(joint)
+    placement = np.concatenate([origin[:3, 3], pin.rpy.matrixToRpy(origin[:3, :3])])
+    names = (str(parent.get("link")), str(child.get("link")))
+    return JointOffset(str(joint.get("name")), 0.0, tuple(float(v) for v in placement), names)  # type: ignore[arg-type]
+
+
+def _insert(root: ET.Element, offset: JointOffset) -> None:
+    """Insert a calibration's fixed joint: the moving joint above ``child`` now ends at the new empty link."""
+    assert offset.inserted is not None
+    mount, child = offset.inserted
+    above = [j for j in root.findall("joint") if (c := j.find("child")) is not None and c.get("link") == child]
+    if len(above) != 1:
+        raise InputError(f"offsets: joint {offset.joint} is inserted above link {child}, which no single joint ends at")
+    above_child = above[0].find("child")
+    assert above_child is not None
+    above_child.set("link", mount)
+    ET.SubElement(root, "link", {"name": mount})
+    joint = ET.SubElement(root, "joint", {"name": offset.joint, "type": "fixed"})
+    ET.SubElement(joint, "parent", {"link": mount})
+    ET.SubElement(joint, "child", {"link": child})
+    ET.SubElement(joint, "origin", {"xyz": "0 0 0", "rpy": "0 0 0"})
+
+
 def apply_offsets(nominal_urdf: str, offsets: list[JointOffset]) -> str:
     """The nominal URDF with every placement change applied (the angle offsets stay with the encoders).
 
@@ -124,10 +159,13 @@ def apply_offsets(nominal_urdf: str, offsets: list[JointOffset]) -> str:
         InputError: An offset names a joint the URDF does not have, or an angle offset a joint that does not rotate.
 
     Example:
-        >>> text = apply_offsets(Path("talos.urdf").read_text(), read_offsets("offsets.yaml"))
+        >>> text = apply_offsets(Path("robot.urdf").read_text(), read_offsets("offsets.yaml"))
 
     """
     root = ET.fromstring(nominal_urdf)
+    for offset in offsets:
+        if offset.inserted is not None:
+            _insert(root, offset)
     joints = {str(j.get("name")): j for j in root.findall("joint")}
     unknown = sorted(o.joint for o in offsets if o.joint not in joints)
     if unknown:
@@ -160,6 +198,7 @@ def offsets_data(offsets: list[JointOffset], urdf: str, nominal: str, provenance
             o.joint: {
                 "angle_offset_rad": float(o.angle_offset_rad),
                 "placement": dict(zip(PLACEMENT_FIELDS, (float(v) for v in o.placement), strict=True)),
+                **({"inserted": {"parent": o.inserted[0], "child": o.inserted[1]}} if o.inserted else {}),
             }
             for o in offsets
         },
@@ -197,9 +236,14 @@ def read_offsets(path: str | Path, joint_names: tuple[str, ...] | None = None) -
                 f"{path}: joints.{name}: angle_offset_rad and placement ({', '.join(PLACEMENT_FIELDS)}) "
                 "must be finite numbers"
             )
-        out.append(JointOffset(str(name), float(angle), tuple(float(v) for v in values)))  # type: ignore[arg-type]
+        inserted = entry.get("inserted")
+        links = (inserted.get("parent"), inserted.get("child")) if isinstance(inserted, dict) else None
+        if inserted is not None and (links is None or not all(isinstance(v, str) and v for v in links)):
+            raise InputError(f"{path}: joints.{name}.inserted: expected 'parent' and 'child' link names")
+        values_tuple = tuple(float(v) for v in values if v is not None)
+        out.append(JointOffset(str(name), float(angle), values_tuple, links))  # type: ignore[arg-type]
     if joint_names is not None:
-        unknown = sorted(o.joint for o in out if o.joint not in joint_names)
+        unknown = sorted(o.joint for o in out if o.joint not in joint_names and o.inserted is None)
         if unknown:
             raise InputError(f"{path}: offsets of joints the URDF does not have: {', '.join(unknown)}")
     return out

@@ -1,6 +1,7 @@
 """The files a robot loads: each deliverable, reloaded, reproduces its own fit; compliance and offsets files."""
 
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -180,3 +181,33 @@ def test_files_that_do_not_match_the_robot_are_refused(compliant, tmp_path):
         read_compliance(tmp_path / "compliance.yaml")
     with pytest.raises(InputError, match="shape"):
         compensate(scene, recorded.joints[:, :5], read_compliance(out / "with_compliance" / "compliance.yaml"))
+
+
+@pytest.mark.parametrize("config", ["talos_table.yaml", "icub_table.yaml"])
+def test_offsets_hold_every_layout(config, tmp_path):
+    """Random deviations of every parameter, through the URDF export (iCub's hands gain a fixed joint)."""
+    from posegen.calibrate import calibrated_urdf, joint_offsets
+    from posegen.calibrate.offsets import offsets_data
+
+    scene = Scene(load_config(Path(__file__).resolve().parents[2] / "configs" / config))
+    model = CalibrationModel(scene, [c.name for c in scene.chains], ["s"], {})
+    rng = np.random.default_rng(3)
+    theta = model.contact.nominal() + rng.normal(scale=2e-3, size=model.contact.size)
+    nominal_text = scene.files.urdf.read_text()
+    text = calibrated_urdf(nominal_text, model.contact, theta)
+    (tmp_path / "offsets.yaml").write_text(
+        yaml.safe_dump(offsets_data(joint_offsets(nominal_text, text), "u", "n", {}))
+    )
+    offsets = read_offsets(tmp_path / "offsets.yaml")
+    patched = pin.buildModelFromXML(apply_offsets(nominal_text, offsets), pin.JointModelFreeFlyer())
+    calibrated = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    pin.seed(7)
+    q = pin.randomConfiguration(calibrated, -np.ones(calibrated.nq), np.ones(calibrated.nq))
+    q[3:7] = [0.0, 0.0, 0.0, 1.0]
+    q_model = q.copy()
+    for offset in (o for o in offsets if o.angle_offset_rad):
+        q_model[patched.joints[patched.getJointId(offset.joint)].idx_q] += offset.angle_offset_rad
+    frames = dict(zip((f.name for f in calibrated.frames), _frames(calibrated, q), strict=True))
+    for name, placement in zip((f.name for f in patched.frames), _frames(patched, q_model), strict=True):
+        assert placement == pytest.approx(frames[name], abs=1e-9), name
+    assert any(o.inserted for o in offsets) == (config == "icub_table.yaml")

@@ -67,3 +67,34 @@ def test_the_valley_search_picks_what_the_exhaustive_search_picked(scene, real_d
     for deliverable in calibration.deliverables.all():
         assert [deliverable.candidate.name, deliverable.result.prior_scale] == recorded[deliverable.kind.value]
     assert {d.kind.value for d in calibration.deliverables.all()} == set(recorded) - {"note", "model"}
+
+
+def test_the_same_bytes_for_any_number_of_workers(lean_scene, example_pool, tmp_path):
+    """Candidates cross-validated in this process or over two workers: the same calibration folder."""
+    import numpy as np
+
+    from posegen.calibrate import Perturbation, Settings, calibrate, simulate, write_calibration
+    from posegen.model import Contacts
+    from posegen.parallel import ProcessBackend
+
+    rows = list(range(30))
+    plan = Contacts(
+        example_pool.joints()[rows],
+        tuple(example_pool.postures[i].chain for i in rows),
+        ("sim",) * len(rows),
+        tuple(f"sim.yaml:{i}:c{i}" for i in rows),
+    )
+    recorded, _, _ = simulate(lean_scene, plan, Perturbation(compliance_rad_per_nm=3e-4), seed=5)
+    folders = []
+    for workers in (1, 2):
+        with ProcessBackend(workers) as backend:
+            calibration = calibrate(lean_scene, recorded, ["sim"], Settings(fold_seeds=1), backend=backend)
+        folders.append(tmp_path / f"w{workers}")
+        write_calibration(calibration, None, folders[-1], seed=0)
+    names = ["calibration.yaml", "calibrated.urdf", "offsets.yaml", "residuals.csv"]
+    names += [f"with_compliance/{n}" for n in ("calibrated.urdf", "compliance.yaml")]
+    for name in names:
+        assert (folders[0] / name).read_bytes() == (folders[1] / name).read_bytes(), name
+    assert np.load(folders[0] / "posterior.npz")["covariance"].tobytes() == np.load(
+        folders[1] / "posterior.npz"
+    )["covariance"].tobytes()
