@@ -275,7 +275,7 @@ def write_calibration(
     write_atomic(out_dir / "calibrated.urdf", urdf)
     config = scene.config.to_dict()
     config["robot"]["source"] = {
-        "urdf": str((out_dir / "calibrated.urdf").resolve()),
+        "urdf": "calibrated.urdf",  # beside this file: the folder can move, and is written in a staging folder
         "srdf": str(scene.files.srdf),
         "package_dirs": list(scene.files.package_dirs),
     }

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -11,10 +11,11 @@ import numpy as np
 
 from posegen.arguments import check_seed, check_size
 from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
+from posegen.calibrate.record import CALIBRATION_FILE
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.errors import ArgumentError, InputError
-from posegen.io import OutputKind, check_writable, claim_output, read_yaml, write_yaml
+from posegen.io import OutputKind, atomic_folder, check_replaceable, check_writable, claim_output, read_yaml, write_yaml
 from posegen.model import (
     MEASUREMENT_FORMAT,
     CalibrationModel,
@@ -150,13 +151,18 @@ def check_compliance(scene: Scene, compliance_rad_per_knm: float) -> None:
 
 def write_truth(path: Path, model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> None:
     """Write the true parameters of a simulated robot beside what it recorded (``posegen-truth``)."""
+    write_yaml(path, truth_record(model, x, provenance))
+
+
+def truth_record(model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> dict[str, Any]:
+    """The true parameters of a simulated robot, as a ``posegen-truth`` document."""
     nominal = model.nominal()
     parameters = {
         p.name: {"true": float(x[i]), "nominal": float(nominal[i])} for i, p in enumerate(model.contact.parameters)
     }
     for group, value in model.compliances(x).items():
         parameters[f"compliance@{group}"] = {"true": value, "nominal": 0.0}
-    write_yaml(path, {"format": TRUTH_FORMAT, "format_version": 1, "provenance": provenance, "parameters": parameters})
+    return {"format": TRUTH_FORMAT, "format_version": 1, "provenance": provenance, "parameters": parameters}
 
 
 def read_contacts(items: Sequence[str], scene: Scene, rejected: list[str]) -> Contacts:
@@ -183,8 +189,9 @@ def calibrate_files(
     settings: Settings,
     config_path: str | None,
     progress: ProgressCallback = ignore_progress,
+    finish: Callable[[Path], object] | None = None,
 ) -> Calibrated:
-    """Calibrate from measurement files and write the calibration folder.
+    """Calibrate from measurement files and write the calibration folder, swapped in whole.
 
     Args:
         measurements: Training files (posegen YAML or recorded CSV), ``FILE[@SESSION]``.
@@ -194,9 +201,12 @@ def calibrate_files(
         config_path: Scene config; None: the one saved in the first measurement file
             that has one (posegen's format; recorded CSV files have none).
         progress: Told when each step starts.
+        finish: Writes more files into the folder (given its staging path) before it
+            is swapped in: ``posegen calibrate``'s ``report.html``.
 
     Raises:
-        PosegenError: Bad config or input, or too few contacts.
+        PosegenError: Bad config or input, too few contacts, or an output folder that
+            is not a calibration folder.
 
     """
     check_settings(settings)
@@ -204,6 +214,7 @@ def calibrate_files(
         raise ArgumentError("give at least one training measurement file")
     out_dir = Path(output)
     check_writable(out_dir, OutputKind.FOLDER)
+    check_replaceable(out_dir, CALIBRATION_FILE)
     scene = Scene(load_config(config_path)) if config_path else _saved_scene([*measurements, *held_out])
     check_candidates(scene, settings)
     rejected: list[str] = []
@@ -212,9 +223,11 @@ def calibrate_files(
     if validation is not None:
         _check_trained(train, validation)
     sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
-    with claim_output(out_dir, OutputKind.FOLDER):
+    with claim_output(out_dir, OutputKind.FOLDER), atomic_folder(out_dir) as staging:
         calibration = calibrate(scene, train, sessions, settings, progress)
-        report = write_calibration(calibration, validation, out_dir, settings.seed, rejected)
+        report = write_calibration(calibration, validation, staging, settings.seed, rejected)
+        if finish is not None:
+            finish(staging)
     return Calibrated(report=report, training_contacts=len(train))
 
 

@@ -40,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Calibrate, write the calibration folder and its HTML report, and print the before/after table."""
     from posegen.calibrate import Settings, calibrate_files, format_table
-    from posegen.view import write_report
+    from posegen.view import REPORT_FILE, write_report_into
 
     settings = Settings(
         prior_scale=args.prior_scale,
@@ -51,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
     )
     with ProgressBar(args.quiet) as bar:
         config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
-        calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar)
+        report_html = lambda folder: write_report_into(folder, args.config, shown_as=args.output)  # noqa: E731
+        calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar, report_html)
     report = calibrated.report
     model = report["model"]
     chosen = report["model_selection"]["chosen"]
@@ -75,10 +76,9 @@ def run(args: argparse.Namespace) -> int:
     for warning in report["warnings"]:
         print(f"  warning: {warning}")
     print(format_table(report))
-    report_path = write_report(args.output, args.config)
     print(
         f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, residuals.csv, posterior.npz, "
-        f"parameters.png, residuals.png, cross_validation.png, {report_path.name})"
+        f"parameters.png, residuals.png, cross_validation.png, {REPORT_FILE})"
     )
     return 0
 

@@ -1,8 +1,15 @@
 """Bulk numbers beside a YAML artefact: a ``.npz`` sidecar that the header names by hash.
 
 The YAML file stays the human-readable header (provenance, summary); the arrays go to
-``<stem>.npz`` next to it, and the header records its file name and sha256, so a stale or
-swapped sidecar is refused rather than read. The bytes depend on the arrays only (zip
+``<header name>.<sha256 prefix>.npz`` next to it (``route.yaml.3fa2b1c4d5e6.npz``), and
+the header records its file name and sha256, so a stale or swapped sidecar is refused
+rather than read. Because the sidecar's name follows its content, a new artefact never
+overwrites the old one's arrays: the new sidecar lands first, then the header (one
+rename: the moment the artefact changes), then the old sidecar is removed. A kill at any
+point leaves the old artefact or the new one readable, plus at most a sidecar no header
+names, which the next write of that header removes. Headers of older posegen name
+``<stem>.npz``; they are still read, and such a sidecar is never removed (two headers,
+``r.yaml`` and ``r.json``, may share it). The bytes depend on the arrays only (zip
 entries carry a fixed date), so same seed, same bytes holds for sidecars too; any
 ``numpy.load`` reads them. Entries are stored as they are, or deflated (``compress``:
 smaller, slower to write; a route's points); each array keeps its memory order, so a
@@ -14,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import re
 import zipfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -24,11 +32,12 @@ from numpy.typing import NDArray
 
 from posegen.errors import InputError, reason
 from posegen.io.artefact import dump_yaml
-from posegen.io.atomic import write_atomic
+from posegen.io.atomic import crash_point, write_atomic
 
 SIDECAR_SUFFIX = ".npz"
 _EPOCH = (1980, 1, 1, 0, 0, 0)  # the zip format's earliest date: no clock in the bytes
 COMPRESS_LEVEL = 9  # deflate level of compressed sidecars
+NAME_DIGITS = 12  # hex digits of the sha256 in a sidecar's name
 
 
 def encode_arrays(arrays: Mapping[str, NDArray[Any]], compress: bool = False) -> bytes:
@@ -53,15 +62,25 @@ def _ordered(array: NDArray[Any]) -> NDArray[Any]:
     return np.ascontiguousarray(array)
 
 
-def sidecar_path(path: str | Path) -> Path:
-    """Where the arrays of the artefact at ``path`` live: same folder and stem, ``.npz``."""
+def sidecar_path(path: str | Path, data: bytes) -> Path:
+    """Where the arrays ``data`` of the artefact at ``path`` go: ``<name>.<sha256 prefix>.npz`` beside it."""
     path = Path(path)
-    return path.with_suffix(SIDECAR_SUFFIX)
+    digest = hashlib.sha256(data).hexdigest()[:NAME_DIGITS]
+    return path.with_name(f"{path.name}.{digest}{SIDECAR_SUFFIX}")
+
+
+def sidecars_of(path: str | Path) -> list[Path]:
+    """The sidecars named after the header at ``path`` that exist beside it (the current one and any orphans)."""
+    path = Path(path)
+    pattern = re.compile(re.escape(path.name) + rf"\.[0-9a-f]{{{NAME_DIGITS}}}" + re.escape(SIDECAR_SUFFIX))
+    if not path.parent.is_dir():
+        return []
+    return sorted(p for p in path.parent.iterdir() if pattern.fullmatch(p.name))
 
 
 def sidecar_reference(path: str | Path, data: bytes) -> dict[str, Any]:
     """What a header records of its sidecar: the file name (relative) and the sha256."""
-    return {"file": sidecar_path(path).name, "sha256": hashlib.sha256(data).hexdigest()}
+    return {"file": sidecar_path(path, data).name, "sha256": hashlib.sha256(data).hexdigest()}
 
 
 def read_arrays(path: str | Path, reference: Any, names: tuple[str, ...]) -> dict[str, NDArray[Any]]:
@@ -101,13 +120,33 @@ def read_arrays(path: str | Path, reference: Any, names: tuple[str, ...]) -> dic
 
 def write_with_arrays(
     path: str | Path, header: dict[str, Any], arrays: Mapping[str, NDArray[Any]], compress: bool = False
-) -> None:
+) -> Path:
     """Write an artefact as a header (YAML, or JSON if the name ends in ``.json``) and its ``.npz`` sidecar.
 
-    Each is written atomically. The sidecar goes first and the header, which names it by
-    hash, last: a header on disk never points at arrays that are not fully written.
+    The sidecar lands first under a name of its own (its content's hash), the header that
+    names it next, in one rename: until then the old header still reads its old arrays.
+    Then the sidecars no header names any more (the old one, orphans of killed runs) are
+    removed. If writing the header fails, the new sidecar is removed (unless it was
+    already there: the same arrays as before).
+
+    Returns:
+        The sidecar's path.
+
     """
+    path = Path(path)
     data = encode_arrays(arrays, compress)
-    write_atomic(sidecar_path(path), data)
+    sidecar = sidecar_path(path, data)
+    existed = sidecar.exists()
+    write_atomic(sidecar, data)
     full = {**header, "arrays": sidecar_reference(path, data)}
-    write_atomic(path, json.dumps(full, indent=1) if Path(path).suffix.lower() == ".json" else dump_yaml(full))
+    try:
+        write_atomic(path, json.dumps(full, indent=1) if path.suffix.lower() == ".json" else dump_yaml(full))
+    except BaseException:
+        if not existed:
+            sidecar.unlink(missing_ok=True)
+        raise
+    for stale in sidecars_of(path):
+        if stale != sidecar:
+            crash_point(f"before removing {stale.name}")
+            stale.unlink(missing_ok=True)
+    return sidecar

@@ -85,6 +85,22 @@ def check_writable(path: str | Path, kind: OutputKind = OutputKind.FILE) -> None
     _probe(_existing_ancestor(path.absolute().parent))
 
 
+def check_replaceable(path: str | Path, marker: str) -> None:
+    """Check that a folder output replaced whole is absent, empty, or an artefact of its kind.
+
+    A folder swapped in whole (:func:`posegen.io.atomic.swap_folder`) removes the folder
+    it replaces, with every file in it: a folder that does not hold ``marker`` (a
+    calibration folder's ``calibration.yaml``) is someone else's, and never replaced.
+
+    Raises:
+        OutputError: ``path`` is a non-empty folder without ``marker``.
+
+    """
+    path = Path(path)
+    if path.is_dir() and not (path / marker).is_file() and any(path.iterdir()):
+        raise OutputError(f"{path} is a folder with other files and no {marker}: not replacing it; give a new folder")
+
+
 def _read_holder(fd: int) -> str:
     os.lseek(fd, 0, os.SEEK_SET)
     return os.read(fd, 64).decode(errors="replace").strip()

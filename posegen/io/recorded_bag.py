@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import threading
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -277,6 +277,7 @@ def write_recording(
     wrenches: dict[str, Wrenches],
     provenance: dict[str, Any],
     start_ns: int = 0,
+    extra: Mapping[str, str] | None = None,
 ) -> None:
     """Write joint states and wrenches as a rosbag2 (MCAP), messages interleaved in time order.
 
@@ -287,6 +288,7 @@ def write_recording(
         wrenches: Wrench series by topic.
         provenance: Recorded in the bag's metadata.
         start_ns: Clock time of ``times_s == 0``.
+        extra: Text files written into the bag directory with it, by file name (all swapped in as one).
 
     """
     names = list(joints.names)
@@ -300,7 +302,7 @@ def write_recording(
     for topic, series in wrenches.items():
         at = start_ns + np.round(series.times_s * 1e9).astype(np.int64)
         streams.append((topic, at, cdr.encode(wrench, at, [series.forces, series.torques])))
-    with writing_bag(path, provenance) as writer:
+    with writing_bag(path, provenance, extra) as writer:
         writer.topic(joint_topic, JOINT_STATE)
         for topic in wrenches:
             writer.topic(topic, WRENCH_STAMPED)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import PosegenError
-from posegen.io import claim_output, read_yaml, sidecar_path
+from posegen.io import claim_output, read_yaml
 from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
@@ -53,7 +53,7 @@ def generate_pool_file(
         check_count(workers, "--workers")
     path = Path(output)
     checkpoint = path.with_name(path.name + ".partial.jsonl")
-    with claim_output(path, beside=(checkpoint, sidecar_path(path))):
+    with claim_output(path, beside=(checkpoint,)):
         config = load_config(config_path)
         scene = Scene(config)
         check_for_planning(scene, CollisionChecker(scene, convex=True))

@@ -259,6 +259,7 @@ TABLE = [
         expect="(one_spot_measurements.yaml:0, one_spot_measurements.yaml:2, one_spot_measurements.yaml:4 and 3 more)",
     ),
     F("calibrate", "output is a file", "{measurements}", *C, "-o", "{existing}"),
+    F("calibrate", "output folder holds other files", "{measurements}", *C, "-o", "{out}", expect="not replacing it"),
     F("calibrate", "unwritable output", "{measurements}", *C, "-o", f"{UNWRITABLE}/cal"),
     F("calibrate", "output being written", "{measurements}", *C, "-o", "{out}/cal", locked="{out}/cal"),
     # view
