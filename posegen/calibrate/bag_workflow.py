@@ -34,6 +34,7 @@ from posegen.io import (
     OutputKind,
     RecordedBag,
     Wrenches,
+    check_apart,
     check_bag_destination,
     check_writable,
     claim_output,
@@ -94,7 +95,9 @@ def _route(route_path: str, scene: Scene | None, config_path: str | None = None)
     provenance = dict(data.get("provenance") or {})
     scene = scene or scene_for(provenance, config_path)
     scene.check_made_for(provenance, route_path)
-    motion = route_motion(data)
+    motion = route_motion(data, route_path)
+    if sorted(motion.joint_names) == sorted(scene.joint_names):  # the robot's joints (each once), reordered
+        motion = motion.in_order(scene.joint_names)  # any order, as posegen check accepts
     if motion.joint_names != scene.joint_names:
         raise InputError(f"{route_path}: its joints are not the robot's ({len(motion.joint_names)} names)")
     return motion, scene
@@ -140,6 +143,7 @@ def simulate_route_bag(
     bag_path = Path(bag)
     truth = bag_path / TRUTH_FILE
     check_writable(bag_path, OutputKind.FOLDER)
+    check_apart([bag_path], [route_path, config_path])
     check_bag_destination(bag_path)
     motion, scene = _route(route_path, None, config_path)
     check_compliance(scene, compliance_rad_per_knm)
@@ -258,6 +262,7 @@ def measure_bag(
     if session is not None and not session.strip():
         raise ArgumentError("--session: give a session name")
     check_writable(output)
+    check_apart([output], [bag, route_path, config_path])
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
     scene = Scene(load_config(config_path))
     planned_motion = None if route_path is None else _route(route_path, scene)[0]

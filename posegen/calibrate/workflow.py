@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,11 +16,21 @@ from posegen.calibrate.record import CALIBRATION_FILE
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.errors import ArgumentError, InputError
-from posegen.io import OutputKind, atomic_folder, check_replaceable, check_writable, claim_output, read_yaml, write_yaml
+from posegen.io import (
+    OutputKind,
+    atomic_folder,
+    check_apart,
+    check_replaceable,
+    check_writable,
+    claim_output,
+    read_yaml,
+    write_yaml,
+)
 from posegen.model import (
     MEASUREMENT_FORMAT,
     CalibrationModel,
     Contacts,
+    measurement_item,
     planned_kinds,
     read_measurements,
     write_measurements,
@@ -88,6 +99,7 @@ def simulate_plan_file(
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
     check_writable(measurements)
     check_writable(truth)
+    check_apart([measurements, truth], [plan_path, config_path])
     plan, _ = load_plan(plan_path)
     scene = scene_for(plan.provenance, config_path)  # None: the config saved in the plan
     check_compliance(scene, compliance_rad_per_knm)
@@ -174,8 +186,8 @@ def read_contacts(items: Sequence[str], scene: Scene, rejected: list[str]) -> Co
     """
     contacts: Contacts | None = None
     for item in items:
-        path, _, session = item.partition("@")
-        part = read_measurements(path, scene, session or None)
+        path, session = measurement_item(item)
+        part = read_measurements(path, scene, session)
         rejected.extend(part.rejected)
         contacts = part.contacts if contacts is None else contacts.concat(part.contacts)
     assert contacts is not None, "at least one measurement file"
@@ -214,6 +226,9 @@ def calibrate_files(
         raise ArgumentError("give at least one training measurement file")
     out_dir = Path(output)
     check_writable(out_dir, OutputKind.FOLDER)
+    files = [measurement_item(item)[0] for item in [*measurements, *held_out]]
+    check_apart([out_dir], [config_path, *files])
+    _check_held_out_apart(files[: len(measurements)], files[len(measurements) :])
     check_replaceable(out_dir, CALIBRATION_FILE)
     scene = Scene(load_config(config_path)) if config_path else _saved_scene([*measurements, *held_out])
     check_candidates(scene, settings)
@@ -229,6 +244,21 @@ def calibrate_files(
         if finish is not None:
             finish(staging)
     return Calibrated(report=report, training_contacts=len(train))
+
+
+def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> None:
+    """No file is both fitted and held out (its contacts would judge the fit they made).
+
+    Raises:
+        InputError: A file given as training and with ``--validate`` (by path, link or name).
+
+    """
+    for kept in held_out:
+        for fitted in training:
+            if Path(kept).resolve() == Path(fitted).resolve() or (
+                Path(kept).exists() and Path(fitted).exists() and os.path.samefile(kept, fitted)
+            ):
+                raise InputError(f"{kept} is a training file and a held-out one (--validate): give it once")
 
 
 def _check_trained(train: Contacts, held_out: Contacts) -> None:
@@ -256,7 +286,7 @@ def _saved_scene(items: Sequence[str]) -> Scene:
 
     """
     for item in items:
-        path = item.partition("@")[0]
+        path = measurement_item(item)[0]
         if Path(path).suffix.lower() in (".yaml", ".yml"):
             data = read_yaml(path, MEASUREMENT_FORMAT)
             return scene_for(data.get("provenance", {}), None)

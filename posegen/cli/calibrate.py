@@ -13,8 +13,12 @@ HELP = "identify the kinematics from recorded contacts"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
-    parser.add_argument("measurements", nargs="+", help="measurement files (posegen YAML or CSV), FILE[@SESSION]")
-    parser.add_argument("--validate", nargs="*", default=[], help="held-out measurement files, FILE[@SESSION]")
+    parser.add_argument(
+        "measurements", nargs="+", help="measurement files (posegen YAML or CSV), FILE[@SESSION] ('@' of a name: '@@')"
+    )
+    parser.add_argument(
+        "--validate", nargs="*", default=[], help="held-out measurement files, FILE[@SESSION] ('@' of a name: '@@')"
+    )
     parser.add_argument(
         "--config",
         default=None,
@@ -85,4 +89,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _any_posegen_file(items: list[str]) -> bool:
     """Whether a measurement file is posegen's (YAML, with its scene config) rather than a recorded CSV."""
-    return any(not item.partition("@")[0].lower().endswith(".csv") for item in items)
+    from posegen.model import measurement_item
+
+    return any(not measurement_item(item)[0].lower().endswith(".csv") for item in items)

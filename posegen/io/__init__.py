@@ -18,7 +18,16 @@ from posegen.io.arrays import (
 from posegen.io.artefact import dump_yaml, load_yaml_file, provenance, read_text_file, read_yaml, write_yaml
 from posegen.io.atomic import atomic_folder, atomic_path, crash_point, staging_folder, swap_folder, write_atomic
 from posegen.io.bag_writer import check_bag_destination
-from posegen.io.output import OutputKind, OutputLock, check_replaceable, check_writable, claim_output, lock_path
+from posegen.io.output import (
+    OutputKind,
+    OutputLock,
+    check_apart,
+    check_replaceable,
+    check_writable,
+    claim_output,
+    input_files,
+    lock_path,
+)
 from posegen.io.recorded_bag import JOINT_STATE, WRENCH_STAMPED, JointStates, RecordedBag, Wrenches, write_recording
 from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, SegmentRow, write_trajectory_bag
 
@@ -36,6 +45,7 @@ __all__ = [
     "Wrenches",
     "atomic_folder",
     "atomic_path",
+    "check_apart",
     "check_bag_destination",
     "check_replaceable",
     "check_writable",
@@ -43,6 +53,7 @@ __all__ = [
     "crash_point",
     "dump_yaml",
     "encode_arrays",
+    "input_files",
     "load_yaml_file",
     "lock_path",
     "provenance",

@@ -83,17 +83,22 @@ def sidecar_reference(path: str | Path, data: bytes) -> dict[str, Any]:
     return {"file": sidecar_path(path, data).name, "sha256": hashlib.sha256(data).hexdigest()}
 
 
-def read_arrays(path: str | Path, reference: Any, names: tuple[str, ...]) -> dict[str, NDArray[Any]]:
+def read_arrays(
+    path: str | Path, reference: Any, names: tuple[str, ...], rows: int | None = None
+) -> dict[str, NDArray[Any]]:
     """Read the sidecar a header refers to, after checking its hash and its arrays.
 
     Args:
         path: The header (YAML) file; the sidecar is looked up beside it.
         reference: The header's record of the sidecar (``{file, sha256}``).
         names: Arrays that must be there.
+        rows: The number of rows the header declares: every array must have it, checked
+            from the arrays' headers before any is decompressed (a small file cannot make
+            its reader allocate more than the header says).
 
     Raises:
         InputError: The reference is malformed, the sidecar is missing, changed, not an
-            ``.npz``, or lacks an array.
+            ``.npz``, lacks an array, or holds another number of rows than declared.
 
     """
     path = Path(path)
@@ -111,11 +116,24 @@ def read_arrays(path: str | Path, reference: Any, names: tuple[str, ...]) -> dic
             missing = [n for n in names if n not in archive.files]
             if missing:
                 raise InputError(f"{file}: missing arrays {', '.join(missing)}")
+            if rows is not None:
+                _check_rows(file, archive.zip, names, rows)
             return {name: archive[name] for name in names}
     except InputError:
         raise
     except Exception as exc:  # numpy's readers raise many kinds on damaged bytes (SyntaxError, MemoryError...)
         raise InputError(f"{file}: not a readable .npz file ({reason(exc)})") from exc
+
+
+def _check_rows(file: Path, archive: zipfile.ZipFile, names: tuple[str, ...], rows: int) -> None:
+    """Every array has ``rows`` rows, read from its ``.npy`` header (nothing decompressed beyond it)."""
+    for name in names:
+        with archive.open(f"{name}.npy") as handle:
+            major, _ = np.lib.format.read_magic(handle)
+            read = np.lib.format.read_array_header_1_0 if major == 1 else np.lib.format.read_array_header_2_0
+            shape = read(handle)[0]
+        if not shape or shape[0] != rows:
+            raise InputError(f"{file}: {name} holds {shape[0] if shape else 0} rows, the header declares {rows}")
 
 
 def write_with_arrays(

@@ -50,7 +50,7 @@ def run(argv: list[str], env: dict[str, str] | None = None) -> subprocess.Comple
 
 @pytest.fixture(scope="module")
 def inputs(tmp_path_factory, route_file) -> dict[str, str]:
-    """One posture to route, 16 simulated contacts to calibrate from, two simulated sessions to measure."""
+    """One posture to route, 16 simulated contacts to calibrate from, two sessions to measure, two routes, two plans."""
     folder = tmp_path_factory.mktemp("inputs")
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
     data["postures"] = data["postures"][3:4]
@@ -62,6 +62,12 @@ def inputs(tmp_path_factory, route_file) -> dict[str, str]:
     for seed in (1, 2):
         bag = folder / f"bag{seed}"
         assert main(["simulate", str(route_file), "--rate", "100", "--seed", str(seed), "--bag", str(bag), "-q"]) == 0
+    shutil.copy(folder / "one.yaml", folder / "plan1.yaml")
+    shutil.copy(folder / "sixteen.yaml", folder / "plan2.yaml")
+    assert main(["route", str(folder / "one.yaml"), "-q", "-o", str(folder / "route1.yaml")]) == 0  # two routes
+    shutil.copy(route_file, folder / "route2.yaml")  # its header names its sidecar, copied beside it
+    for sidecar in sidecars_of(route_file):
+        shutil.copy(sidecar, folder / sidecar.name)
     return {"one": str(folder / "one.yaml"), "m": str(folder / "m.yaml"), "route": str(route_file), "dir": str(folder)}
 
 
@@ -72,10 +78,19 @@ STAGES = {  # argv of a run with seed {seed} (output last), output name, what th
     "simulate --bag": (["simulate", "{route}", "--rate", "100", "--seed", "{seed}", "--bag"], "session"),
     "measure": (["measure", "{dir}/bag{seed}", "--route", "{route}", "--session", "sim", "-o"], "measured.yaml"),
     "calibrate": ([*CALIBRATE, "--config", str(CONFIG), "--seed", "{seed}", "-o"], "cal"),
+    "export": (["export", "{dir}/route{seed}.yaml", "--bag"], "bag"),
+    "view --html": (["view", "{dir}/plan{seed}.yaml", "--html"], "page.html"),
 }
 
 
-IN_PROCESS = {"pool", "simulate --bag", "measure", "calibrate"}  # same bytes in this process (route seeds OMPL once)
+IN_PROCESS = {
+    "pool",
+    "simulate --bag",
+    "measure",
+    "calibrate",
+    "export",
+    "view --html",
+}  # same bytes in this process (route seeds OMPL once)
 
 
 def run_to_the_end(stage: str, argv: list[str]) -> None:
