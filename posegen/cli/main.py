@@ -94,6 +94,11 @@ def main(argv: list[str] | None = None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"posegen: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return EXIT_ERROR
+    finally:
+        if held is not None:  # nothing stays held once main returns: later records go to stderr as usual
+            held.buffer.clear()
+            logging.getLogger().removeHandler(held)
+            logging.getLogger().addHandler(stream)
 
 
 def _held_warnings(target: logging.Handler) -> logging.handlers.MemoryHandler:

@@ -324,3 +324,12 @@ def test_simulate_bag_and_measure_take_a_route_whose_joints_are_in_another_order
     assert joints["plain"].names == joints["shuffled"].names  # recorded in the robot's order
     assert np.array_equal(joints["plain"].positions, joints["shuffled"].positions)
     assert joints["plain contacts"] == joints["shuffled contacts"] and joints["plain contacts"]
+
+
+def test_q_holds_warnings_only_while_main_runs(tmp_path, capsys):
+    import logging
+    import logging.handlers
+
+    code, _, err = run(["check", str(tmp_path / "nothing.yaml"), "-q"], capsys)
+    assert code == 2 and err.count("\n") == 1
+    assert not any(isinstance(h, logging.handlers.MemoryHandler) for h in logging.getLogger().handlers)
