@@ -8,7 +8,7 @@ export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 DEMO := plans/demo
 
-.PHONY: install demo test lint bench clean browser lock
+.PHONY: install demo test lint bench clean browser lock kill-matrix fuzz
 
 LOCK := constraints.txt
 
@@ -57,6 +57,14 @@ browser:
 
 test: lint browser
 	$(PY) -m pytest -q tests
+
+# Every command killed at every crash point, the files a folder is staged from included (~10 min).
+kill-matrix: $(STAMP)
+	POSEGEN_KILL_MATRIX=full $(PY) -m pytest -q tests/robustness/test_kill_matrix.py
+
+# The fuzz suite with new random draws and many examples (~10 min; make test runs a few, fixed).
+fuzz: $(STAMP)
+	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests/robustness/test_fuzz.py tests/robustness/test_readers.py
 
 bench: $(STAMP) browser
 	$(PY) benchmarks/run.py

@@ -28,6 +28,7 @@ def _run(posegen: str, root: Path, *args: str) -> tuple[float, subprocess.Comple
 
 
 def _route_row(posegen: str, root: Path, selection: Path, out: Path, label: str) -> tuple[str, dict[str, float]]:
+    from posegen.io import sidecars_of
     from posegen.robot import read_route
 
     wall, done = _run(posegen, root, "route", str(selection), "--workers", str(WORKERS), "-q", "-o", str(out))
@@ -39,7 +40,7 @@ def _route_row(posegen: str, root: Path, selection: Path, out: Path, label: str)
     summary = data["summary"]
     t_check, check = _run(posegen, root, "check", str(out), "--workers", str(WORKERS), "-q")
     verdict = "ok" if check.returncode == 0 else "VIOLATIONS"
-    size = (out.stat().st_size + out.with_suffix(".npz").stat().st_size) / 1e6
+    size = (out.stat().st_size + sum(p.stat().st_size for p in sidecars_of(out))) / 1e6
     swaps = "; ".join(
         f"{s['pool_id']} -> {s['substitute_pool_id']} (O1 {s['o1_before']:.2f} -> {s['o1_after']:.2f})"
         for s in data["substitutions"]

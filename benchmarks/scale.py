@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+from posegen.io import sidecars_of
 from posegen.robot import load_pool
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -61,7 +62,7 @@ def bench_dask(pool_path: Path, workdir: Path, machine: str) -> None:
         wall, _ = measured("pool", "--n", str(n), "-q", "--scheduler", cluster.scheduler_address, "-o", str(out))
         same = all(
             a.read_bytes() == b.read_bytes()
-            for a, b in ((out, pool_path), (out.with_suffix(".npz"), pool_path.with_suffix(".npz")))
+            for a, b in ((out, pool_path), *zip(sidecars_of(out), sidecars_of(pool_path), strict=True))
         )
         start = time.perf_counter()
         subprocess.run(
@@ -107,7 +108,7 @@ def bench_scale(workdir: Path, n: int, measured_n: int, machine: str) -> Path:
     print(f"| samples attempted / accepted | {pool.attempted} / {len(pool.postures)} |")
     print(f"| peak memory, largest process | {peak:.0f} MB |")
     print(
-        f"| file: YAML header + .npz sidecar | {size_mb(out):.2f} + {size_mb(out.with_suffix('.npz')):.2f} MB "
+        f"| file: YAML header + .npz sidecar | {size_mb(out):.2f} + {size_mb(sidecars_of(out)[0]):.2f} MB "
         f"(all inline in YAML: {size_mb(inline):.1f} MB) |"
     )
     print(f"| load (`load_pool`) | {t_load:.2f} s (inline YAML: {t_inline:.1f} s) |")

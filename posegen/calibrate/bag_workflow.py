@@ -27,21 +27,25 @@ from posegen.calibrate.contact_windows import (
     wrist_force,
 )
 from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
-from posegen.calibrate.workflow import check_compliance, perturbation_of, write_truth
+from posegen.calibrate.workflow import check_compliance, perturbation_of, truth_record
 from posegen.errors import ArgumentError, InputError, unknown_name
 from posegen.io import (
     JointStates,
     OutputKind,
     RecordedBag,
     Wrenches,
+    check_apart,
     check_bag_destination,
     check_writable,
     claim_output,
+    dump_yaml,
     write_recording,
     write_yaml,
 )
 from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measurements_to_dict, planned_kinds
 from posegen.robot import FloatArray, Scene, load_config, read_route, scene_for
+
+TRUTH_FILE = "truth.yaml"  # a simulated session's true parameters, inside its bag folder
 
 
 @dataclass(frozen=True)
@@ -49,7 +53,7 @@ class SimulatedSession:
     """What ``posegen simulate --bag`` wrote."""
 
     bag: Path
-    truth: Path  # the true parameters, beside the bag
+    truth: Path  # the true parameters, in the bag's folder (written with it, as one)
     contacts: int
     duration_s: float  # of the recording
     samples: int  # joint states
@@ -91,7 +95,9 @@ def _route(route_path: str, scene: Scene | None, config_path: str | None = None)
     provenance = dict(data.get("provenance") or {})
     scene = scene or scene_for(provenance, config_path)
     scene.check_made_for(provenance, route_path)
-    motion = route_motion(data)
+    motion = route_motion(data, route_path)
+    if sorted(motion.joint_names) == sorted(scene.joint_names):  # the robot's joints (each once), reordered
+        motion = motion.in_order(scene.joint_names)  # any order, as posegen check accepts
     if motion.joint_names != scene.joint_names:
         raise InputError(f"{route_path}: its joints are not the robot's ({len(motion.joint_names)} names)")
     return motion, scene
@@ -111,11 +117,11 @@ def simulate_route_bag(
     joint_topic: str,
     compliance_rad_per_knm: float = 0.0,
 ) -> SimulatedSession:
-    """Record a perturbed robot executing a route, as a rosbag2; the truth goes beside it.
+    """Record a perturbed robot executing a route, as a rosbag2 with the truth in its folder.
 
     Args:
         route_path: Route file.
-        bag: Bag directory to write (``<bag>.truth.yaml`` beside it).
+        bag: Bag directory to write (with ``truth.yaml`` in it, swapped in as one).
         config_path: Scene config; None: the one saved in the route.
         seed: Seed of the robot's errors (the robot ``posegen simulate`` makes) and of the noise.
         error_mm: Sigma of placement length errors (mm).
@@ -135,9 +141,9 @@ def simulate_route_bag(
     perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
     check_size(rate_hz, "--rate", positive=True)
     bag_path = Path(bag)
-    truth = bag_path.with_name(bag_path.name + ".truth.yaml")
+    truth = bag_path / TRUTH_FILE
     check_writable(bag_path, OutputKind.FOLDER)
-    check_writable(truth)
+    check_apart([bag_path], [route_path, config_path])
     check_bag_destination(bag_path)
     motion, scene = _route(route_path, None, config_path)
     check_compliance(scene, compliance_rad_per_knm)
@@ -145,7 +151,7 @@ def simulate_route_bag(
     if not motion.contacts:
         raise InputError(f"{route_path}: the route makes no contact")
     settings = SessionSettings(rate_hz=rate_hz)
-    with claim_output(bag_path, OutputKind.FOLDER, beside=(truth,)):
+    with claim_output(bag_path, OutputKind.FOLDER):
         recorded = simulate_session(scene, motion, session, perturbation, settings, seed)
         prov = scene.provenance(seed)
         prov["simulation"] = {
@@ -163,8 +169,8 @@ def simulate_route_bag(
             for chain, topic in wrench_topics(scene).items()
         }
         joints = JointStates(scene.joint_names, recorded.times_s, recorded.positions)
-        write_recording(bag_path, joints, joint_topic, wrenches, prov)
-        write_truth(truth, recorded.model, recorded.theta, prov)
+        true = dump_yaml(truth_record(recorded.model, recorded.theta, prov))
+        write_recording(bag_path, joints, joint_topic, wrenches, prov, extra={TRUTH_FILE: true})
     return SimulatedSession(bag_path, truth, len(motion.contacts), float(recorded.times_s[-1]), len(recorded.times_s))
 
 
@@ -256,6 +262,7 @@ def measure_bag(
     if session is not None and not session.strip():
         raise ArgumentError("--session: give a session name")
     check_writable(output)
+    check_apart([output], [bag, route_path, config_path])
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
     scene = Scene(load_config(config_path))
     planned_motion = None if route_path is None else _route(route_path, scene)[0]

@@ -15,7 +15,8 @@ encoders read the angles plus noise. The recording starts and ends with the robo
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -62,6 +63,17 @@ class Motion:
     velocities: FloatArray  # (m, nj) rad/s
     contacts: tuple[ContactPhase, ...]
 
+    def in_order(self, names: Sequence[str]) -> Motion:
+        """The same motion with its joint columns in the order of ``names`` (the same joints, reordered)."""
+        columns = [self.joint_names.index(name) for name in names]
+        return Motion(
+            tuple(names),
+            self.times,
+            self.positions[:, columns],
+            self.velocities[:, columns],
+            tuple(replace(c, posture=c.posture[columns]) for c in self.contacts),
+        )
+
 
 @dataclass(frozen=True)
 class Session:
@@ -81,9 +93,14 @@ def contact_label(posture: Any, pool_id: Any) -> str:
     return f"posture {posture}" + ("" if pool_id is None else f" (pool {pool_id})")
 
 
-def route_motion(data: dict[str, Any]) -> Motion:
-    """The trajectory and contacts of a route file's data (as read by ``posegen.robot.read_route``)."""
-    times, positions, velocities, _ = route_arrays(data)
+def route_motion(data: dict[str, Any], where: str = "route") -> Motion:
+    """The trajectory and contacts of a route file's data (as read by ``posegen.robot.read_route``).
+
+    Raises:
+        InputError: Points no reader accepts (:func:`posegen.robot.route_arrays`), named ``where``.
+
+    """
+    times, positions, velocities, _ = route_arrays(data, where)
     phases: dict[Any, dict[SegmentType, dict[str, Any]]] = {}
     for segment in data["segments"]:
         kind = SegmentType(segment["type"])

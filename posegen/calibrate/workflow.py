@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -11,14 +12,25 @@ import numpy as np
 
 from posegen.arguments import check_seed, check_size
 from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
+from posegen.calibrate.record import CALIBRATION_FILE
 from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.errors import ArgumentError, InputError
-from posegen.io import OutputKind, check_writable, claim_output, read_yaml, write_yaml
+from posegen.io import (
+    OutputKind,
+    atomic_folder,
+    check_apart,
+    check_replaceable,
+    check_writable,
+    claim_output,
+    read_yaml,
+    write_yaml,
+)
 from posegen.model import (
     MEASUREMENT_FORMAT,
     CalibrationModel,
     Contacts,
+    measurement_item,
     planned_kinds,
     read_measurements,
     write_measurements,
@@ -88,6 +100,7 @@ def simulate_plan_file(
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
     check_writable(measurements)
     check_writable(truth)
+    check_apart([measurements, truth], [plan_path, config_path])
     plan, _ = load_plan(plan_path)
     scene = scene_for(plan.provenance, config_path)  # None: the config saved in the plan
     check_compliance(scene, compliance_rad_per_knm)
@@ -151,13 +164,18 @@ def check_compliance(scene: Scene, compliance_rad_per_knm: float) -> None:
 
 def write_truth(path: Path, model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> None:
     """Write the true parameters of a simulated robot beside what it recorded (``posegen-truth``)."""
+    write_yaml(path, truth_record(model, x, provenance))
+
+
+def truth_record(model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> dict[str, Any]:
+    """The true parameters of a simulated robot, as a ``posegen-truth`` document."""
     nominal = model.nominal()
     parameters = {
         p.name: {"true": float(x[i]), "nominal": float(nominal[i])} for i, p in enumerate(model.contact.parameters)
     }
     for group, value in model.compliances(x).items():
         parameters[f"compliance@{group}"] = {"true": value, "nominal": 0.0}
-    write_yaml(path, {"format": TRUTH_FORMAT, "format_version": 1, "provenance": provenance, "parameters": parameters})
+    return {"format": TRUTH_FORMAT, "format_version": 1, "provenance": provenance, "parameters": parameters}
 
 
 def read_contacts(items: Sequence[str], scene: Scene, rejected: list[str]) -> Contacts:
@@ -169,8 +187,8 @@ def read_contacts(items: Sequence[str], scene: Scene, rejected: list[str]) -> Co
     """
     contacts: Contacts | None = None
     for item in items:
-        path, _, session = item.partition("@")
-        part = read_measurements(path, scene, session or None)
+        path, session = measurement_item(item)
+        part = read_measurements(path, scene, session)
         rejected.extend(part.rejected)
         contacts = part.contacts if contacts is None else contacts.concat(part.contacts)
     assert contacts is not None, "at least one measurement file"
@@ -185,8 +203,9 @@ def calibrate_files(
     config_path: str | None,
     progress: ProgressCallback = ignore_progress,
     backend: Backend | None = None,
+    finish: Callable[[Path], object] | None = None,
 ) -> Calibrated:
-    """Calibrate from measurement files and write the calibration folder.
+    """Calibrate from measurement files and write the calibration folder, swapped in whole.
 
     Args:
         measurements: Training files (posegen YAML or recorded CSV), ``FILE[@SESSION]``.
@@ -197,9 +216,12 @@ def calibrate_files(
             that has one (posegen's format; recorded CSV files have none).
         progress: Told when each step starts.
         backend: Where the candidates' cross-validations run; None: this process.
+        finish: Writes more files into the folder (given its staging path) before it
+            is swapped in: ``posegen calibrate``'s ``report.html``.
 
     Raises:
-        PosegenError: Bad config or input, or too few contacts.
+        PosegenError: Bad config or input, too few contacts, or an output folder that
+            is not a calibration folder.
 
     """
     check_settings(settings)
@@ -207,6 +229,10 @@ def calibrate_files(
         raise ArgumentError("give at least one training measurement file")
     out_dir = Path(output)
     check_writable(out_dir, OutputKind.FOLDER)
+    files = [measurement_item(item)[0] for item in [*measurements, *held_out]]
+    check_apart([out_dir], [config_path, *files])
+    _check_held_out_apart(files[: len(measurements)], files[len(measurements) :])
+    check_replaceable(out_dir, CALIBRATION_FILE)
     scene = Scene(load_config(config_path)) if config_path else _saved_scene([*measurements, *held_out])
     check_candidates(scene, settings)
     rejected: list[str] = []
@@ -215,10 +241,27 @@ def calibrate_files(
     if validation is not None:
         _check_trained(train, validation)
     sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
-    with claim_output(out_dir, OutputKind.FOLDER):
+    with claim_output(out_dir, OutputKind.FOLDER), atomic_folder(out_dir) as staging:
         calibration = calibrate(scene, train, sessions, settings, progress, backend)
-        report = write_calibration(calibration, validation, out_dir, settings.seed, rejected)
+        report = write_calibration(calibration, validation, staging, settings.seed, rejected)
+        if finish is not None:
+            finish(staging)
     return Calibrated(report=report, training_contacts=len(train))
+
+
+def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> None:
+    """No file is both fitted and held out (its contacts would judge the fit they made).
+
+    Raises:
+        InputError: A file given as training and with ``--validate`` (by path, link or name).
+
+    """
+    for kept in held_out:
+        for fitted in training:
+            if Path(kept).resolve() == Path(fitted).resolve() or (
+                Path(kept).exists() and Path(fitted).exists() and os.path.samefile(kept, fitted)
+            ):
+                raise InputError(f"{kept} is a training file and a held-out one (--validate): give it once")
 
 
 def _check_trained(train: Contacts, held_out: Contacts) -> None:
@@ -246,7 +289,7 @@ def _saved_scene(items: Sequence[str]) -> Scene:
 
     """
     for item in items:
-        path = item.partition("@")[0]
+        path = measurement_item(item)[0]
         if Path(path).suffix.lower() in (".yaml", ".yml"):
             data = read_yaml(path, MEASUREMENT_FORMAT)
             return scene_for(data.get("provenance", {}), None)

@@ -14,8 +14,12 @@ HELP = "identify the kinematics from recorded contacts"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
-    parser.add_argument("measurements", nargs="+", help="measurement files (posegen YAML or CSV), FILE[@SESSION]")
-    parser.add_argument("--validate", nargs="*", default=[], help="held-out measurement files, FILE[@SESSION]")
+    parser.add_argument(
+        "measurements", nargs="+", help="measurement files (posegen YAML or CSV), FILE[@SESSION] ('@' of a name: '@@')"
+    )
+    parser.add_argument(
+        "--validate", nargs="*", default=[], help="held-out measurement files, FILE[@SESSION] ('@' of a name: '@@')"
+    )
     parser.add_argument(
         "--config",
         default=None,
@@ -48,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     """Calibrate, write the calibration folder and its HTML report, and print the before/after table."""
     from posegen.calibrate import Settings, calibrate_files, format_table, load_line
     from posegen.parallel import open_backend
-    from posegen.view import write_report
+    from posegen.view import REPORT_FILE, write_report_into
 
     settings = Settings(
         prior_scale=args.prior_scale,
@@ -58,8 +62,11 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
+    report_html = lambda folder: write_report_into(folder, args.config, shown_as=args.output)  # noqa: E731
     with ProgressBar(args.quiet) as bar, open_backend(args.workers) as backend:
-        calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar, backend)
+        calibrated = calibrate_files(
+            args.measurements, args.validate, args.output, settings, config, bar, backend, report_html
+        )
     report = calibrated.report
     model = report["model"]
     chosen = report["model_selection"]["chosen"]
@@ -83,10 +90,9 @@ def run(args: argparse.Namespace) -> int:
     for warning in report["warnings"]:
         print(f"  warning: {warning}")
     print(format_table(report))
-    report_path = write_report(args.output, args.config)
     print(
         f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, offsets.yaml, residuals.csv, "
-        f"posterior.npz, parameters.png, residuals.png, cross_validation.png, {report_path.name}"
+        f"posterior.npz, parameters.png, residuals.png, cross_validation.png, {REPORT_FILE}"
         + (", with_compliance/" if "compensated" in report["deliverables"] else "")
         + ")"
     )
@@ -96,4 +102,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _any_posegen_file(items: list[str]) -> bool:
     """Whether a measurement file is posegen's (YAML, with its scene config) rather than a recorded CSV."""
-    return any(not item.partition("@")[0].lower().endswith(".csv") for item in items)
+    from posegen.model import measurement_item
+
+    return any(not measurement_item(item)[0].lower().endswith(".csv") for item in items)

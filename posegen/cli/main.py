@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import logging.handlers
 import os
 import sys
 from typing import NoReturn
@@ -69,15 +70,18 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as exc:  # --help, --version, or a bad argument (already reported)
         return exc.code if isinstance(exc.code, int) else EXIT_ERROR
-    logging.basicConfig(
-        level=logging.INFO if args.verbose else logging.WARNING,
-        format="posegen: %(message)s",
-        stream=sys.stderr,
-        force=True,  # the current stderr, also when main runs more than once in a process
-    )
+    stream = logging.StreamHandler(sys.stderr)  # the current stderr, also when main runs more than once
+    stream.setFormatter(logging.Formatter("posegen: %(message)s"))
+    held = _held_warnings(stream) if getattr(args, "quiet", False) else None
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, handlers=[held or stream], force=True)
     try:
-        return int(args.run(args))
+        code = int(args.run(args))
+        if held is not None:
+            held.flush()  # -q: the warnings of a run that succeeded, at its end
+        return code
     except PosegenError as exc:
+        if held is not None:
+            held.buffer.clear()  # -q: a failed run says one line, its error
         print(f"posegen: error: {' '.join(str(exc).split())}", file=sys.stderr)  # one line, always
         return EXIT_ERROR
     except KeyboardInterrupt:
@@ -90,6 +94,16 @@ def main(argv: list[str] | None = None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"posegen: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return EXIT_ERROR
+    finally:
+        if held is not None:  # nothing stays held once main returns: later records go to stderr as usual
+            held.buffer.clear()
+            logging.getLogger().removeHandler(held)
+            logging.getLogger().addHandler(stream)
+
+
+def _held_warnings(target: logging.Handler) -> logging.handlers.MemoryHandler:
+    """A handler that keeps the log records until the run ends (``-q``: said once it succeeded, else dropped)."""
+    return logging.handlers.MemoryHandler(1 << 20, flushLevel=logging.CRITICAL + 1, target=target, flushOnClose=False)
 
 
 if __name__ == "__main__":

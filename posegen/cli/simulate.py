@@ -29,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
-    bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR.truth.yaml")
+    bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR/truth.yaml")
     bag.add_argument(
         "--rate", type=positive_size, default=500.0, help="joint state and wrench rate in Hz (default 500)"
     )

@@ -7,11 +7,27 @@ writing (:mod:`~posegen.io.bag_writer`), recorded sessions (:mod:`~posegen.io.re
 and routes as bags (:mod:`~posegen.io.trajectory_bag`).
 """
 
-from posegen.io.arrays import encode_arrays, read_arrays, sidecar_path, sidecar_reference, write_with_arrays
+from posegen.io.arrays import (
+    encode_arrays,
+    read_arrays,
+    sidecar_path,
+    sidecar_reference,
+    sidecars_of,
+    write_with_arrays,
+)
 from posegen.io.artefact import dump_yaml, load_yaml_file, provenance, read_text_file, read_yaml, write_yaml
-from posegen.io.atomic import atomic_path, write_atomic
+from posegen.io.atomic import atomic_folder, atomic_path, crash_point, staging_folder, swap_folder, write_atomic
 from posegen.io.bag_writer import check_bag_destination
-from posegen.io.output import OutputKind, OutputLock, check_writable, claim_output, lock_path
+from posegen.io.output import (
+    OutputKind,
+    OutputLock,
+    check_apart,
+    check_replaceable,
+    check_writable,
+    claim_output,
+    input_files,
+    lock_path,
+)
 from posegen.io.recorded_bag import JOINT_STATE, WRENCH_STAMPED, JointStates, RecordedBag, Wrenches, write_recording
 from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, SegmentRow, write_trajectory_bag
 
@@ -27,12 +43,17 @@ __all__ = [
     "RecordedBag",
     "SegmentRow",
     "Wrenches",
+    "atomic_folder",
     "atomic_path",
+    "check_apart",
     "check_bag_destination",
+    "check_replaceable",
     "check_writable",
     "claim_output",
+    "crash_point",
     "dump_yaml",
     "encode_arrays",
+    "input_files",
     "load_yaml_file",
     "lock_path",
     "provenance",
@@ -41,6 +62,9 @@ __all__ = [
     "read_yaml",
     "sidecar_path",
     "sidecar_reference",
+    "sidecars_of",
+    "staging_folder",
+    "swap_folder",
     "write_atomic",
     "write_recording",
     "write_trajectory_bag",

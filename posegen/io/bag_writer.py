@@ -1,8 +1,10 @@
 """Writing rosbag2 directories (MCAP storage, rosbag2 format 9) atomically, with ``rosbags``.
 
-The bag is written under a temporary folder beside its destination and renamed into
-place at the end: an interrupted run leaves no half-written bag, and a bag written before
-is only replaced by a complete one. posegen's provenance goes into ``metadata.yaml``'s
+The bag, with any file that goes with it (a simulated session's ``truth.yaml``), is
+written under a staging folder beside its destination and swapped into place by one
+rename at the end (:func:`posegen.io.atomic.swap_folder`): an interrupted run leaves no
+half-written bag, a bag written before is only replaced by a complete one, and a bag
+and its files always come from one run. posegen's provenance goes into ``metadata.yaml``'s
 ``custom_data`` (key ``posegen``, a JSON string).
 """
 
@@ -10,8 +12,7 @@ from __future__ import annotations
 
 import json
 import shutil
-import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -20,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from posegen.errors import InputError
+from posegen.io.atomic import staging_folder, swap_folder, write_atomic
 
 PROVENANCE_KEY = "posegen"
 
@@ -74,8 +76,15 @@ def check_bag_destination(path: str | Path) -> None:
 
 
 @contextmanager
-def writing_bag(path: str | Path, provenance: dict[str, Any]) -> Iterator[BagWriter]:
+def writing_bag(
+    path: str | Path, provenance: dict[str, Any], extra: Mapping[str, str] | None = None
+) -> Iterator[BagWriter]:
     """Write a rosbag2 directory at ``path``, all or nothing.
+
+    Args:
+        path: The bag directory (a bag there is replaced whole).
+        provenance: Recorded in ``metadata.yaml``.
+        extra: Text files to write into the bag directory with it, by file name.
 
     Raises:
         InputError: ``path`` exists and is not a rosbag2 directory (it is never deleted).
@@ -85,15 +94,15 @@ def writing_bag(path: str | Path, provenance: dict[str, Any]) -> Iterator[BagWri
 
     path = Path(path)
     check_bag_destination(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    scratch = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
+    scratch = staging_folder(path)
     try:
-        writer = Writer(scratch / path.name, version=9, storage_plugin=StoragePlugin.MCAP)
+        bag = scratch / path.name
+        writer = Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP)
         writer.set_custom_data(PROVENANCE_KEY, json.dumps(provenance, sort_keys=True))
         with writer:
             yield BagWriter(writer)
-        if path.exists():
-            path.rename(scratch / ".replaced")  # removed with the scratch folder
-        (scratch / path.name).rename(path)
+        for name, text in (extra or {}).items():
+            write_atomic(bag / name, text)
+        swap_folder(bag, path)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)

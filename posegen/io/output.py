@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import enum
 import fcntl
+import glob
 import logging
 import os
 import shutil
@@ -83,6 +84,70 @@ def check_writable(path: str | Path, kind: OutputKind = OutputKind.FILE) -> None
     if kind is OutputKind.FOLDER and path.is_dir():
         _probe(path)
     _probe(_existing_ancestor(path.absolute().parent))
+
+
+def check_replaceable(path: str | Path, marker: str) -> None:
+    """Check that a folder output replaced whole is absent, empty, or an artefact of its kind.
+
+    A folder swapped in whole (:func:`posegen.io.atomic.swap_folder`) removes the folder
+    it replaces, with every file in it: a folder that does not hold ``marker`` (a
+    calibration folder's ``calibration.yaml``) is someone else's, and never replaced.
+
+    Raises:
+        OutputError: ``path`` is a non-empty folder without ``marker``.
+
+    """
+    path = Path(path)
+    if path.is_dir() and not (path / marker).is_file() and any(path.iterdir()):
+        raise OutputError(f"{path} is a folder with other files and no {marker}: not replacing it; give a new folder")
+
+
+def input_files(path: str | Path) -> list[Path]:
+    """An input and the files read with it: a header's sidecars (named by hash, or an older ``<stem>.npz``)."""
+    path = Path(path)
+    found = [path]
+    if path.is_file():
+        found += [p for p in path.parent.glob(glob.escape(path.name) + ".*.npz") if p.is_file()]
+        legacy = path.with_suffix(".npz")
+        if legacy != path and legacy.is_file():
+            found.append(legacy)
+    return found
+
+
+def _same(first: Path, second: Path) -> bool:
+    if first.resolve() == second.resolve():
+        return True
+    try:
+        return os.path.samefile(first, second)  # hard links
+    except OSError:
+        return False
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    return folder.is_dir() and folder.resolve() in path.resolve().parents
+
+
+def check_apart(outputs: Sequence[str | Path | None], inputs: Sequence[str | Path | None]) -> None:
+    """Check, before any work, that no output is, contains, lies inside or shares a file with an input.
+
+    Inputs count with the files read with them (:func:`input_files`: a header's
+    sidecar); an output folder (a calibration, a bag) may not hold an input, and no
+    output may be written inside an input folder (a recorded bag). ``None`` entries are
+    skipped (an option not given).
+
+    Raises:
+        OutputError: An output would overwrite, replace or be written into an input.
+
+    """
+    read = [f for i in inputs if i is not None for f in input_files(i)]
+    for output in (Path(o) for o in outputs if o is not None):
+        for source in read:
+            if _same(output, source):
+                raise OutputError(f"{output} is an input of this command ({source}): not overwriting it")
+            if _inside(output, source):
+                raise OutputError(f"{output} is inside the input {source}: not writing into it")
+            if _inside(source, output):
+                raise OutputError(f"{output} holds the input {source}: not replacing it")
 
 
 def _read_holder(fd: int) -> str:

@@ -9,13 +9,18 @@ of its topic is deserialised on its own, never guessed.
 
 Times are seconds from the bag's start, taken from the header stamps (or from the
 recording times when a topic leaves its stamps at zero); every series is sorted by time.
+A clock that goes back (stamps, in recording order, earlier than one already seen by
+more than :data:`CLOCK_BACK_TOLERANCE_S`) is an error naming the topic and the jump, as
+are joint states that are not finite numbers; wrench samples that are not finite are
+left out, and said (a warning with their number).
 """
 
 from __future__ import annotations
 
 import hashlib
+import logging
 import threading
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,10 +34,13 @@ from posegen.io import cdr, mcap_index
 from posegen.io.bag_writer import writing_bag
 from posegen.io.cdr import FloatArray
 
+LOG = logging.getLogger(__name__)
+
 JOINT_STATE = "sensor_msgs/msg/JointState"
 WRENCH_STAMPED = "geometry_msgs/msg/WrenchStamped"
 STORAGES = ("mcap", "sqlite3")
 _BATCH = 4096  # messages per batch on the message-by-message path
+CLOCK_BACK_TOLERANCE_S = 0.05  # stamps logged a little out of order are sorted; a clock going back further is refused
 
 
 @dataclass(frozen=True)
@@ -124,14 +132,44 @@ class _Topic:
             stamp = np.array([message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec])
             self.parts.append((stamp, batch.log_times[[k]], self._values(message, int(batch.log_times[k]))[None, :]))
 
+    def _checked(
+        self, stamps: NDArray[np.int64], values: FloatArray, origin_ns: int, where: Path
+    ) -> tuple[NDArray[np.int64], FloatArray]:
+        """The samples, in recording order, once the clock and the values are checked (see the module docstring).
+
+        Raises:
+            InputError: The clock goes back, or joint states (or every wrench) not finite.
+
+        """
+        back = np.maximum.accumulate(stamps) - stamps  # ns behind the latest stamp seen, in recording order
+        if back.max() > CLOCK_BACK_TOLERANCE_S * 1e9:
+            k = int(np.argmax(back > CLOCK_BACK_TOLERANCE_S * 1e9))
+            raise InputError(
+                f"{where}: topic '{self.topic}': the clock goes back {back.max() * 1e-9:.3f} s at message {k} "
+                f"({(stamps[k] - origin_ns) * 1e-9:.3f} s): one recording has one clock, forward"
+            )
+        finite = np.isfinite(values).all(axis=1)
+        if finite.all():
+            return stamps, values
+        first = f"first at {(stamps[~finite][0] - origin_ns) * 1e-9:.3f} s"
+        count = f"{int((~finite).sum())} of {len(values)} messages"
+        if self.msgtype == JOINT_STATE or not finite.any():
+            raise InputError(f"{where}: topic '{self.topic}': {count} hold values that are not finite ({first})")
+        LOG.warning(
+            "%s: topic '%s': %s hold values that are not finite (%s): left out", where, self.topic, count, first
+        )
+        return stamps[finite], values[finite]
+
     def series(self, origin_ns: int, where: Path) -> tuple[FloatArray, FloatArray]:
         """Times (n,) in s from ``origin_ns`` and values (n, k), sorted by time."""
         if not self.parts:
             raise InputError(f"{where}: topic '{self.topic}' has no message")
-        stamps = np.concatenate([p[0] for p in self.parts])
+        logged = np.argsort(np.concatenate([p[1] for p in self.parts]), kind="stable")  # recording order
+        stamps = np.concatenate([p[0] for p in self.parts])[logged]
         if not np.any(stamps):
-            stamps = np.concatenate([p[1] for p in self.parts])  # never stamped: the recording times
-        values = np.concatenate([p[2] for p in self.parts])
+            stamps = np.concatenate([p[1] for p in self.parts])[logged]  # never stamped: the recording times
+        values = np.concatenate([p[2] for p in self.parts])[logged]
+        stamps, values = self._checked(stamps, values, origin_ns, where)
         if np.any(np.diff(stamps) < 0):
             order = np.argsort(stamps, kind="stable")
             stamps, values = stamps[order], values[order]
@@ -277,6 +315,7 @@ def write_recording(
     wrenches: dict[str, Wrenches],
     provenance: dict[str, Any],
     start_ns: int = 0,
+    extra: Mapping[str, str] | None = None,
 ) -> None:
     """Write joint states and wrenches as a rosbag2 (MCAP), messages interleaved in time order.
 
@@ -287,6 +326,7 @@ def write_recording(
         wrenches: Wrench series by topic.
         provenance: Recorded in the bag's metadata.
         start_ns: Clock time of ``times_s == 0``.
+        extra: Text files written into the bag directory with it, by file name (all swapped in as one).
 
     """
     names = list(joints.names)
@@ -300,7 +340,7 @@ def write_recording(
     for topic, series in wrenches.items():
         at = start_ns + np.round(series.times_s * 1e9).astype(np.int64)
         streams.append((topic, at, cdr.encode(wrench, at, [series.forces, series.torques])))
-    with writing_bag(path, provenance) as writer:
+    with writing_bag(path, provenance, extra) as writer:
         writer.topic(joint_topic, JOINT_STATE)
         for topic in wrenches:
             writer.topic(topic, WRENCH_STAMPED)

@@ -61,15 +61,53 @@ def _check_angles(scene: Scene, names: Sequence[str], values: np.ndarray, where:
 
 
 def _check_names(scene: Scene, names: Sequence[str], path: Path) -> None:
-    """Check that every recorded joint name is the model's.
+    """Check that the recorded joint names are the model's, each once, every joint the config leaves free included.
+
+    A joint the config locks may be absent (it keeps the reference posture's value); a
+    free joint may not: its angle would be guessed.
 
     Raises:
-        InputError: One is not (the valid names are listed).
+        InputError: A name the model does not know (the valid names are listed), a name
+            given twice, or a free joint missing (named).
 
     """
     for name in names:
         if name not in scene.joint_names:
             raise InputError(f"{path}: {unknown_name('joint', name, scene.joint_names)}")
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise InputError(f"{path}: joint column {', '.join(twice)} given twice")
+    missing = [n for n, locked in zip(scene.joint_names, scene.locked, strict=True) if not locked and n not in names]
+    if missing:
+        raise InputError(
+            f"{path}: no column for joint {', '.join(missing)} (only the joints the config locks may be absent)"
+        )
+
+
+def measurement_item(item: str) -> tuple[str, str | None]:
+    """The file and the session of a ``FILE[@SESSION]`` item; ``@@`` is an ``@`` of the name.
+
+    ``day@2.csv@morning`` is written ``day@@2.csv@morning``; ``day@@2.csv`` is the file
+    ``day@2.csv`` with its own session.
+
+    Raises:
+        InputError: An ``@`` followed by no session name.
+
+    """
+    text, k = [], 0
+    while k < len(item):
+        if item.startswith("@@", k):
+            text.append("@")
+            k += 2
+        elif item[k] == "@":
+            session = item[k + 1 :].replace("@@", "@")
+            if not session.strip():
+                raise InputError(f"{item}: no session name after '@' (an '@' of a file name is written '@@')")
+            return "".join(text), session
+        else:
+            text.append(item[k])
+            k += 1
+    return "".join(text), None
 
 
 def _full_joints(scene: Scene, names: Sequence[str], values: np.ndarray) -> np.ndarray:

@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
-from posegen.errors import PosegenError
-from posegen.io import claim_output, read_yaml, sidecar_path
+from posegen.errors import InputError, PosegenError
+from posegen.io import check_apart, claim_output, read_yaml
 from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
@@ -53,7 +53,8 @@ def generate_pool_file(
         check_count(workers, "--workers")
     path = Path(output)
     checkpoint = path.with_name(path.name + ".partial.jsonl")
-    with claim_output(path, beside=(checkpoint, sidecar_path(path))):
+    check_apart([path, checkpoint], [config_path])
+    with claim_output(path, beside=(checkpoint,)):
         config = load_config(config_path)
         scene = Scene(config)
         check_for_planning(scene, CollisionChecker(scene, convex=True))
@@ -84,10 +85,12 @@ def check_pool_file(
         workers: Local worker processes (1: in this process), or the backend to run on.
 
     Raises:
-        PosegenError: Not a pool, or a pool made for another robot model.
+        PosegenError: Not a pool, an empty pool, or a pool made for another robot model.
 
     """
     pool = pool_from_dict(read_yaml(path, POOL_FORMAT), path)
+    if not pool.postures:
+        raise InputError(f"{path}: the pool holds no posture: nothing to check")
     scene = scene_for(pool.provenance, config_path)
     scene.check_made_for(pool.provenance, path)
     pool.check_joints(scene.joint_names, path)

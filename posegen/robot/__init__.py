@@ -62,6 +62,8 @@ from posegen.robot.stance_space import StanceSpace
 from posegen.robot.statics import MOMENT_ARM_M, gravity_torques
 from posegen.robot.trajectory import (
     ACCELERATION_STEP,
+    MAX_DURATION_S,
+    MIN_STEP_S,
     POSITION_DTYPE,
     ROUTE_ARRAYS,
     ROUTE_FORMAT,
@@ -70,6 +72,7 @@ from posegen.robot.trajectory import (
     VELOCITY_STEP,
     SegmentType,
     is_route_file,
+    points_problem,
     read_route,
     route_arrays,
     stamp,
@@ -80,6 +83,8 @@ from posegen.robot.verification import EXAMPLES, Verification, Worst, WorstSoFar
 __all__ = [
     "ACCELERATION_STEP",
     "EXAMPLES",
+    "MAX_DURATION_S",
+    "MIN_STEP_S",
     "MOMENT_ARM_M",
     "POOL_FORMAT",
     "POOL_VERSION",
@@ -141,6 +146,7 @@ __all__ = [
     "parse_candidate",
     "parse_config",
     "plan_entries",
+    "points_problem",
     "polygon_margin",
     "pool_from_dict",
     "posture_from_dict",

@@ -54,6 +54,9 @@ POSITION_DTYPE = np.float32  # positions, velocities and accelerations in the si
 TIME_DTYPE = np.float64
 VELOCITY_STEP = 2.0**-20  # rad/s (~1e-6): stored velocities are multiples of it, rounded toward zero
 ACCELERATION_STEP = 2.0**-16  # rad/s^2 (~1.5e-5): the same for accelerations
+READ_VERSIONS = (1, 2)
+MIN_STEP_S = 1e-6  # smallest time step a reader accepts (posegen check's --min-dt is the controller's, 1 ms)
+MAX_DURATION_S = 1e6  # longest route a reader accepts (11.6 days): times fit a rosbag2 clock in ns
 
 
 class SegmentType(str, enum.Enum):
@@ -103,12 +106,16 @@ def read_route(path: str | Path) -> dict[str, Any]:
             SegmentType(seg["type"])
             int(seg["first_point"])
             int(seg["last_point"])
-            float(seg["start_s"])
-            float(seg["end_s"])
-        version = int(data.get("format_version", 1))
-        if version >= 2:
-            arrays = read_arrays(path, data.get("arrays"), ROUTE_ARRAYS)
-            int(trajectory["points"])
+            if not all(np.isfinite(float(seg[k])) for k in ("start_s", "end_s")):
+                raise ValueError(f"segment times must be finite numbers, not {seg['start_s']}, {seg['end_s']}")
+        version = data.get("format_version", 1)
+        if version not in READ_VERSIONS or isinstance(version, bool):
+            raise InputError(f"{path}: format_version {version!r}: this posegen reads versions 1 and 2")
+        if version == 2:
+            points = trajectory["points"]
+            if not isinstance(points, int) or isinstance(points, bool) or points < 0:
+                raise ValueError(f"trajectory.points must be a count, not {points!r}")
+            arrays = read_arrays(path, data.get("arrays"), ROUTE_ARRAYS, rows=points)
         else:
             arrays = _inline_arrays(trajectory["points"])
     except (KeyError, TypeError, ValueError, IndexError, OverflowError, AttributeError) as exc:
@@ -161,10 +168,50 @@ def route_arrays(data: dict[str, Any], where: str = "route") -> tuple[FloatArray
     shape = (len(times), len(data["trajectory"]["joint_names"]))
     if times.ndim != 1 or any(a.shape != shape for a in (positions, velocities, accelerations)):
         raise InputError(f"{where}: point arrays of inconsistent shapes (expected {shape[0]} points of {shape[1]})")
-    ends = [int(s[k]) for s in data["segments"] for k in ("first_point", "last_point")]
-    if any(not 0 <= k < len(times) for k in ends):
-        raise InputError(f"{where}: a segment points outside the route's {len(times)} points")
+    problem = points_problem(times, (positions, velocities, accelerations), data["segments"])
+    if problem:
+        raise InputError(f"{where}: {problem} (posegen check tells more)")
     return times, positions, velocities, accelerations
+
+
+def points_problem(times: FloatArray, arrays: tuple[FloatArray, ...], segments: list[dict[str, Any]]) -> str:
+    """What makes a route's points unusable by any reader ("" if nothing): the readers' rules.
+
+    Every value finite; times from 0, strictly increasing by at least :data:`MIN_STEP_S`,
+    within :data:`MAX_DURATION_S`; a segment table that covers the points from first to
+    last, each segment starting where the previous one ends.
+
+    Args:
+        times: (m,) s.
+        arrays: Positions, velocities, accelerations, each (m, nj).
+        segments: The header's segment table.
+
+    """
+    m = len(times)
+    if m == 0:
+        return "the route has no point"
+    for name, values in zip(("time_from_start", *ROUTE_ARRAYS[1:]), (times, *arrays), strict=True):
+        bad = np.flatnonzero(~np.isfinite(values).reshape(m, -1).all(axis=1))
+        if len(bad):
+            return f"{name} at point {bad[0]} is not a finite number"
+    steps = np.diff(times)
+    if times[0] != 0.0 or (len(steps) and steps.min() < MIN_STEP_S) or times[-1] > MAX_DURATION_S:
+        k = int(np.argmin(steps)) + 1 if len(steps) and steps.min() < MIN_STEP_S else (0 if times[0] else m - 1)
+        return (
+            f"time_from_start at point {k} is {times[k]} s: times start at 0, increase by at least "
+            f"{MIN_STEP_S:g} s and end within {MAX_DURATION_S:g} s"
+        )
+    if not segments:
+        return "the segment table is empty"
+    expected = 0
+    for i, seg in enumerate(segments):
+        first, last = int(seg["first_point"]), int(seg["last_point"])
+        if first != expected or not first <= last < m:
+            return f"segment {i} covers points {first}..{last}: expected it to start at {expected}, end before {m}"
+        expected = last
+    if expected != m - 1:
+        return f"the segments end at point {expected}, the route's last point is {m - 1}"
+    return ""
 
 
 def stamp(seconds: float) -> dict[str, int]:

@@ -34,7 +34,7 @@ import numpy as np
 
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import EXAMPLES, Scene, SegmentType, Verification, Worst, worst_case
+from posegen.robot import EXAMPLES, MAX_DURATION_S, Scene, SegmentType, Verification, Worst, worst_case
 from posegen.route.pose_check import PoseInvariant, check_poses
 
 MIN_DT_S = 1e-3  # default smallest time step between two points
@@ -133,7 +133,9 @@ def _structure(scene: Scene, data: dict[str, Any], arrays: dict[str, np.ndarray]
         if SegmentType(seg["type"]).in_contact and seg.get("chain") not in chains:
             problems.append(f"segment {i} ({seg['type']}) names chain {seg.get('chain')!r}; valid: {sorted(chains)}")
         expected_first = last
-    if data["segments"] and expected_first != m - 1:
+    if not data["segments"]:
+        problems.append("the segment table is empty: no point says what the robot does")
+    elif expected_first != m - 1:
         problems.append(f"the segments end at point {expected_first}, the route's last point is {m - 1}")
     return problems
 
@@ -162,10 +164,13 @@ def _times(times: np.ndarray, min_dt: float) -> Worst:
     excess = np.zeros(len(times))
     excess[0] = abs(times[0]) if len(times) else 0.0
     excess[1:] = min_dt - np.diff(times)
+    excess = np.maximum(excess, times - MAX_DURATION_S)  # a time no clock holds (1e39 s) is no step
 
     def describe(k: int) -> str:
         if k == 0:
             return f"point 0 at t {times[0]} s: a route starts at 0"
+        if times[k] > MAX_DURATION_S:
+            return f"{_at(times, k)}: beyond the longest route a reader accepts, {MAX_DURATION_S:g} s"
         dt = times[k] - times[k - 1]
         kind = "repeats the time of" if dt == 0 else ("goes back from" if dt < 0 else "is too close to")
         return f"{_at(times, k)} {kind} point {k - 1}: dt {dt:.3e} s, minimum {min_dt:.3e} s"
@@ -196,7 +201,7 @@ def _limits(scene: Scene, times: np.ndarray, q: np.ndarray, v: np.ndarray, a: np
     ratio = np.maximum(np.abs(v), np.abs(mean)) / v_limit
 
     def describe_velocity(k: int) -> str:
-        j = int(np.nanargmax(ratio[k]))
+        j = int(np.argmax(np.nan_to_num(ratio[k], nan=np.inf)))  # a NaN time makes a whole row NaN
         return (
             f"{_at(times, k)} {names[j]}: velocity {v[k, j]:.4f} rad/s, mean since the previous point "
             f"{mean[k, j]:.4f} rad/s; limit {v_limit[j]:.4f} rad/s"
@@ -205,7 +210,7 @@ def _limits(scene: Scene, times: np.ndarray, q: np.ndarray, v: np.ndarray, a: np
     a_limit = scene.route.acceleration_limit_rad_s2
 
     def describe_acceleration(k: int) -> str:
-        j = int(np.nanargmax(np.abs(a[k])))
+        j = int(np.argmax(np.nan_to_num(np.abs(a[k]), nan=np.inf)))
         return f"{_at(times, k)} {names[j]}: acceleration {a[k, j]:.4f} rad/s^2; limit {a_limit} rad/s^2"
 
     return [
@@ -268,7 +273,7 @@ def _rest(scene: Scene, segments: list[dict[str, Any]], times: np.ndarray, v: np
     names = scene.joint_names
 
     def describe(k: int) -> str:
-        j = int(np.nanargmax(np.abs(v[k])))
+        j = int(np.argmax(np.nan_to_num(np.abs(v[k]), nan=np.inf)))
         return f"{_at(times, k)} must be at rest (start, end, hold, go-to-contact start): {names[j]} at {v[k, j]} rad/s"
 
     return worst_case(RouteInvariant.REST, speed - 1e-9, describe, "at rest where it must stop")

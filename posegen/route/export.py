@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from posegen.io import sidecar_path, write_atomic, write_with_arrays
+from posegen.io import write_atomic, write_with_arrays
 from posegen.robot import ACCELERATION_STEP, POSITION_DTYPE, ROUTE_FORMAT, ROUTE_VERSION, TIME_DTYPE, VELOCITY_STEP
 from posegen.route.route import Route
 
@@ -102,8 +102,11 @@ def route_header(
 
 
 def route_outputs(path: Path, csv_too: bool = False) -> list[Path]:
-    """The files :func:`write_route` writes: the header, its sidecar, and the CSV if asked."""
-    written = [path, sidecar_path(path)]
+    """The files :func:`write_route` writes whose names are known before: the header, and the CSV if asked.
+
+    The sidecar's name follows its content (:func:`posegen.io.sidecar_path`), beside the header.
+    """
+    written = [path]
     if csv_too:
         written.append(path.with_suffix(".csv"))
     return written
@@ -113,15 +116,15 @@ def write_route(path: Path, route: Route, header: dict[str, Any], csv_too: bool 
     """Write the route (the deflated sidecar first, the header that names it last; the CSV if asked).
 
     Returns:
-        The paths written: :func:`route_outputs`.
+        The paths written: the header, its sidecar, and the CSV if asked.
 
     """
     arrays = route_arrays_of(route)
-    written = route_outputs(path, csv_too)
+    outputs = route_outputs(path, csv_too)
     if csv_too:
-        write_atomic(written[2], _csv(header, arrays))
-    write_with_arrays(path, header, arrays, compress=True)
-    return written
+        write_atomic(outputs[1], _csv(header, arrays))
+    sidecar = write_with_arrays(path, header, arrays, compress=True)
+    return [path, sidecar, *outputs[1:]]
 
 
 def _csv(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> str:

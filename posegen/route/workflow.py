@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import logging
 import statistics
@@ -15,6 +16,7 @@ from posegen.errors import ArgumentError, InputError
 from posegen.io import (
     OutputKind,
     SegmentRow,
+    check_apart,
     check_bag_destination,
     check_writable,
     claim_output,
@@ -84,7 +86,9 @@ def route_plan_file(
     outputs = route_outputs(path, csv)
     for output_path in outputs:
         check_writable(output_path)
+    check_apart(outputs, [plan_path, pool_path, config_path])
     plan, entries = load_plan(plan_path)
+    plan, entries, repeated = _without_repeats(plan, entries, plan_path)
     scene = scene_for(plan.provenance, config_path)
     scene.check_made_for(plan.provenance, plan_path)
     plan.check_joints(scene.joint_names, plan_path)
@@ -100,6 +104,8 @@ def route_plan_file(
         nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
         summary = _summary(scene, route, len(plan.postures))
         summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
+        if repeated:
+            summary["repeated"] = repeated  # postures of the input given twice: routed once
         if substitutes is not None and route.substitutions:
             rows = [r for v in route.visited if (r := substitutes.row(v, n)) is not None]
             summary["information"] = o1_figures(substitutes, rows)
@@ -113,6 +119,31 @@ def route_plan_file(
         )
         written = write_route(path, route, route_header(route, nodes, provenance, summary), csv)
     return Routed(route=route, summary=summary, written=tuple(written), planning_s=elapsed, repair=repair)
+
+
+def _without_repeats(
+    plan: Pool, entries: list[dict[str, Any]], plan_path: str
+) -> tuple[Pool, list[dict[str, Any]], list[dict[str, int]]]:
+    """The plan without the postures it holds twice (same chain, same joints), each one said.
+
+    Returns:
+        The plan and its entries, first occurrences kept; and each repeat as
+        ``{posture, same_as}`` (indices in the input).
+
+    """
+    first: dict[tuple[str, tuple[float, ...]], int] = {}
+    keep, repeated = [], []
+    for k, posture in enumerate(plan.postures):
+        seen = first.setdefault((posture.chain, posture.joints), k)
+        if seen == k:
+            keep.append(k)
+        else:
+            repeated.append({"posture": k, "same_as": seen})
+            LOG.warning("%s: posture %d repeats posture %d (same chain and joints): routed once", plan_path, k, seen)
+    if not repeated:
+        return plan, entries, []
+    postures = tuple(plan.postures[k] for k in keep)
+    return dataclasses.replace(plan, postures=postures), [entries[k] for k in keep], repeated
 
 
 def _substitutes(
@@ -230,9 +261,10 @@ def export_route_bag(route_path: str, bag: str, topic: str, segments_topic: str)
 
     """
     check_writable(bag, OutputKind.FOLDER)
+    check_apart([bag], [route_path])
     check_bag_destination(bag)
     data = read_route(route_path)
-    times, positions, velocities, accelerations = route_arrays(data)
+    times, positions, velocities, accelerations = route_arrays(data, route_path)
     rows = [
         SegmentRow(
             type=str(s["type"]),

@@ -12,8 +12,8 @@ from typing import Any
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import check_writable, claim_output, write_yaml
-from posegen.model import DEFAULT_NOISE, Contacts, build_design, read_measurements
+from posegen.io import check_apart, check_writable, claim_output, write_yaml
+from posegen.model import DEFAULT_NOISE, Contacts, build_design, measurement_item, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import (
     POOL_VERSION,
@@ -80,6 +80,7 @@ def select_pool_file(
     check_writable(path)
     for plot in plots:
         check_writable(plot)
+    check_apart([path, *plots], [pool_path, config_path])
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, config_path)
     scene.check_made_for(pool.provenance, pool_path)
@@ -151,6 +152,7 @@ def follow_up_pool_file(
     check_writable(path)
     if not given:
         raise InputError("--given: at least one measurement file")
+    check_apart([path], [pool_path, calibration_path, config_path, *(measurement_item(g)[0] for g in given)])
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, config_path)
     scene.check_made_for(pool.provenance, pool_path)
@@ -160,7 +162,7 @@ def follow_up_pool_file(
         raise InfeasibleError(f"--k {k}: the pool has only {len(pool.postures)} postures")
     contacts: Contacts | None = None
     for item in given:
-        measured, _, session = item.partition("@")
+        measured, session = measurement_item(item)
         part = read_measurements(measured, scene, session or None).contacts
         contacts = part if contacts is None else contacts.concat(part)
     assert contacts is not None  # given is not empty

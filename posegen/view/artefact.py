@@ -118,6 +118,10 @@ def _plan(path: Path, data: dict[str, Any], config_path: str | None) -> PlanArte
     scene = scene_for(plan.provenance, config_path)
     scene.check_made_for(plan.provenance, str(path))
     plan.check_joints(scene.joint_names, str(path))
+    chains = sorted(c.name for c in scene.config.chains)
+    for k, posture in enumerate(plan.postures):
+        if posture.chain not in chains:
+            raise InputError(f"{path}: posture {k} names chain '{posture.chain}'; valid chains: {', '.join(chains)}")
     selection = data["format"] == SELECTION_FORMAT
     pool = None
     if selection:
@@ -138,7 +142,7 @@ def _route(path: Path, config_path: str | None) -> RouteArtefact:
     recorded = data.get("provenance") or {}
     scene = scene_for(recorded, config_path)
     scene.check_made_for(recorded, str(path))
-    times, positions, _, _ = route_arrays(data)
+    times, positions, _, _ = route_arrays(data, str(path))
     names = list(data["trajectory"]["joint_names"])
     unknown = sorted(set(scene.joint_names) - set(names))
     if unknown:

@@ -212,7 +212,7 @@ def _outliers(report: dict[str, Any]) -> str:
     return "".join(parts)
 
 
-def report_html(artefact: CalibrationArtefact) -> str:
+def report_html(artefact: CalibrationArtefact, shown_as: Path | None = None) -> str:
     """The report page of a calibration folder."""
     report = artefact.record.report
     contacts = artefact.record.contacts
@@ -239,11 +239,12 @@ def report_html(artefact: CalibrationArtefact) -> str:
         ),
     ]
     body = "".join(f"<h2>{_e(title)}</h2>{content}" for title, content in sections)
-    title = f"posegen calibration report: {artefact.path}"
+    where = artefact.path if shown_as is None else shown_as  # a staging folder shows its destination
+    title = f"posegen calibration report: {where}"
     return (
         f'<!doctype html><html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
         f"<style>{STYLE}</style></head><body><h1>Calibration report</h1>"
-        f'<p class="muted">{_e(artefact.path.resolve())}</p>{body}</body></html>'
+        f'<p class="muted">{_e(where.resolve())}</p>{body}</body></html>'
     )
 
 
@@ -256,9 +257,31 @@ def write_report(directory: str | Path, config_path: str | None = None) -> Path:
     """
     if not Path(directory).is_dir():
         raise InputError(f"{directory}: not a calibration folder")
+    with claim_output(directory, OutputKind.FOLDER):
+        return write_report_into(directory, config_path)
+
+
+def write_report_into(
+    directory: str | Path, config_path: str | None = None, shown_as: str | Path | None = None
+) -> Path:
+    """Write ``report.html`` into a calibration folder the caller holds, and return its path.
+
+    For a folder being made (``posegen calibrate`` writes the report into its staging
+    folder, before the folder is swapped in, so the report and the calibration come from
+    one run).
+
+    Args:
+        directory: The calibration folder (complete but for the report).
+        config_path: Scene config to use instead of the one saved in the calibration.
+        shown_as: The folder's name to show in the page (its destination); default ``directory``.
+
+    Raises:
+        PosegenError: The folder is not a complete calibration folder.
+
+    """
     artefact = open_artefact(directory, config_path)
-    assert isinstance(artefact, CalibrationArtefact), "a folder is a calibration"
+    if not isinstance(artefact, CalibrationArtefact):
+        raise InputError(f"{directory}: not a calibration folder")
     path = artefact.record.directory / REPORT_FILE
-    with claim_output(artefact.record.directory, OutputKind.FOLDER):
-        write_atomic(path, report_html(artefact))
+    write_atomic(path, report_html(artefact, None if shown_as is None else Path(shown_as)))
     return path

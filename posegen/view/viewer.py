@@ -19,7 +19,7 @@ from typing import Protocol
 
 import viser
 
-from posegen.io import check_writable, claim_output, write_atomic
+from posegen.io import check_apart, check_writable, claim_output, write_atomic
 from posegen.view.artefact import Artefact, CalibrationArtefact, PlanArtefact, RouteArtefact, open_artefact
 from posegen.view.calibration_view import CalibrationView
 from posegen.view.plan_view import PlanView
@@ -125,6 +125,7 @@ def write_html_file(artefact_path: str | Path, path: str | Path, config_path: st
 
     """
     check_writable(path)
+    check_apart([path], [artefact_path, config_path])
     return write_html(open_artefact(artefact_path, config_path), path)
 
 

@@ -202,7 +202,7 @@ def test_route_then_check(tmp_path, capsys):
     out = tmp_path / "route.json"
     code, stdout, _ = run(["route", str(two), "--workers", "1", "--csv", "-q", "-o", str(out)], capsys)
     assert code == 0 and "2 of 2 postures" in stdout and out.exists()
-    assert (tmp_path / "route.npz").exists() and (tmp_path / "route.csv").exists()
+    assert len(list(tmp_path.glob("route.json.*.npz"))) == 1 and (tmp_path / "route.csv").exists()
     code, stdout, _ = run(["check", str(out), "--workers", "1", "-q"], capsys)
     assert code == 0 and "FAIL" not in stdout and "points" in stdout
     code, stdout, _ = run(["check", str(out), "--workers", "1", "--min-dt", "5", "-q"], capsys)
@@ -218,7 +218,7 @@ def test_unreachable_scheduler_fails_before_any_work(tmp_path, capsys, monkeypat
         ["pool", "--n", "2", "--scheduler", "tcp://127.0.0.1:9", "-q", "-o", str(out)], out, capsys
     )
     assert "cannot reach the Dask scheduler" in err
-    assert not out.with_suffix(".npz").exists()
+    assert not list(tmp_path.glob("*.npz"))
 
 
 def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
@@ -279,3 +279,57 @@ def test_reference_posture_in_collision(tmp_path, capsys):
     argv = ["pool", "--n", "3", "--workers", "1", "--config", path, "-o", str(out), "-q"]
     err = assert_fails_cleanly(argv, out, capsys)
     assert "stance.reference_posture: 'half_sitting' with stance.reference_joints is in collision" in err
+
+
+def test_route_routes_a_repeated_posture_once_and_says_so(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    data = yaml.safe_load(EXAMPLE_POOL.read_text())
+    data["postures"] = [data["postures"][3], data["postures"][4], data["postures"][3]]
+    plan = tmp_path / "twice.yaml"
+    write_yaml(plan, data)
+    out = tmp_path / "route.yaml"
+    code, stdout, err = run(["route", str(plan), "--workers", "1", "-o", str(out)], capsys)
+    assert code == 0, err
+    assert "posture 2 repeats posture 0 (same chain and joints): routed once" in err
+    header = yaml.safe_load(out.read_text())
+    assert header["summary"]["repeated"] == [{"posture": 2, "same_as": 0}]
+    assert len(header["postures"]) == 2 and "2 of 2 postures" in stdout
+
+
+def test_simulate_bag_and_measure_take_a_route_whose_joints_are_in_another_order(route_file, tmp_path, capsys):
+    import numpy as np
+
+    from posegen.io import RecordedBag, read_arrays, write_with_arrays
+    from posegen.robot import ROUTE_ARRAYS
+
+    header = yaml.safe_load(route_file.read_text())
+    arrays = read_arrays(route_file, header.pop("arrays"), ROUTE_ARRAYS)
+    order = np.random.default_rng(0).permutation(len(header["trajectory"]["joint_names"]))
+    header["trajectory"]["joint_names"] = [header["trajectory"]["joint_names"][j] for j in order]
+    arrays = {k: v if v.ndim == 1 else np.asfortranarray(v[:, order]) for k, v in arrays.items()}
+    shuffled = tmp_path / "shuffled.yaml"
+    write_with_arrays(shuffled, header, arrays, compress=True)
+    joints = {}
+    for name, route in (("plain", route_file), ("shuffled", shuffled)):
+        bag = tmp_path / f"{name}_bag"
+        argv = ["simulate", str(route), "--bag", str(bag), "--rate", "100", "--seed", "3", "-q"]
+        code, _, err = run(argv, capsys)
+        assert code == 0, err
+        joints[name] = RecordedBag(bag).read_and_hash("/joint_states", [])[0]
+        out = tmp_path / f"measured_{name}.yaml"
+        code, _, err = run(["measure", str(bag), "--route", str(route), "--session", "s", "-q", "-o", str(out)], capsys)
+        assert code == 0, err
+        joints[name + " contacts"] = [c["joints"] for c in yaml.safe_load(out.read_text())["contacts"]]
+    assert joints["plain"].names == joints["shuffled"].names  # recorded in the robot's order
+    assert np.array_equal(joints["plain"].positions, joints["shuffled"].positions)
+    assert joints["plain contacts"] == joints["shuffled contacts"] and joints["plain contacts"]
+
+
+def test_q_holds_warnings_only_while_main_runs(tmp_path, capsys):
+    import logging
+    import logging.handlers
+
+    code, _, err = run(["check", str(tmp_path / "nothing.yaml"), "-q"], capsys)
+    assert code == 2 and err.count("\n") == 1
+    assert not any(isinstance(h, logging.handlers.MemoryHandler) for h in logging.getLogger().handlers)

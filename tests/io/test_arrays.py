@@ -20,24 +20,26 @@ def test_round_trip_is_exact(tmp_path):
     values = {"x": np.random.default_rng(0).normal(size=(5, 7))}
     write_with_arrays(path, {"format": "test"}, values)
     header = yaml.safe_load(path.read_text())
-    assert header["arrays"]["file"] == "thing.npz"
+    name = header["arrays"]["file"]
+    assert name == f"thing.yaml.{header['arrays']['sha256'][:12]}.npz"  # named by its content
     again = read_arrays(path, header["arrays"], ("x",))
     assert again["x"].tobytes() == values["x"].tobytes()
-    assert np.load(tmp_path / "thing.npz")["x"].shape == (5, 7)  # any numpy reads it
+    assert np.load(tmp_path / name)["x"].shape == (5, 7)  # any numpy reads it
 
 
 def test_changed_missing_or_incomplete_sidecar_is_refused(tmp_path):
     path = tmp_path / "thing.yaml"
     write_with_arrays(path, {"format": "test"}, ARRAYS)
     reference = yaml.safe_load(path.read_text())["arrays"]
+    sidecar = tmp_path / reference["file"]
     with pytest.raises(InputError, match="missing arrays c"):
         read_arrays(path, reference, ("a", "c"))
     with pytest.raises(InputError, match="must name its sidecar"):
         read_arrays(path, "thing.npz", ("a",))
-    (tmp_path / "thing.npz").write_bytes(encode_arrays({**ARRAYS, "a": ARRAYS["a"] * 2}))
+    sidecar.write_bytes(encode_arrays({**ARRAYS, "a": ARRAYS["a"] * 2}))
     with pytest.raises(InputError, match="sha256 differs"):
         read_arrays(path, reference, ("a",))
-    (tmp_path / "thing.npz").unlink()
+    sidecar.unlink()
     with pytest.raises(InputError, match="cannot read"):
         read_arrays(path, reference, ("a",))
     (tmp_path / "thing.npz").write_bytes(b"not a zip")

@@ -8,7 +8,16 @@ import sys
 import pytest
 
 from posegen.errors import OutputError
-from posegen.io import OutputKind, OutputLock, atomic_path, check_writable, claim_output, lock_path, write_atomic
+from posegen.io import (
+    OutputKind,
+    OutputLock,
+    atomic_path,
+    check_apart,
+    check_writable,
+    claim_output,
+    lock_path,
+    write_atomic,
+)
 
 
 def test_a_second_writer_fails_at_once_naming_the_first(tmp_path):
@@ -118,3 +127,25 @@ def test_the_next_writer_removes_what_a_killed_write_left(tmp_path):
     with claim_output(output, beside=(plot,)):
         assert not any(p.exists() for p in left)
     assert [p.name for p in tmp_path.iterdir()] == [".other.yaml.x3.tmp.yaml"]
+
+
+def test_an_output_may_not_be_share_or_hold_an_input(tmp_path):
+    source = tmp_path / "r.yaml"
+    source.write_text("header")
+    sidecar = tmp_path / "r.yaml.0123456789ab.npz"
+    sidecar.write_bytes(b"arrays")
+    (tmp_path / "link.yaml").hardlink_to(source)
+    (tmp_path / "alias.yaml").symlink_to(source)
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    for output, message in (
+        (source, "not overwriting"),
+        (sidecar, "not overwriting"),  # read with its header
+        (tmp_path / "link.yaml", "not overwriting"),  # the same file by another name
+        (tmp_path / "alias.yaml", "not overwriting"),
+        (bag / "m.yaml", "inside the input"),
+        (tmp_path, "holds the input"),
+    ):
+        with pytest.raises(OutputError, match=message):
+            check_apart([output], [source, bag, None])
+    check_apart([tmp_path / "other.yaml", None], [source, bag, None])  # apart: nothing said

@@ -217,3 +217,61 @@ def test_a_corrupt_chunk_is_an_error(recorded, tmp_path):
     storage.write_bytes(bytes(data))
     with pytest.raises(InputError, match="corrupt MCAP chunk"):
         RecordedBag(tmp_path / "copy").read("/joint_states")
+
+
+def _stamped_messages(joints, stamps_s, logged_s):
+    """Joint state messages whose header stamps are ``stamps_s``, recorded at ``logged_s``."""
+    layout = joint_state_layout(NAMES)
+    stamps = np.round(np.asarray(stamps_s) * 1e9).astype(np.int64)
+    rows = encode(layout, stamps, [joints.positions, joints.positions, np.zeros((len(stamps), 0))])
+    logged = np.round(np.asarray(logged_s) * 1e9).astype(np.int64)
+    return [("/joint_states", JOINT, int(t), r.tobytes()) for t, r in zip(logged, rows, strict=True)]
+
+
+JOINT = "sensor_msgs/msg/JointState"
+
+
+def test_a_clock_that_goes_back_is_an_error_naming_the_jump(tmp_path):
+    joints, _ = session(200)
+    logged = 10.0 + joints.times_s
+    stamps = logged.copy()
+    stamps[100:] -= 3.0  # the joint clock jumps back 3 s
+    _rosbags_bag(tmp_path / "bag", _stamped_messages(joints, stamps, logged))
+    with pytest.raises(InputError, match=r"topic '/joint_states': the clock goes back 2\.998 s at message 100"):
+        RecordedBag(tmp_path / "bag").read("/joint_states")
+
+
+def test_stamps_a_little_out_of_order_are_sorted(tmp_path):
+    joints, _ = session(200)
+    logged = 10.0 + joints.times_s
+    stamps = logged.copy()
+    stamps[[50, 51]] = stamps[[51, 50]]  # two messages logged in the other order (2 ms)
+    _rosbags_bag(tmp_path / "bag", _stamped_messages(joints, stamps, logged))
+    back, _ = RecordedBag(tmp_path / "bag").read("/joint_states")
+    assert np.all(np.diff(back.times_s) > 0) and np.array_equal(back.positions[50], joints.positions[51])
+
+
+def test_joint_states_that_are_not_finite_are_an_error(tmp_path):
+    joints, _ = session(200)
+    positions = joints.positions.copy()
+    positions[30, 1] = np.nan
+    write_recording(tmp_path / "bag", JointStates(NAMES, joints.times_s, positions), "/joint_states", {}, {})
+    with pytest.raises(InputError, match=r"1 of 200 messages hold values that are not finite \(first at 0\.060 s\)"):
+        RecordedBag(tmp_path / "bag").read("/joint_states")
+
+
+def test_wrench_samples_that_are_not_finite_are_left_out_and_said(tmp_path, caplog):
+    joints, wrench = session(200)
+    forces = wrench.forces.copy()
+    forces[[5, 6, 7], 2] = np.nan
+    bad = Wrenches(wrench.times_s, forces, wrench.torques)
+    write_recording(tmp_path / "bag", joints, "/joint_states", {"/ft": bad}, {})
+    _, (read,) = RecordedBag(tmp_path / "bag").read("/joint_states", ["/ft"])
+    assert len(read.times_s) == 197 and np.isfinite(read.forces).all()
+    assert "topic '/ft': 3 of 200 messages hold values that are not finite (first at 0.010 s): left out" in caplog.text
+    forces[:] = np.nan
+    write_recording(
+        tmp_path / "all", joints, "/joint_states", {"/ft": Wrenches(wrench.times_s, forces, wrench.torques)}, {}
+    )
+    with pytest.raises(InputError, match="200 of 200 messages hold values that are not finite"):
+        RecordedBag(tmp_path / "all").read("/joint_states", ["/ft"])

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from posegen.errors import InputError
-from posegen.model import read_measurements, write_measurements
+from posegen.model import measurement_item, read_measurements, write_measurements
 
 
 @pytest.mark.parametrize(
@@ -80,3 +80,73 @@ def test_posegen_format_round_trip(scene, real_data, tmp_path):
 def test_missing_file(scene, tmp_path):
     with pytest.raises(InputError, match="not found"):
         read_measurements(tmp_path / "nothing.csv", scene)
+
+
+def _one_row_csv(path, names, values):
+    path.write_text(
+        f"joint_names,{','.join(names)}\n"
+        f"gripper,talos/left_gripper,handle,x,joint_states,{','.join(repr(float(v)) for v in values)}\n"
+    )
+    return path
+
+
+def test_a_free_joint_without_a_column_is_an_error_naming_it(scene, tmp_path):
+    names = list(scene.joint_names)
+    free = [n for n, locked in zip(names, scene.locked, strict=True) if not locked]
+    gone = free[len(free) // 2]
+    kept = [n for n in names if n != gone]
+    values = [scene.reference[scene.joint_index(n)] for n in kept]
+    with pytest.raises(InputError, match=rf"no column for joint {gone} \(only the joints the config locks"):
+        read_measurements(_one_row_csv(tmp_path / "m.csv", kept, values), scene)
+
+
+def test_a_locked_joint_may_be_absent(scene, tmp_path):
+    names = list(scene.joint_names)
+    locked = [n for n, lock in zip(names, scene.locked, strict=True) if lock]
+    if not locked:
+        pytest.skip("the config locks no joint")
+    kept = [n for n in names if n != locked[0]]
+    values = [scene.reference[scene.joint_index(n)] for n in kept]
+    contacts = read_measurements(_one_row_csv(tmp_path / "m.csv", kept, values), scene).contacts
+    assert contacts.joints[0, scene.joint_index(locked[0])] == scene.reference[scene.joint_index(locked[0])]
+
+
+def test_a_joint_column_given_twice_is_an_error(scene, tmp_path):
+    names = [*scene.joint_names, scene.joint_names[3]]
+    values = [scene.reference[scene.joint_index(n)] for n in names]
+    with pytest.raises(InputError, match=rf"joint column {scene.joint_names[3]} given twice"):
+        read_measurements(_one_row_csv(tmp_path / "m.csv", names, values), scene)
+
+
+def test_a_yaml_file_without_a_free_joint_is_an_error(scene, tmp_path):
+    from posegen.io import write_yaml
+    from posegen.model import Contacts, measurements_to_dict
+
+    contacts = Contacts(scene.reference[None, :].copy(), ("left",), ("s",), ("c",))
+    data = measurements_to_dict(scene, contacts, {"seed": 0})
+    free = next(n for n, locked in zip(scene.joint_names, scene.locked, strict=True) if not locked)
+    k = data["joint_names"].index(free)
+    data["joint_names"].pop(k)
+    data["contacts"][0]["joints"].pop(k)
+    write_yaml(tmp_path / "m.yaml", data)
+    with pytest.raises(InputError, match=rf"no column for joint {free}"):
+        read_measurements(tmp_path / "m.yaml", scene)
+
+
+@pytest.mark.parametrize(
+    ("item", "parsed"),
+    [
+        ("m.yaml", ("m.yaml", None)),
+        ("m.yaml@day1", ("m.yaml", "day1")),
+        ("day@@2.csv", ("day@2.csv", None)),
+        ("day@@2.csv@morning", ("day@2.csv", "morning")),
+        ("a@@@@b.csv@s@@1", ("a@@b.csv", "s@1")),
+    ],
+)
+def test_measurement_items_and_their_escaped_at_signs(item, parsed):
+    assert measurement_item(item) == parsed
+
+
+def test_an_at_sign_without_a_session_is_an_error():
+    with pytest.raises(InputError, match="no session name after '@'"):
+        measurement_item("m.yaml@")

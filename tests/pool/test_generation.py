@@ -127,9 +127,10 @@ def test_pool_file_with_sidecar_round_trip(small_pool, tmp_path):
     assert header["format_version"] == 2 and "postures" not in header
     assert header["summary"]["accepted"] == len(small_pool.postures)
     assert load_pool(path) == small_pool
-    first = (path.read_bytes(), (tmp_path / "pool.npz").read_bytes())
+    sidecar = header["arrays"]["file"]
+    first = (path.read_bytes(), (tmp_path / sidecar).read_bytes())
     write_pool(tmp_path / "again" / "pool.yaml", small_pool)
-    assert first == ((tmp_path / "again" / "pool.yaml").read_bytes(), (tmp_path / "again" / "pool.npz").read_bytes())
+    assert first == ((tmp_path / "again" / "pool.yaml").read_bytes(), (tmp_path / "again" / sidecar).read_bytes())
 
 
 def test_table_out_of_reach_is_infeasible(config):

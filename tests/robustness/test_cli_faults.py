@@ -23,9 +23,9 @@ import pytest
 import yaml
 
 from posegen.cli import main
-from posegen.io import JointStates, OutputLock, Wrenches, write_recording, write_yaml
+from posegen.io import JointStates, OutputLock, Wrenches, read_arrays, write_recording, write_with_arrays, write_yaml
 from posegen.model import Contacts, measurements_to_dict
-from posegen.robot import Scene, load_config
+from posegen.robot import ROUTE_ARRAYS, Scene, load_config
 from tests.conftest import CONFIG, EXAMPLE_POOL
 
 UNWRITABLE = "/sys/posegen-test"  # no file can be created there, not even by root
@@ -76,6 +76,19 @@ MEASUREMENT_FILES = {  # bad measurement files (posegen YAML or recorded CSV): i
     "NaN joint angle": "nan_measurements",
     "no contact": "no_contact_measurements",
     "unknown joint in a CSV": "unknown_joint_csv",
+}
+BAD_ROUTES = {  # routes no reader accepts (posegen check reports each): input name
+    "a NaN time": "route_nan_time",
+    "a last time of 1e39 s": "route_huge_time",
+    "a NaN last time": "route_nan_last_time",
+    "a repeated time": "route_repeated_time",
+    "a time going back": "route_reversed_time",
+    "a NaN position": "route_nan_position",
+    "an infinite velocity": "route_inf_velocity",
+    "more points than declared": "route_count",
+    "no segment": "route_no_segment",
+    "format_version 3": "route_version_3",
+    "a NaN segment time": "route_nan_segment_time",
 }
 CALIBRATION_FILES = {  # bad calibration.yaml files: input name
     "binary": "binary",
@@ -128,6 +141,10 @@ TABLE = [
     F("check", "missing file", "{out}/nothing.yaml"),
     F("check", "a folder", "{out}"),
     F("check", "malformed route", "{malformed_route}"),
+    F("check", "an empty pool", "{empty_pool}", expect="holds no posture"),
+    F("check", "a route of format_version 3", "{route_version_3}", expect="reads versions 1 and 2"),
+    F("check", "a route with a NaN segment time", "{route_nan_segment_time}", expect="segment times must be finite"),
+    F("check", "a route with more points than declared", "{route_count}", expect="the header declares"),
     F("check", "binary config", "{pool}", "--config", "{binary}"),
     F("check", "--workers 0", "{pool}", "--workers", "0"),
     F("check", "malformed --scheduler", "{pool}", "--scheduler", "::::"),
@@ -220,6 +237,24 @@ TABLE = [
     F("calibrate", "no contact", "{no_contact_measurements}", *C, "-o", "{out}/cal"),
     F("calibrate", "too few contacts", "{few_measurements}", *C, "-o", "{out}/cal"),
     F("calibrate", "unknown joint in a CSV", "{unknown_joint_csv}", *C, "-o", "{out}/cal"),
+    F(
+        "calibrate",
+        "a free joint without a column",
+        "{missing_joint_csv}",
+        *C,
+        "-o",
+        "{out}/cal",
+        expect="no column for",
+    ),
+    F("calibrate", "a joint column twice", "{twice_joint_csv}", *C, "-o", "{out}/cal", expect="given twice"),
+    F("calibrate", "a row left out, then too few (-q: one line)", "{one_good_row_csv}", *C, "-o", "{out}/cal"),
+    F(
+        "calibrate",
+        "a file trained on and held out",
+        *("{measurements}", "--validate", "{measurements}", *C, "-o", "{out}/cal"),
+        expect="a training file and a held-out one",
+    ),
+    F("calibrate", "an '@' with no session", "{measurements}@", *C, "-o", "{out}/cal", expect="no session name"),
     F("calibrate", "missing file", "{out}/nothing.csv", *C, "-o", "{out}/cal"),
     F("calibrate", "binary held-out file", "{measurements}", "--validate", "{binary}", *C, "-o", "{out}/cal"),
     F("calibrate", "--prior-scale 0", "{measurements}", "--prior-scale", "0", *C, "-o", "{out}/cal"),
@@ -259,12 +294,20 @@ TABLE = [
         expect="(one_spot_measurements.yaml:0, one_spot_measurements.yaml:2, one_spot_measurements.yaml:4 and 3 more)",
     ),
     F("calibrate", "output is a file", "{measurements}", *C, "-o", "{existing}"),
+    F("calibrate", "output folder holds other files", "{measurements}", *C, "-o", "{out}", expect="not replacing it"),
     F("calibrate", "unwritable output", "{measurements}", *C, "-o", f"{UNWRITABLE}/cal"),
     F("calibrate", "output being written", "{measurements}", *C, "-o", "{out}/cal", locked="{out}/cal"),
     # view
     *bad_inputs("view", PLAN_FILES, "--html", "{out}/v.html"),
     F("view", "binary file, live", "{binary}", "--port", "0"),
     F("view", "malformed route", "{malformed_route}", "--html", "{out}/v.html"),
+    F("view", "a posture of an unknown chain", "{tail_chain_pool}", "--html", "{out}/v.html", expect="chain 'tail'"),
+    *(F("view", f"a route with {what}", f"{{{name}}}", "--html", "{out}/v.html") for what, name in BAD_ROUTES.items()),
+    *(F("export", f"a route with {what}", f"{{{name}}}", "--bag", "{out}/b") for what, name in BAD_ROUTES.items()),
+    *(
+        F("simulate", f"--bag: a route with {what}", f"{{{name}}}", "--bag", "{out}/b")
+        for what, name in BAD_ROUTES.items()
+    ),
     F("view", "a folder that is no calibration", "{out}", "--html", "{out}/v.html"),
     F("view", "missing file", "{out}/nothing.yaml", "--html", "{out}/v.html"),
     F("view", "binary config", "{pool}", "--config", "{binary}", "--html", "{out}/v.html"),
@@ -392,6 +435,8 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
             meta.write_text(meta.read_text().replace("storage_identifier: mcap", "storage_identifier: tape"))
         made[name] = str(copy)
     made["route"] = str(route_file)
+    made.update(bad_routes(route_file, folder))
+    put("tail_chain_pool.yaml", pool | {"postures": [pool["postures"][0] | {"chain": "tail"}]})
     put("malformed_route.yaml", {"format": "posegen-route", "format_version": 1, "trajectory": {"points": 3}})
 
     config = _config_data()
@@ -473,6 +518,42 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     names = ",".join(scene.joint_names).replace("torso_1_joint", "torso_one_joint")
     angles = ",".join(repr(float(v)) for v in scene.reference)
     put("unknown_joint.csv", f"joint_names,{names}\ngripper,talos/left_gripper,handle,x,joint_states,{angles}\n")
+    row = "gripper,talos/left_gripper,handle,x,joint_states,"
+    free = int(np.flatnonzero(~scene.locked)[-1])  # a joint the config does not lock
+    names = ",".join(n for j, n in enumerate(scene.joint_names) if j != free)
+    kept = ",".join(a for j, a in enumerate(angles.split(",")) if j != free)
+    put("missing_joint.csv", f"joint_names,{names}\n{row}{kept}\n")
+    names = ",".join([*scene.joint_names, scene.joint_names[0]])
+    put("twice_joint.csv", f"joint_names,{names}\n{row}{angles},{angles.split(',')[0]}\n")
+    names = ",".join(scene.joint_names)
+    put("one_good_row.csv", f"joint_names,{names}\n{row}{angles}\n{row}text,{angles}\n")
+    return made
+
+
+def bad_routes(route_file: Path, folder: Path) -> dict[str, str]:
+    """Copies of a good route, each with one defect no reader accepts (a consistent header and sidecar)."""
+    header = yaml.safe_load(route_file.read_text())
+    good = read_arrays(route_file, header.pop("arrays"), ROUTE_ARRAYS)
+    edits = {
+        "route_nan_time": lambda a, h: a["time_from_start"].__setitem__(5, np.nan),
+        "route_huge_time": lambda a, h: a["time_from_start"].__setitem__(-1, 1e39),
+        "route_nan_last_time": lambda a, h: a["time_from_start"].__setitem__(-1, np.nan),
+        "route_repeated_time": lambda a, h: a["time_from_start"].__setitem__(5, a["time_from_start"][4]),
+        "route_reversed_time": lambda a, h: a["time_from_start"].__setitem__(5, a["time_from_start"][3]),
+        "route_nan_position": lambda a, h: a["positions"].__setitem__((3, 2), np.nan),
+        "route_inf_velocity": lambda a, h: a["velocities"].__setitem__((3, 2), np.inf),
+        "route_count": lambda a, h: h["trajectory"].update(points=h["trajectory"]["points"] - 1),
+        "route_no_segment": lambda a, h: h.update(segments=[]),
+        "route_version_3": lambda a, h: h.update(format_version=3),
+        "route_nan_segment_time": lambda a, h: h["segments"][1].update(start_s=float("nan")),
+    }
+    made = {}
+    for name, edit in edits.items():
+        arrays = {k: v.copy() for k, v in good.items()}
+        edited = yaml.safe_load(yaml.safe_dump(header))
+        edit(arrays, edited)
+        write_with_arrays(folder / f"{name}.yaml", edited, arrays, compress=True)
+        made[name] = str(folder / f"{name}.yaml")
     return made
 
 

@@ -8,7 +8,7 @@ import yaml
 
 from posegen.errors import InputError
 from posegen.io import encode_arrays, read_arrays, write_with_arrays
-from posegen.robot import ROUTE_ARRAYS, SegmentType, read_route
+from posegen.robot import ROUTE_ARRAYS, SegmentType, read_route, route_arrays
 from posegen.route import PoseInvariant, RouteInvariant, plan_route, route_header, verify_route, write_route
 
 ROWS = [3, 4]
@@ -115,9 +115,86 @@ def test_a_dropped_point(scene, route_file, tmp_path):
         for name in arrays:
             arrays[name] = np.delete(arrays[name], k, axis=0)
 
-    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit))
-    assert not result.ok
-    assert any("the header declares" in e for e in worst[RouteInvariant.STRUCTURE].examples)
+    with pytest.raises(InputError, match=r"holds \d+ rows, the header declares \d+"):
+        read_route(corrupted(route_file, tmp_path, edit))  # every reader refuses it, check included
+
+
+def test_arrays_larger_than_declared_are_refused_before_they_are_read(route_file, tmp_path):
+    """A small sidecar deflating to many points (the 9.6 MB file of 4 M points) is refused from its headers."""
+
+    def edit(arrays, header):
+        m = 2_000_000
+        arrays["time_from_start"] = np.zeros(m)
+        for name in ROUTE_ARRAYS[1:]:
+            arrays[name] = np.zeros((m, arrays[name].shape[1]), dtype=np.float32)
+
+    path = corrupted(route_file, tmp_path, edit)
+    assert sum(f.stat().st_size for f in tmp_path.glob("route.yaml.*.npz")) < 1e6  # deflate: ~1 kB per MB of zeros
+    with pytest.raises(InputError, match=r"holds 2000000 rows, the header declares"):
+        read_route(path)
+
+
+@pytest.mark.parametrize(
+    ("edit_header", "message"),
+    [
+        (lambda h: h.update(format_version=3), "format_version 3: this posegen reads versions 1 and 2"),
+        (lambda h: h["segments"][1].update(start_s=float("nan")), "segment times must be finite"),
+        (lambda h: h["trajectory"].update(points=-1), "must be a count"),
+    ],
+    ids=["format_version 3", "NaN segment time", "negative point count"],
+)
+def test_headers_no_reader_accepts(route_file, tmp_path, edit_header, message):
+    with pytest.raises(InputError, match=message):
+        read_route(corrupted(route_file, tmp_path, edit_header=edit_header))
+
+
+def test_an_empty_segment_table_fails_the_check(scene, route_file, tmp_path):
+    path = corrupted(route_file, tmp_path, edit_header=lambda h: h.update(segments=[]))
+    result, worst = verdict(scene, path)
+    assert not result.ok and "the segment table is empty" in worst[RouteInvariant.STRUCTURE].detail
+
+
+@pytest.mark.parametrize("k", [5, -1], ids=["a NaN time", "a NaN last time"])
+def test_a_nan_time_is_reported_not_a_crash(scene, route_file, tmp_path, k):
+    path = corrupted(route_file, tmp_path, lambda arrays, _: arrays["time_from_start"].__setitem__(k, np.nan))
+    result, worst = verdict(scene, path)
+    assert not result.ok and "time_from_start nan" in worst[RouteInvariant.FINITE].detail
+
+
+def test_a_last_time_no_clock_holds_fails_the_check(scene, route_file, tmp_path):
+    path = corrupted(route_file, tmp_path, lambda arrays, _: arrays["time_from_start"].__setitem__(-1, 1e39))
+    result, worst = verdict(scene, path)
+    assert not result.ok and "beyond the longest route a reader accepts" in worst[RouteInvariant.TIMES].detail
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda a, h: a["time_from_start"].__setitem__(5, np.nan), "time_from_start at point 5 is not a finite"),
+        (lambda a, h: a["time_from_start"].__setitem__(-1, 1e39), r"end within 1e\+06 s"),
+        (lambda a, h: a["time_from_start"].__setitem__(5, a["time_from_start"][4]), "increase by at least"),
+        (lambda a, h: a["time_from_start"].__setitem__(5, a["time_from_start"][3]), "increase by at least"),
+        (lambda a, h: a["positions"].__setitem__((3, 2), np.nan), "positions at point 3 is not a finite"),
+        (lambda a, h: a["velocities"].__setitem__((3, 2), np.inf), "velocities at point 3 is not a finite"),
+        (lambda a, h: h.update(segments=[]), "the segment table is empty"),
+        (lambda a, h: h["segments"].pop(), "the segments end at point"),
+    ],
+    ids=[
+        "NaN time",
+        "last time 1e39",
+        "repeated time",
+        "reversed time",
+        "NaN position",
+        "inf velocity",
+        "no segment",
+        "a segment missing",
+    ],
+)
+def test_the_readers_of_points_refuse_what_no_controller_can_run(route_file, tmp_path, edit, message):
+    """export, simulate --bag and view read points through route_arrays: one set of rules."""
+    data = read_route(corrupted(route_file, tmp_path, edit))
+    with pytest.raises(InputError, match=message):
+        route_arrays(data, "r.yaml")
 
 
 def test_positions_jumping_between_two_points(scene, route_file, tmp_path):
@@ -137,10 +214,11 @@ def test_a_sidecar_that_is_not_the_headers(route_file, tmp_path):
     shutil.copy(route_file, path)
     arrays = read_arrays(route_file, yaml.safe_load(route_file.read_text())["arrays"], ROUTE_ARRAYS)
     arrays["positions"][0, 0] += 1e-3
-    path.with_suffix(".npz").write_bytes(encode_arrays(arrays, compress=True))
+    sidecar = tmp_path / yaml.safe_load(path.read_text())["arrays"]["file"]
+    sidecar.write_bytes(encode_arrays(arrays, compress=True))
     with pytest.raises(InputError, match="sha256"):
         read_route(path)
-    path.with_suffix(".npz").unlink()
+    sidecar.unlink()
     with pytest.raises(InputError, match="cannot read its arrays"):
         read_route(path)
 

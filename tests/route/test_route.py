@@ -6,6 +6,7 @@ import itertools
 import numpy as np
 import pytest
 
+from posegen.io import sidecars_of
 from posegen.model import build_design
 from posegen.robot import SegmentType, read_route, route_arrays
 from posegen.route import (
@@ -142,7 +143,9 @@ def test_same_route_whatever_the_number_of_workers(scene, example_pool, tmp_path
         route = plan_route(scene, postures, seed=3, workers=workers)
         files.append(write(route, example_pool, rows, folder / "route.yaml"))
     assert files[0].read_bytes() == files[1].read_bytes()
-    assert files[0].with_suffix(".npz").read_bytes() == files[1].with_suffix(".npz").read_bytes()
+    sidecars = [sidecars_of(f) for f in files]
+    assert [s.name for s in sidecars[0]] == [s.name for s in sidecars[1]] and len(sidecars[0]) == 1
+    assert sidecars[0][0].read_bytes() == sidecars[1][0].read_bytes()
 
 
 def unreachable(scene, posture):
