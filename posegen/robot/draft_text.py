@@ -8,7 +8,7 @@ from typing import Any
 import yaml
 
 from posegen.errors import ConfigError
-from posegen.io import claim_output, write_atomic
+from posegen.io import check_apart, claim_output, write_atomic
 from posegen.robot.additions import Capsule, DisabledPair
 from posegen.robot.collision_matrix import PairSurvey, survey_scene_pairs
 from posegen.robot.config import load_config, parse_config
@@ -122,6 +122,7 @@ def write_draft(robot: str, output: str, srdf: str | None = None, samples: int =
         OutputError: ``output`` cannot be written, or another posegen is writing it.
 
     """
+    check_apart([output], [srdf])  # never over the SRDF it reads
     with claim_output(output):  # checked and locked before any work
         draft = draft_robot(robot, srdf, samples, seed)
         text = render_draft(draft, seed)

@@ -67,6 +67,10 @@ ROWS = {  # what: argv ({here}: the row's folder, holding copies of the original
         ["simulate", "{here}/route.yaml", "--bag", "{here}"],
         "holds the input",
     ),
+    "robot init -o its --srdf": (
+        ["robot", "init", "talos", "--srdf", "{here}/config.yaml", "-o", "{here}/config.yaml"],
+        "not overwriting",
+    ),
     "calibrate -o a folder holding its measurements": (
         ["calibrate", "{here}/m.yaml", "-o", "{here}"],
         "holds the input",
