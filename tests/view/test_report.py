@@ -22,6 +22,7 @@ def test_the_report_is_written_beside_calibration_yaml_with_every_section(calibr
     path, text = report
     assert path == calibration_folder.path / REPORT_FILE
     for title in (
+        "What to load: the deliverables",
         "Residuals before and after calibration",
         "Every contact",
         "Model selection: repeated grouped cross-validation",
@@ -33,6 +34,17 @@ def test_the_report_is_written_beside_calibration_yaml_with_every_section(calibr
         assert f"<h2>{title}</h2>" in text
     images = re.findall(r"<img src=\"data:image/png;base64,", text)
     assert len(images) == 4  # residuals, their spread, singular values, correlation
+
+
+def test_what_to_load_names_each_file_with_its_predicted_and_held_out_error(calibration_folder, report):
+    _, text = report
+    section = text.split("<h2>What to load: the deliverables</h2>")[1].split("<h2>")[0]
+    deliverables = calibration_folder.calibration.deliverables
+    assert "calibrated.urdf, calibrated.yaml, offsets.yaml" in section
+    assert deliverables.urdf.candidate.name in section and "CV predicted" in section
+    assert f"held-out ({len(calibration_folder.held_out)} contacts)" in section
+    z = deliverables.urdf.result.chains["left"].mean_abs[0] * 1e3
+    assert f"{round(z, 3)}" in section
 
 
 def test_every_identified_parameter_is_listed_with_its_std(calibration_folder, report):
