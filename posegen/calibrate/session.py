@@ -161,7 +161,11 @@ def simulate_session(
         labels,
         planned_kinds(scene, chains),
     )
-    model, theta = perturbed_robot(scene, chains, [session], perturbation, seed, planned.kinds_by_chain())
+    # The true robot has every chain of the config, whichever the route touches with: the same
+    # seed is the same robot for every route (a session's batches, one arm's route or both).
+    every = tuple(c.name for c in scene.config.chains)
+    kinds = {c: (scene.chain(c).contact_kind,) for c in every} | planned.kinds_by_chain()
+    model, theta = perturbed_robot(scene, every, [session], perturbation, seed, kinds)
     settled, converged = settle_true(model, theta, planned, stand=False)  # the legs follow the route
     if not np.all(converged):
         label = planned.labels[int(np.flatnonzero(~converged)[0])]

@@ -14,6 +14,7 @@ recording times when a topic leaves its stamps at zero); every series is sorted 
 from __future__ import annotations
 
 import hashlib
+import json
 import threading
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -26,7 +27,7 @@ from numpy.typing import NDArray
 
 from posegen.errors import InputError, reason
 from posegen.io import cdr, mcap_index
-from posegen.io.bag_writer import writing_bag
+from posegen.io.bag_writer import PROVENANCE_KEY, writing_bag
 from posegen.io.cdr import FloatArray
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
@@ -158,7 +159,10 @@ class RecordedBag:
             self.files = tuple(self.path / Path(str(f)).name for f in info["relative_file_paths"])
             self.start_ns = int(info["starting_time"]["nanoseconds_since_epoch"])
             compression = str(info.get("compression_mode") or "").lower()
-        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
+            custom = info.get("custom_data") or {}
+            written = custom.get(PROVENANCE_KEY) if isinstance(custom, dict) else None
+            self.provenance: dict[str, Any] | None = json.loads(written) if isinstance(written, str) else None
+        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:  # JSON too
             raise InputError(f"{self.path}: not a rosbag2 bag (metadata.yaml: {reason(exc)})") from exc
         if self.storage not in STORAGES:
             raise InputError(f"{self.path}: unknown storage plugin '{self.storage}'; valid: {', '.join(STORAGES)}")
