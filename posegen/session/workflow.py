@@ -142,7 +142,7 @@ def _check_bag(index: SessionIndex, folder: Path, recorded: RecordedBag, digest:
     last = index.batches[-1]
     for batch in index.batches:
         recording = batch.recording
-        if recording is not None and recording.bag_sha256 == digest and batch is not last:
+        if recording is not None and recording.bag_sha256 == digest and (batch is not last or index.done):
             raise InputError(
                 f"{recorded.path}: this bag was already added (batch {batch.number}, sha256 {digest[:12]})"
             )

@@ -6,6 +6,7 @@ two candidate models and one fold seed: every step runs, in about two minutes. T
 reuse its recordings (a copy of the started session is the robot before its first batch).
 """
 
+import dataclasses
 import shutil
 
 import numpy as np
@@ -28,6 +29,7 @@ from posegen.session import (
     rehearse_session,
     session_status,
     start_session,
+    write_index,
 )
 from tests.cli.test_cli import assert_one_line_error
 from tests.conftest import EXAMPLE_POOL
@@ -213,3 +215,21 @@ def test_a_batch_played_in_part_plans_its_missing_postures_again(started, rehear
     assert rows[len(recording.missing) :] == [r for r in follow_up if r not in recording.missing]
     assert sorted(added.next_batch.pool_rows) == sorted(rows)  # routed (in the route's own order)
     assert np.isfinite(list(added.batch.assessment.predicted_z_mm.values())).all()
+
+
+def test_the_session_stops_when_every_chain_meets_the_target(started, rehearsed, tmp_path, capsys):
+    copy = copy_of(started, tmp_path)
+    index = read_index(copy)
+    write_index(copy, dataclasses.replace(index, settings=dataclasses.replace(index.settings, target_mm=50.0)))
+    bag = str(rehearsed[0] / "batch_001" / REHEARSAL_BAG)
+    assert main(["session", "add", str(copy), bag, "--workers", "2", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "ok the target 50 mm" in out
+        and f"session: done -> the deliverables are in {copy}/batch_001/calibration/" in out
+    )
+    done = read_index(copy)
+    assert done.done and len(done.batches) == 1 and not (copy / "batch_002").exists()
+    assert (copy / "batch_001" / "calibration" / "calibrated.urdf").is_file()
+    assert main(["session", "add", str(copy), bag, "-q"]) == 2
+    assert "already added" in capsys.readouterr().err
