@@ -16,6 +16,7 @@ from __future__ import annotations
 import statistics
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +63,75 @@ def true_error_mm(calibration: Calibration, held: Contacts) -> float:
     return max(float(np.mean(np.abs(residuals[by_chain == c, 0])) * 1e3) for c in sorted(set(mine.chains)))
 
 
+ORDERS = ("session (its recordings)", "session postures", "IROC", "random")
+
+
+@dataclass(frozen=True)
+class Split:
+    """The pool split into the postures a session may choose (the design pool) and held-out ones."""
+
+    scene: Scene
+    joints: np.ndarray  # (n, nj) the whole pool
+    chains: list[str]
+    spots: list[str]
+    design_rows: list[int]  # pool rows of the design pool, in its order
+    held_rows: list[int]
+    ranking: list[int]  # IROC ranking of the design pool (its rows)
+
+    def contacts(self, rows: Sequence[int], robot: Robot) -> Contacts:
+        """The robot's contacts at some pool rows."""
+        chains, spots = [self.chains[i] for i in rows], [self.spots[i] for i in rows]
+        return robot_contacts(self.scene, self.joints[list(rows)], chains, spots, robot)
+
+
+def split_pool(pool_path: Path, workdir: Path, held_out: int) -> tuple[Split, Path]:
+    """Hold postures out of the pool (seed 0); write the design pool; rank it by IROC."""
+    pool = load_pool(pool_path)
+    scene = scene_for(pool.provenance, None)
+    held = sorted(np.random.default_rng(0).choice(len(pool.postures), size=held_out, replace=False).tolist())
+    design_rows = [i for i in range(len(pool.postures)) if i not in set(held)]
+    data = pool.to_dict()
+    data["postures"] = [data["postures"][i] for i in design_rows]
+    design_pool = workdir / "session_pool.yaml"
+    write_yaml(design_pool, data)
+    joints, chains = pool.joints(), [p.chain for p in pool.postures]
+    design, _ = build_design(scene, joints[design_rows], [chains[i] for i in design_rows])
+    ranking = list(iroc(design).ranking)
+    spots = [p.spot for p in pool.postures]
+    return Split(scene, joints, chains, spots, design_rows, held, ranking), design_pool
+
+
+def judge_seed(
+    split: Split, design_pool: Path, folder: Path, robot: Robot, settings: SessionSettings, max_batches: int
+) -> tuple[list[int], dict[str, list[float]], float]:
+    """Rehearse one robot; the contact counts after each batch, each order's true error there, the last prediction."""
+    with open_backend(2) as backend:
+        start_session(str(design_pool), str(folder), settings, backend)
+        rehearse_session(str(folder), robot, backend, max_batches)
+    lean = Settings(candidates=settings.candidates, fold_seeds=settings.fold_seeds, seed=settings.seed)
+    held = split.contacts(split.held_rows, robot)
+    shuffled = np.random.default_rng(robot.seed).permutation(len(split.design_rows)).tolist()
+    recorded: Contacts | None = None
+    planned: list[int] = []  # design pool rows
+    errors: dict[str, list[float]] = {k: [] for k in ORDERS}
+    counts: list[int] = []
+    predicted = float("nan")
+    for batch in read_index(folder).batches:
+        if batch.assessment is None or batch.assessment.error:
+            continue
+        part = read_measurements(folder / batch.folder / "measurements.yaml", split.scene).contacts
+        recorded = part if recorded is None else recorded.concat(part)
+        planned.extend(batch.pool_rows)
+        counts.append(len(recorded))
+        errors[ORDERS[0]].append(true_error_mm(calibrate(split.scene, recorded, [TABLE], lean), held))
+        for name, picked in zip(ORDERS[1:], (planned, split.ranking, shuffled), strict=True):
+            rows = [split.design_rows[i] for i in picked[: len(recorded)]]
+            contacts = split.contacts(rows, robot)
+            errors[name].append(true_error_mm(calibrate(split.scene, contacts, [TABLE], lean), held))
+        predicted = max(batch.assessment.predicted_z_mm.values())
+    return counts, errors, predicted
+
+
 def bench_session(
     pool_path: Path,
     workdir: Path,
@@ -72,88 +142,32 @@ def bench_session(
     max_batches: int = 6,
     settings: SessionSettings | None = None,
 ) -> None:
-    """Print the table: true held-out error at the session's contact counts, three orders, over robot seeds."""
+    """Print the table: true held-out error at the session's contact counts, four orders, over robot seeds."""
     settings = settings or SessionSettings(target_mm=1.0, candidates=("offsets", "offsets_hip_pitch"), fold_seeds=1)
-    lean = Settings(candidates=settings.candidates, fold_seeds=settings.fold_seeds, seed=settings.seed)
-    pool = load_pool(pool_path)
-    scene = scene_for(pool.provenance, None)
-    rng = np.random.default_rng(0)
-    held_rows = set(rng.choice(len(pool.postures), size=held_out, replace=False).tolist())
-    data = pool.to_dict()
-    design_rows = [i for i in range(len(pool.postures)) if i not in held_rows]
-    data["postures"] = [data["postures"][i] for i in design_rows]
-    design_pool = workdir / "session_pool.yaml"
-    write_yaml(design_pool, data)
-    joints = pool.joints()
-    chains = [p.chain for p in pool.postures]
-    spots = [p.spot for p in pool.postures]
-    sub_joints, sub_chains, sub_spots = (
-        joints[design_rows],
-        [chains[i] for i in design_rows],
-        [spots[i] for i in design_rows],
-    )
-    design, _ = build_design(scene, sub_joints, sub_chains)
-    ranking = list(iroc(design).ranking)
-    rows: dict[str, list[list[float]]] = {
-        "session (its recordings)": [],
-        "session postures": [],
-        "IROC": [],
-        "random": [],
-    }
-    counts: list[list[int]] = []
-    stops: list[tuple[float, float, int]] = []
+    split, design_pool = split_pool(pool_path, workdir, held_out)
     start = time.perf_counter()
-    for seed in seeds:
-        robot = Robot(seed=seed, compliance_rad_per_knm=compliance)
-        folder = workdir / f"session_{seed}"
-        with open_backend(2) as backend:
-            start_session(str(design_pool), str(folder), settings, backend)
-            rehearse_session(str(folder), robot, backend, max_batches)
-        index = read_index(folder)
-        kept = sorted(held_rows)
-        held = robot_contacts(scene, joints[kept], [chains[i] for i in kept], [spots[i] for i in kept], robot)
-        order = np.random.default_rng(seed).permutation(len(design_rows)).tolist()
-        recorded: Contacts | None = None
-        planned: list[int] = []
-        mine: dict[str, list[float]] = {k: [] for k in rows}
-        at: list[int] = []
-        for batch in index.batches:
-            if batch.assessment is None or batch.assessment.error:
-                continue
-            part = read_measurements(folder / batch.folder / "measurements.yaml", scene).contacts
-            recorded = part if recorded is None else recorded.concat(part)
-            planned.extend(batch.pool_rows)
-            n = len(recorded)
-            at.append(n)
-            mine["session (its recordings)"].append(true_error_mm(calibrate(scene, recorded, [TABLE], lean), held))
-            for name, picked in (("session postures", planned), ("IROC", ranking[:n]), ("random", order[:n])):
-                picked_chains, picked_spots = [sub_chains[i] for i in picked], [sub_spots[i] for i in picked]
-                contacts = robot_contacts(scene, sub_joints[picked], picked_chains, picked_spots, robot)
-                mine[name].append(true_error_mm(calibrate(scene, contacts, [TABLE], lean), held))
-            last = batch
-        for name in rows:
-            rows[name].append(mine[name])
-        counts.append(at)
-        predicted = max(last.assessment.predicted_z_mm.values())
-        stops.append((predicted, mine["session (its recordings)"][-1], at[-1]))
+    trials = [
+        judge_seed(split, design_pool, workdir / f"session_{seed}", Robot(seed, compliance), settings, max_batches)
+        for seed in seeds
+    ]
     took = time.perf_counter() - start
     print(f"\n### session: true held-out height error at fixed contact counts ({machine})\n")
     print(
         f"{len(seeds)} robot seeds (hips {compliance:g} rad/kN m), {held_out} held-out postures, pool "
-        f"{len(design_rows)}; URDF deliverable, candidates {', '.join(settings.candidates)}; {took:.0f} s\n"
+        f"{len(split.design_rows)}; URDF deliverable, candidates {', '.join(settings.candidates)}; {took:.0f} s\n"
     )
-    print("| contacts | " + " | ".join(f"{name}: median (min-max) mm" for name in rows) + " |")
-    print("|---" * (len(rows) + 1) + "|")
-    for b in range(min(len(c) for c in counts)):
+    print("| contacts | " + " | ".join(f"{name}: median (min-max) mm" for name in ORDERS) + " |")
+    print("|---" * (len(ORDERS) + 1) + "|")
+    for b in range(min(len(counts) for counts, _, _ in trials)):
         cells = []
-        for name in rows:
-            values = [r[b] for r in rows[name]]
+        for name in ORDERS:
+            values = [errors[name][b] for _, errors, _ in trials]
             cells.append(f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})")
-        shown = sorted({c[b] for c in counts})
+        shown = sorted({counts[b] for counts, _, _ in trials})
         print(f"| {'/'.join(str(c) for c in shown)} | " + " | ".join(cells) + " |")
-    ratios = [p / t for p, t, _ in stops]
+    ratios = [predicted / errors[ORDERS[0]][-1] for _, errors, predicted in trials]
     print(
-        f"\nat the last batch: predicted (CV, worst chain) / true held-out error = "
+        f"\nat the last batch: predicted (CV, worst chain) / true held-out error (worst chain) = "
         f"{', '.join(f'{r:.2f}' for r in ratios)} (median {statistics.median(ratios):.2f}); "
-        f"contacts {', '.join(str(n) for _, _, n in stops)}"
+        f"contacts {', '.join(str(counts[-1]) for counts, _, _ in trials)}"
     )

@@ -87,7 +87,11 @@ def run(args: argparse.Namespace) -> int:
             _added(args.session, add_bag(args.session, args.bag, backend, args.new_table))
             return 0
         robot = Robot(seed=args.seed, compliance_rad_per_knm=args.compliance)
-        rehearse_session(args.session, robot, backend, args.max_batches, lambda a: _added(args.session, a))
+        added = rehearse_session(args.session, robot, backend, args.max_batches, lambda a: _added(args.session, a))
+    if not added:
+        print(f"session: {args.session} is done already: nothing to rehearse")
+    elif not added[-1].index.done:
+        print(f"session: not done after {len(added)} rehearsed batches (--max-batches {args.max_batches})")
     return 0
 
 

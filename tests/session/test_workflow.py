@@ -233,3 +233,5 @@ def test_the_session_stops_when_every_chain_meets_the_target(started, rehearsed,
     assert (copy / "batch_001" / "calibration" / "calibrated.urdf").is_file()
     assert main(["session", "add", str(copy), bag, "-q"]) == 2
     assert "already added" in capsys.readouterr().err
+    assert main(["session", "rehearse", str(copy), "--seed", "3", "-q"]) == 0
+    assert "is done already" in capsys.readouterr().out
