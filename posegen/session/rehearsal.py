@@ -1,7 +1,8 @@
 """A session played on a simulated robot, batch after batch, until it is done (``posegen session rehearse``).
 
 Each batch's route is run by the perturbed robot of ``posegen simulate ROUTE --bag``
-(the same seed: the same robot for every batch, :func:`posegen.calibrate.simulate_route_bag`);
+(drawn with every chain of the config: the same robot for every batch,
+:func:`posegen.calibrate.simulate_route_bag`);
 its recording, ``batch_NNN/rehearsal_bag`` (its true parameters beside it), is added as a
 real one would be.
 """
@@ -75,6 +76,7 @@ def rehearse_session(
                 rate_hz=RATE_HZ,
                 joint_topic=index.settings.joint_topic,
                 compliance_rad_per_knm=robot.compliance_rad_per_knm,
+                every_chain=True,  # the same robot for every batch, whichever chains it touches with
             )
         result = add_bag(session, str(bag), backend)
         added.append(result)
