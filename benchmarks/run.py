@@ -318,7 +318,7 @@ def main() -> None:
     parser.add_argument(
         "--only",
         nargs="*",
-        default=["pool", "dask", "select", "route", "bag", "calibration", "view", "scale", "robots"],
+        default=["pool", "dask", "select", "route", "bag", "calibration", "session", "view", "scale", "robots"],
         help="stages to run",
     )
     parser.add_argument("--n", type=int, default=1500, help="pool size")
@@ -326,6 +326,7 @@ def main() -> None:
     parser.add_argument(
         "--measure-n", type=int, default=None, help="make a pool of this size and project to --large-n (stage scale)"
     )
+    parser.add_argument("--session-seeds", type=int, default=3, help="robot seeds of the session stage")
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
     workdir = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="posegen-bench-"))
@@ -346,6 +347,10 @@ def main() -> None:
         bench_bag(pool_path, workdir)
     if "calibration" in args.only:
         bench_calibration(workdir)
+    if "session" in args.only:
+        from session_bench import bench_session  # benchmarks/session_bench.py, beside this script
+
+        bench_session(pool_path, workdir, machine(), seeds=tuple(range(1, args.session_seeds + 1)))
     if "view" in args.only:
         bench_view(pool_path, workdir)
     if "scale" in args.only:

@@ -7,7 +7,7 @@ Layers, bottom first (README, "Architecture")::
     robot
     model
     pool | select | route | calibrate      (stages: never each other)
-    view                                   (reads every stage's artefacts)
+    session | view                         (chains the stages | reads every stage's artefacts)
     cli
 
 A module may import its own package freely (its siblings by module path), and from
@@ -40,6 +40,7 @@ LAYERS = {
     "posegen.select": 4,
     "posegen.route": 4,
     "posegen.calibrate": 4,
+    "posegen.session": 5,  # an experiment: chains the stages (beside view)
     "posegen.view": 5,  # reads every stage's artefacts
     "posegen.cli": 6,
 }

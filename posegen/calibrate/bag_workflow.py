@@ -116,6 +116,7 @@ def simulate_route_bag(
     rate_hz: float,
     joint_topic: str,
     compliance_rad_per_knm: float = 0.0,
+    every_chain: bool = False,
 ) -> SimulatedSession:
     """Record a perturbed robot executing a route, as a rosbag2 with the truth in its folder.
 
@@ -131,6 +132,8 @@ def simulate_route_bag(
         rate_hz: Recording rate of the joint states and wrenches.
         joint_topic: Topic of the joint states.
         compliance_rad_per_knm: True compliance of the config's first compliance group.
+        every_chain: The robot drawn with every chain of the config (the same robot for
+            every route of a seed); False: with the route's chains, as ``posegen simulate``.
 
     Raises:
         PosegenError: Not a route, a route without contacts or for another robot, or a
@@ -152,7 +155,7 @@ def simulate_route_bag(
         raise InputError(f"{route_path}: the route makes no contact")
     settings = SessionSettings(rate_hz=rate_hz)
     with claim_output(bag_path, OutputKind.FOLDER):
-        recorded = simulate_session(scene, motion, session, perturbation, settings, seed)
+        recorded = simulate_session(scene, motion, session, perturbation, settings, seed, every_chain)
         prov = scene.provenance(seed)
         prov["simulation"] = {
             "route": route_path,
@@ -162,6 +165,7 @@ def simulate_route_bag(
             "error_deg": error_deg,
             "encoder_noise_deg": noise_deg,
             "compliance_rad_per_knm": compliance_rad_per_knm,
+            "every_chain": every_chain,
             "sensors": dataclasses.asdict(settings),
         }
         wrenches = {

@@ -153,7 +153,13 @@ def contact_weight(phase: ContactPhase, at: FloatArray) -> FloatArray:
 
 
 def simulate_session(
-    scene: Scene, motion: Motion, session: str, perturbation: Perturbation, settings: SessionSettings, seed: int
+    scene: Scene,
+    motion: Motion,
+    session: str,
+    perturbation: Perturbation,
+    settings: SessionSettings,
+    seed: int,
+    every_chain: bool = False,
 ) -> Session:
     """Record a perturbed robot executing a route.
 
@@ -164,6 +170,9 @@ def simulate_session(
         perturbation: Error sizes; the encoder noise is per sample.
         settings: Sensor rate, contact force and noise.
         seed: Seed of the robot's errors (as ``posegen simulate``) and of the sensor noise.
+        every_chain: Draw the robot with every chain of the config, whichever the route
+            touches with (the same seed is then the same robot for every route: a
+            session's batches); False: with the route's chains, as ``posegen simulate``.
 
     Raises:
         InfeasibleError: The route has no contact, or a contact does not settle on the true plane.
@@ -178,7 +187,12 @@ def simulate_session(
         labels,
         planned_kinds(scene, chains),
     )
-    model, theta = perturbed_robot(scene, chains, [session], perturbation, seed, planned.kinds_by_chain())
+    if every_chain:
+        every = tuple(c.name for c in scene.config.chains)
+        kinds = {c: (scene.chain(c).contact_kind,) for c in every} | planned.kinds_by_chain()
+        model, theta = perturbed_robot(scene, every, [session], perturbation, seed, kinds)
+    else:
+        model, theta = perturbed_robot(scene, chains, [session], perturbation, seed, planned.kinds_by_chain())
     settled, converged = settle_true(model, theta, planned, stand=False)  # the legs follow the route
     if not np.all(converged):
         label = planned.labels[int(np.flatnonzero(~converged)[0])]

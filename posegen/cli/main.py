@@ -19,11 +19,11 @@ import sys
 from typing import NoReturn
 
 from posegen import __version__
-from posegen.cli import calibrate, check, export, measure, pool, robot, route, select, simulate, view
+from posegen.cli import calibrate, check, export, measure, pool, robot, route, select, session, simulate, view
 from posegen.errors import PosegenError
 
 # the robot's set-up, then pipeline order, as --help lists them
-COMMANDS = (robot, pool, check, select, route, export, simulate, measure, calibrate, view)
+COMMANDS = (robot, pool, check, select, route, export, simulate, measure, calibrate, session, view)
 EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130
 

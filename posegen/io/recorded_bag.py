@@ -18,6 +18,7 @@ left out, and said (a warning with their number).
 from __future__ import annotations
 
 import hashlib
+import json
 import logging
 import threading
 from collections.abc import Iterator, Mapping, Sequence
@@ -31,7 +32,7 @@ from numpy.typing import NDArray
 
 from posegen.errors import InputError, reason
 from posegen.io import cdr, mcap_index
-from posegen.io.bag_writer import writing_bag
+from posegen.io.bag_writer import PROVENANCE_KEY, writing_bag
 from posegen.io.cdr import FloatArray
 
 LOG = logging.getLogger(__name__)
@@ -196,7 +197,10 @@ class RecordedBag:
             self.files = tuple(self.path / Path(str(f)).name for f in info["relative_file_paths"])
             self.start_ns = int(info["starting_time"]["nanoseconds_since_epoch"])
             compression = str(info.get("compression_mode") or "").lower()
-        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:
+            custom = info.get("custom_data") or {}
+            written = custom.get(PROVENANCE_KEY) if isinstance(custom, dict) else None
+            self.provenance: dict[str, Any] | None = json.loads(written) if isinstance(written, str) else None
+        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:  # JSON too
             raise InputError(f"{self.path}: not a rosbag2 bag (metadata.yaml: {reason(exc)})") from exc
         if self.storage not in STORAGES:
             raise InputError(f"{self.path}: unknown storage plugin '{self.storage}'; valid: {', '.join(STORAGES)}")

@@ -130,6 +130,7 @@ def follow_up_pool_file(
     calibration_path: str | None = None,
     k: int = 10,
     config_path: str | None = None,
+    weakest: str | None = None,
 ) -> dict[str, Any]:
     """Choose the next ``k`` postures of a pool for the weakest chain of a calibration; write a selection file.
 
@@ -142,6 +143,8 @@ def follow_up_pool_file(
             the middle prior scale, noise (1 mm, 0.1 deg), and the chain this model predicts worst.
         k: Postures to choose.
         config_path: Scene config; None: the one saved in the pool.
+        weakest: The chain to improve; None: the calibration's weakest (or, without
+            one, the chain the model predicts worst).
 
     Raises:
         PosegenError: Bad pool, measurements or calibration file; k out of range.
@@ -169,11 +172,12 @@ def follow_up_pool_file(
     scales = scene.calibration.prior_scales
     candidate, scale = scene.calibration.candidates[0], scales[len(scales) // 2]
     noise: tuple[float, ...] = DEFAULT_NOISE
-    weakest = None
-    source = "posterior variance of the config's first candidate"
+    chosen = weakest
+    source = "posterior variance of the config's first candidate" if weakest is None else "given"
     if calibration_path is not None:
         candidate, scale, noise, weakest = read_calibration_model(calibration_path, scene)
-        source = f"cross-validation of {calibration_path}"
+        source = f"cross-validation of {calibration_path}" if chosen is None else "given"
+        weakest = chosen or weakest
         chains = {p.chain for p in pool.postures}
         if weakest not in chains:
             raise InfeasibleError(

@@ -369,6 +369,24 @@ TABLE = [
     F("pool", "a disabled pair of an unknown link", "--n", "3", "--config", "{bad_pair_config}", "-o", "{out}/p.yaml"),
     F("pool", "a point frame the robot lacks", "--n", "3", "--config", "{bad_point_config}", "-o", "{out}/p.yaml"),
     F("calibrate", "a contact kind the chain does not make", "{point_measurements}", *C, "-o", "{out}/cal"),
+    # session (issue 25): start, add, status, rehearse
+    *[F("session", f"start: {what}", "start", f"{{{name}}}", "-o", "{out}/s") for what, name in STAGE_PLANS.items()],
+    F("session", "start: --target-mm 0", "start", "{pool}", "--target-mm", "0", "-o", "{out}/s"),
+    F("session", "start: negative --margin", "start", "{pool}", "--margin", "-1", "-o", "{out}/s"),
+    F("session", "start: --batch 0", "start", "{pool}", "--batch", "0", "-o", "{out}/s"),
+    F("session", "start: unknown candidate", "start", "{pool}", "--candidates", "nonsense", "-o", "{out}/s"),
+    F("session", "start: -o a file", "start", "{pool}", "-o", "{existing}"),
+    F("session", "start: -o unwritable", "start", "{pool}", "-o", f"{UNWRITABLE}/s"),
+    F("session", "start: -o a session", "start", "{pool}", "-o", "{malformed_session}", expect="already holds"),
+    F("session", "start: no -o", "start", "{pool}"),
+    F("session", "add: not a session", "add", "{out}", "{bag}", expect="not a posegen session"),
+    F("session", "add: malformed index", "add", "{malformed_session}", "{bag}", expect="not a valid session"),
+    F("session", "status: not a session", "status", "{out}", expect="not a posegen session"),
+    F("session", "status: malformed index", "status", "{malformed_session}", expect="not a valid session"),
+    F("session", "rehearse: not a session", "rehearse", "{out}", "--seed", "1"),
+    F("session", "rehearse: no --seed", "rehearse", "{out}"),
+    F("session", "rehearse: --max-batches 0", "rehearse", "{out}", "--seed", "1", "--max-batches", "0"),
+    F("session", "unknown step", "nonsense"),
 ]
 
 
@@ -515,6 +533,9 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     (damaged / "calibration.yaml").write_text(text[: len(text) // 2])
     made["damaged_calibration_folder"] = str(damaged)
 
+    (folder / "malformed_session").mkdir()
+    put("malformed_session/session.yaml", {"format": "posegen-session", "format_version": 1, "batches": "none"})
+    made["malformed_session"] = str(folder / "malformed_session")
     names = ",".join(scene.joint_names).replace("torso_1_joint", "torso_one_joint")
     angles = ",".join(repr(float(v)) for v in scene.reference)
     put("unknown_joint.csv", f"joint_names,{names}\ngripper,talos/left_gripper,handle,x,joint_states,{angles}\n")

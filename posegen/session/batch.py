@@ -1,0 +1,144 @@
+"""A batch: its postures chosen, routed from the start posture, checked, and exported as a rosbag2 to play.
+
+The first batch is the select stage's exact-k design of (1 + margin) x the fewest
+postures that identify every base parameter of the pool's chains (more when that
+design does not identify them all); the next ones are ``select --given`` on the
+weakest chain, after the postures of the previous batch that the robot did not record.
+Every file goes through the stages' own functions (the same files their commands write).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from posegen.errors import InfeasibleError
+from posegen.io import read_yaml, write_yaml
+from posegen.model import MEASUREMENT_FORMAT, build_design
+from posegen.parallel import Backend
+from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool, SegmentType, read_route, scene_for
+from posegen.route import check_route_file, export_route_bag, route_plan_file
+from posegen.select import SelectionSettings, follow_up_pool_file, iroc, select_pool_file
+from posegen.session.index import Batch, SessionSettings, batch_folder, sha256_of
+
+SELECTION_FILE = "selection.yaml"
+FOLLOW_UP_FILE = "followup.yaml"
+ROUTE_FILE = "route.yaml"
+ROUTE_BAG = "route_bag"
+MEASUREMENTS_FILE = "measurements.yaml"
+CALIBRATION_FOLDER = "calibration"
+_POOL_ROW = re.compile(r"\(pool (\d+)\)")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Where a batch's postures come from."""
+
+    given: tuple[str, ...] = ()  # measurement files so far (none: the first batch)
+    calibration: str | None = None  # their calibration.yaml (none: no follow-up, only the missing postures)
+    weakest: str | None = None  # the chain to improve
+    missing: tuple[int, ...] = ()  # pool rows the robot did not record: planned again, first
+    follow: bool = True  # add ``select --given`` postures (False: only the missing ones, too few to calibrate)
+
+
+def first_batch_size(pool: Pool, margin: float) -> tuple[int, int]:
+    """Postures of the first batch, and the base parameters of the pool's chains.
+
+    (1 + margin) x the fewest postures with as many measured rows as base parameters, at most the pool.
+    """
+    scene = scene_for(pool.provenance, None)
+    design, _ = build_design(scene, pool.joints(), [p.chain for p in pool.postures])
+    fewest = design.fewest(iroc(design).ranking)
+    return min(len(pool.postures), math.ceil(fewest * (1.0 + margin))), design.n_params
+
+
+def select_first(pool_path: str, pool: Pool, output: Path, settings: SessionSettings) -> dict[str, Any]:
+    """The first batch's selection: exact k, grown until it identifies every base parameter.
+
+    Raises:
+        InfeasibleError: The whole pool does not identify them.
+
+    """
+    k, base = first_batch_size(pool, settings.margin)
+    while True:
+        data = select_pool_file(pool_path, str(output), SelectionSettings(k=k, seed=settings.seed))
+        if data["figures"]["rank"] >= base:
+            return data
+        if k >= len(pool.postures):
+            raise InfeasibleError(f"{pool_path}: the whole pool identifies only {data['figures']['rank']} of {base}")
+        k = min(len(pool.postures), k + max(1, k // 10))
+
+
+def select_next(pool_path: str, pool: Pool, folder: Path, plan: Plan, settings: SessionSettings) -> None:
+    """The next batch's selection: the missing postures first, then ``select --given`` on the weakest chain."""
+    followed: list[dict[str, Any]] = []
+    provenance = {**pool.provenance, "pool": pool_path, "pool_sha256": sha256_of(Path(pool_path))}
+    figures: dict[str, Any] = {"missing_postures": list(plan.missing)}
+    if plan.follow:
+        data = follow_up_pool_file(
+            pool_path,
+            str(folder / FOLLOW_UP_FILE),
+            list(plan.given),
+            plan.calibration,
+            settings.batch_postures,
+            weakest=plan.weakest,
+        )
+        followed, provenance = data["postures"], data["provenance"]
+        figures["follow_up"] = data["figures"]
+    again = [{"pool_id": row, "rank": 0, "weight": 0.0, **pool.entry(row)} for row in plan.missing]
+    followed = [e for e in followed if int(e["pool_id"]) not in set(plan.missing)]  # each posture once
+    write_yaml(
+        folder / SELECTION_FILE,
+        {
+            "format": SELECTION_FORMAT,
+            "format_version": POOL_VERSION,
+            "provenance": provenance,
+            "method": "session",
+            "joint_names": list(pool.joint_names),
+            "figures": figures,
+            "postures": [*again, *followed],
+        },
+    )
+
+
+def route_batch(session: Path, number: int, pool_path: str, settings: SessionSettings, backend: Backend) -> Batch:
+    """Route the batch's selection from the start posture, check it on the meshes, export its rosbag2.
+
+    Raises:
+        InfeasibleError: The route fails its check (nothing is exported).
+
+    """
+    folder = session / batch_folder(number)
+    route = folder / ROUTE_FILE
+    routed = route_plan_file(
+        str(folder / SELECTION_FILE), str(route), settings.seed, None, workers=backend, pool_path=pool_path
+    )
+    verdict = check_route_file(str(route), None, workers=backend)
+    if not verdict.ok:
+        bad = next(w for w in verdict.worst if w.checked and w.violations)
+        raise InfeasibleError(f"{route}: the route fails its check ({bad.invariant.value}: {bad.detail})")
+    export_route_bag(str(route), str(folder / ROUTE_BAG), settings.trajectory_topic, settings.segments_topic)
+    files = [folder / SELECTION_FILE, *routed.written]
+    return Batch(
+        number=number,
+        pool_rows=route_pool_rows(str(route)),
+        planned_s=round(float(routed.summary["duration_s"]), 3),  # as the index records it
+        files={str(p.relative_to(session)): sha256_of(p) for p in files},
+    )
+
+
+def route_pool_rows(route: str) -> tuple[int, ...]:
+    """The pool rows a route holds a contact at, in its order."""
+    data = read_route(route)
+    return tuple(int(s["pool_id"]) for s in data["segments"] if s["type"] == SegmentType.HOLD.value)
+
+
+def missing_rows(planned: Sequence[int], measurements: Path) -> tuple[int, ...]:
+    """The planned pool rows that no measured contact names (a batch played in part), in planned order."""
+    data = read_yaml(measurements, MEASUREMENT_FORMAT)
+    found = {int(m.group(1)) for c in data["contacts"] if (m := _POOL_ROW.search(str(c.get("label", ""))))}
+    return tuple(row for row in planned if row not in found)

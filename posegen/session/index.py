@@ -1,0 +1,268 @@
+"""The session index: what an experiment holds, as a frozen dataclass with its own reader and writer.
+
+A session folder holds one experiment: ``session.yaml`` (this index) and one subfolder per
+batch (``batch_001/``: selection, route, the route's rosbag2 to play, measurements,
+calibration). The index is written last, atomically: a file the index does not name is
+the leftover of a killed step and is made again; a file it names carries its sha256, so a
+file edited by hand is refused (:func:`check_files`).
+"""
+
+from __future__ import annotations
+
+import enum
+import hashlib
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from posegen.errors import InputError, reason
+from posegen.io import read_yaml, write_yaml
+
+SESSION_FORMAT = "posegen-session"
+SESSION_VERSION = 1
+INDEX_FILE = "session.yaml"
+
+
+class Deliverable(str, enum.Enum):
+    """Whose predicted error stops the session (the calibration's deliverables)."""
+
+    URDF = "urdf"  # calibrated.urdf alone: what any stack loads
+    COMPENSATED = "compensated"  # the URDF with its compliance compensation, when the calibration ships it
+
+
+class BatchState(str, enum.Enum):
+    """How far a batch has gone."""
+
+    PLANNED = "planned"  # selection, route, checked and exported: to play
+    RECORDED = "recorded"  # its bag is measured
+    ASSESSED = "assessed"  # calibrated on every contact so far
+
+
+@dataclass(frozen=True)
+class SessionSettings:
+    """How a session plans and stops; fixed at ``start``, recorded in the index."""
+
+    target_mm: float = 4.0  # stop when every chain's predicted held-out height error (mean abs) is below
+    seed: int = 0  # of the routes and of the calibrations' folds
+    margin: float = 0.2  # the first batch: (1 + margin) x the fewest postures that identify every base parameter
+    batch_postures: int = 10  # postures of each follow-up batch (select --given)
+    deliverable: Deliverable = Deliverable.URDF
+    candidates: tuple[str, ...] = ()  # the calibrations' candidate models; empty: the config's
+    fold_seeds: int | None = None  # repetitions of the calibrations' CV; None: the config's
+    prior_scale: float | None = None  # fixed prior scale; None: chosen by CV
+    joint_topic: str = "/joint_states"
+    trajectory_topic: str = "/joint_trajectory_controller/joint_trajectory"
+    segments_topic: str = "/posegen/segments"
+
+
+@dataclass(frozen=True)
+class Recording:
+    """A bag added to a batch, and the contacts measured in it."""
+
+    bag: str  # where it was read
+    bag_sha256: str
+    table: str  # table session of its contacts
+    contacts: int
+    duration_s: float  # of its joint states: robot time spent
+    missing: tuple[int, ...]  # pool rows of the batch's postures with no contact in the bag
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """The calibration on every contact up to a batch, and its verdict."""
+
+    contacts: int  # training contacts read
+    deliverable: str  # the deliverable whose CV figure is shown (urdf or compensated)
+    candidate: str  # its model
+    predicted_z_mm: Mapping[str, float]  # chain -> predicted held-out height error, mean abs (grouped CV)
+    done: bool  # every chain below the target
+    error: str = ""  # why no calibration could be made yet (too few contacts), else empty
+
+
+@dataclass(frozen=True)
+class Batch:
+    """One batch: postures planned, then recorded, then assessed."""
+
+    number: int
+    pool_rows: tuple[int, ...]  # the postures planned (pool rows)
+    planned_s: float  # robot time of its route
+    files: Mapping[str, str]  # file (relative to the session) -> sha256, of what the index vouches for
+    recording: Recording | None = None
+    assessment: Assessment | None = None
+
+    @property
+    def folder(self) -> str:
+        """Its subfolder, relative to the session."""
+        return batch_folder(self.number)
+
+    @property
+    def state(self) -> BatchState:
+        """How far it has gone."""
+        if self.assessment is not None:
+            return BatchState.ASSESSED
+        return BatchState.RECORDED if self.recording is not None else BatchState.PLANNED
+
+
+@dataclass(frozen=True)
+class SessionIndex:
+    """Everything a session folder holds."""
+
+    provenance: Mapping[str, Any]  # config, robot model hash, seed, posegen version
+    pool: str  # the pool file (absolute)
+    pool_sha256: str
+    settings: SessionSettings
+    batches: tuple[Batch, ...] = field(default_factory=tuple)
+
+    @property
+    def done(self) -> bool:
+        """Whether the last assessment met the target."""
+        last = self.batches[-1].assessment if self.batches else None
+        return last is not None and last.done
+
+    @property
+    def table(self) -> str:
+        """The table session of the last recording (the first table when nothing is recorded)."""
+        tables = [b.recording.table for b in self.batches if b.recording is not None]
+        return tables[-1] if tables else table_name(1)
+
+    def with_batch(self, batch: Batch) -> SessionIndex:
+        """The index with ``batch`` replacing the batch of its number, or appended."""
+        kept = tuple(b for b in self.batches if b.number != batch.number)
+        return replace(self, batches=tuple(sorted((*kept, batch), key=lambda b: b.number)))
+
+
+def batch_folder(number: int) -> str:
+    """The subfolder of batch ``number``: ``batch_001``."""
+    return f"batch_{number:03d}"
+
+
+def table_name(number: int) -> str:
+    """The name of the ``number``-th table session: ``table_1``."""
+    return f"table_{number}"
+
+
+def sha256_of(path: Path) -> str:
+    """The sha256 of a file."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def index_to_dict(index: SessionIndex) -> dict[str, Any]:
+    """Plain data of the index file."""
+    settings = dict(index.settings.__dict__)
+    settings["deliverable"] = index.settings.deliverable.value
+    settings["candidates"] = list(index.settings.candidates)
+    batches = []
+    for b in index.batches:
+        entry: dict[str, Any] = {
+            "number": b.number,
+            "state": b.state.value,
+            "pool_rows": list(b.pool_rows),
+            "planned_s": round(b.planned_s, 3),
+            "files": dict(sorted(b.files.items())),
+            "recording": None
+            if b.recording is None
+            else {**b.recording.__dict__, "missing": list(b.recording.missing)},
+            "assessment": None,
+        }
+        if b.assessment is not None:
+            entry["assessment"] = {**b.assessment.__dict__, "predicted_z_mm": dict(b.assessment.predicted_z_mm)}
+        batches.append(entry)
+    return {
+        "format": SESSION_FORMAT,
+        "format_version": SESSION_VERSION,
+        "provenance": dict(index.provenance),
+        "pool": index.pool,
+        "pool_sha256": index.pool_sha256,
+        "settings": settings,
+        "done": index.done,
+        "batches": batches,
+    }
+
+
+def write_index(folder: Path, index: SessionIndex) -> None:
+    """Write the index, atomically (the last write of every step)."""
+    write_yaml(folder / INDEX_FILE, index_to_dict(index))
+
+
+def read_index(folder: Path) -> SessionIndex:
+    """Read a session's index.
+
+    Raises:
+        InputError: No session there, another format or version, or a malformed index.
+
+    """
+    path = folder / INDEX_FILE
+    if not path.is_file():
+        raise InputError(f"{folder}: not a posegen session (no {INDEX_FILE}; start one with posegen session start)")
+    data = read_yaml(path, SESSION_FORMAT)
+    version = data.get("format_version")
+    if version != SESSION_VERSION:
+        raise InputError(f"{path}: session format version {version!r}; this posegen reads version {SESSION_VERSION}")
+    try:
+        raw = dict(data["settings"])
+        settings = SessionSettings(
+            **{
+                **raw,
+                "deliverable": Deliverable(raw["deliverable"]),
+                "candidates": tuple(str(c) for c in raw["candidates"]),
+                "target_mm": float(raw["target_mm"]),
+            }
+        )
+        batches = tuple(_batch(entry) for entry in data["batches"])
+        index = SessionIndex(dict(data["provenance"]), str(data["pool"]), str(data["pool_sha256"]), settings, batches)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"{path}: not a valid session index ({reason(exc)}); was it edited by hand?") from exc
+    if [b.number for b in batches] != list(range(1, len(batches) + 1)):
+        raise InputError(f"{path}: batches are not numbered 1, 2, ...; was it edited by hand?")
+    return index
+
+
+def _batch(entry: dict[str, Any]) -> Batch:
+    recording = entry["recording"]
+    assessment = entry["assessment"]
+    return Batch(
+        number=int(entry["number"]),
+        pool_rows=tuple(int(r) for r in entry["pool_rows"]),
+        planned_s=float(entry["planned_s"]),
+        files={str(k): str(v) for k, v in dict(entry["files"]).items()},
+        recording=None
+        if recording is None
+        else Recording(
+            bag=str(recording["bag"]),
+            bag_sha256=str(recording["bag_sha256"]),
+            table=str(recording["table"]),
+            contacts=int(recording["contacts"]),
+            duration_s=float(recording["duration_s"]),
+            missing=tuple(int(r) for r in recording["missing"]),
+        ),
+        assessment=None
+        if assessment is None
+        else Assessment(
+            contacts=int(assessment["contacts"]),
+            deliverable=str(assessment["deliverable"]),
+            candidate=str(assessment["candidate"]),
+            predicted_z_mm={str(c): float(v) for c, v in dict(assessment["predicted_z_mm"]).items()},
+            done=bool(assessment["done"]),
+            error=str(assessment.get("error", "")),
+        ),
+    )
+
+
+def check_files(folder: Path, index: SessionIndex) -> None:
+    """Check that every file the index vouches for is there, with its bytes.
+
+    Raises:
+        InputError: A file missing or changed since the session wrote it.
+
+    """
+    for batch in index.batches:
+        for name, digest in batch.files.items():
+            path = folder / name
+            if not path.is_file():
+                raise InputError(f"{path} is missing: the session's files were moved or deleted by hand")
+            if sha256_of(path) != digest:
+                raise InputError(
+                    f"{path} was changed since the session wrote it (sha256 differs): restore it, or start a "
+                    "new session"
+                )

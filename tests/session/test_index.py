@@ -1,0 +1,77 @@
+"""The session index: written and read back to the same dataclass; malformed or edited indexes refused."""
+
+import pytest
+import yaml
+
+from posegen.errors import InputError
+from posegen.session import (
+    INDEX_FILE,
+    Assessment,
+    Batch,
+    BatchState,
+    Deliverable,
+    Recording,
+    SessionIndex,
+    SessionSettings,
+    read_index,
+    write_index,
+)
+from posegen.session.index import check_files, sha256_of
+
+
+def an_index(tmp_path):
+    (tmp_path / "batch_001").mkdir()
+    made = tmp_path / "batch_001" / "route.yaml"
+    made.write_text("route\n")
+    recording = Recording("/bags/one", "ab" * 32, "table_1", 27, 130.5, (4, 9))
+    assessment = Assessment(27, "urdf", "offsets", {"left": 5.25, "right": 3.5}, False)
+    first = Batch(1, (1, 4, 9), 132.0, {"batch_001/route.yaml": sha256_of(made)}, recording, assessment)
+    second = Batch(2, (7, 8), 25.0, {})
+    settings = SessionSettings(target_mm=3.0, seed=4, deliverable=Deliverable.COMPENSATED, candidates=("offsets",))
+    return SessionIndex({"seed": 4, "posegen_version": "0"}, "/pools/pool.yaml", "cd" * 32, settings, (first, second))
+
+
+def test_the_index_reads_back_to_the_same_dataclass(tmp_path):
+    index = an_index(tmp_path)
+    write_index(tmp_path, index)
+    again = read_index(tmp_path)
+    assert again == index
+    assert [b.state for b in again.batches] == [BatchState.ASSESSED, BatchState.PLANNED]
+    assert not again.done and again.table == "table_1"
+    data = yaml.safe_load((tmp_path / INDEX_FILE).read_text())
+    assert data["format"] == "posegen-session" and data["format_version"] == 1 and data["done"] is False
+
+
+def test_a_file_edited_by_hand_is_refused(tmp_path):
+    index = an_index(tmp_path)
+    check_files(tmp_path, index)
+    (tmp_path / "batch_001" / "route.yaml").write_text("route, edited\n")
+    with pytest.raises(InputError, match="changed since the session wrote it"):
+        check_files(tmp_path, index)
+    (tmp_path / "batch_001" / "route.yaml").unlink()
+    with pytest.raises(InputError, match="missing"):
+        check_files(tmp_path, index)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d.update(format_version=9), "version 9"),
+        (lambda d: d["batches"][0].pop("pool_rows"), "not a valid session index"),
+        (lambda d: d["settings"].update(deliverable="everything"), "not a valid session index"),
+        (lambda d: d["batches"][1].update(number=5), "numbered"),
+        (lambda d: d.update(format="posegen-pool"), "posegen-pool"),
+    ],
+)
+def test_a_malformed_index_is_one_clear_error(tmp_path, edit, message):
+    write_index(tmp_path, an_index(tmp_path))
+    data = yaml.safe_load((tmp_path / INDEX_FILE).read_text())
+    edit(data)
+    (tmp_path / INDEX_FILE).write_text(yaml.safe_dump(data))
+    with pytest.raises(InputError, match=message):
+        read_index(tmp_path)
+
+
+def test_no_index_is_not_a_session(tmp_path):
+    with pytest.raises(InputError, match="not a posegen session"):
+        read_index(tmp_path)

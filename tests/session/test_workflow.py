@@ -1,0 +1,237 @@
+"""``posegen session`` end to end on a simulated robot: start -> rehearse, the stopping rule, and bad input.
+
+One arm of the example pool, the smallest first batch (no margin), 3-posture follow-ups,
+two candidate models and one fold seed: every step runs, in about two minutes. The robot
+(seed 3, compliant hips) is simulated once, for the first two batches; the other tests
+reuse its recordings (a copy of the started session is the robot before its first batch).
+"""
+
+import dataclasses
+import shutil
+
+import numpy as np
+import pytest
+import yaml
+
+from posegen.cli import main
+from posegen.errors import InputError
+from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
+from posegen.parallel import open_backend
+from posegen.robot import load_pool
+from posegen.session import (
+    INDEX_FILE,
+    REHEARSAL_BAG,
+    BatchState,
+    Robot,
+    SessionSettings,
+    add_bag,
+    read_index,
+    rehearse_session,
+    session_status,
+    start_session,
+    write_index,
+)
+from tests.cli.test_cli import assert_one_line_error
+from tests.conftest import EXAMPLE_POOL
+
+CHAIN = "left"
+SETTINGS = SessionSettings(
+    target_mm=1.0, seed=0, margin=0.0, batch_postures=3, candidates=("offsets", "offsets_hip_pitch"), fold_seeds=1
+)
+ROBOT = Robot(seed=3, compliance_rad_per_knm=0.3)
+
+
+@pytest.fixture(scope="module")
+def backend():
+    with open_backend(2) as opened:
+        yield opened
+
+
+@pytest.fixture(scope="module")
+def started(tmp_path_factory, backend):
+    folder = tmp_path_factory.mktemp("session")
+    data = load_pool(EXAMPLE_POOL).to_dict()
+    data["postures"] = [p for p in data["postures"] if p["chain"] == CHAIN]
+    write_yaml(folder / "pool.yaml", data)
+    start_session(str(folder / "pool.yaml"), str(folder / "started"), SETTINGS, backend)
+    return folder / "started"
+
+
+@pytest.fixture(scope="module")
+def rehearsed(started, backend, tmp_path_factory):
+    copy = tmp_path_factory.mktemp("rehearsed") / "session"
+    shutil.copytree(started, copy)
+    return copy, rehearse_session(str(copy), ROBOT, backend, max_batches=2)
+
+
+def copy_of(folder, tmp_path):
+    shutil.copytree(folder, tmp_path / "session")
+    return tmp_path / "session"
+
+
+def test_the_first_batch_identifies_every_base_parameter(started):
+    index = read_index(started)
+    assert [b.state for b in index.batches] == [BatchState.PLANNED]
+    batch = index.batches[0]
+    selection = yaml.safe_load((started / batch.folder / "selection.yaml").read_text())
+    figures = selection["figures"]
+    assert figures["rank"] == figures["base_parameters"]  # identifies every base parameter...
+    assert len(batch.pool_rows) >= -(-figures["base_parameters"] // 3)  # ... so at least nb / 3 flush contacts
+    assert sorted(batch.pool_rows) == sorted(p["pool_id"] for p in selection["postures"])  # all routed
+    assert RecordedBag(started / batch.folder / "route_bag").topics  # the bag to play
+    provenance = index.provenance
+    assert provenance["seed"] == 0 and provenance["robot_model_sha256"] and provenance["posegen_version"]
+    assert provenance["config"]["chains"][CHAIN]
+
+
+def test_the_rehearsal_plays_batches_for_the_weakest_chain(rehearsed):
+    folder, added = rehearsed
+    index = read_index(folder)
+    assert len(added) == 2 and [b.state for b in index.batches] == [BatchState.ASSESSED] * 2 + [BatchState.PLANNED]
+    first, second, third = index.batches
+    assert first.recording.contacts == len(first.pool_rows) and not first.recording.missing
+    assert second.assessment.contacts == first.recording.contacts + second.recording.contacts
+    assert len(second.pool_rows) == len(third.pool_rows) == SETTINGS.batch_postures
+    follow_up = yaml.safe_load((folder / "batch_002" / "followup.yaml").read_text())["figures"]
+    assert follow_up["weakest_chain"] == CHAIN and follow_up["given_contacts"] == first.recording.contacts
+    assert not index.done  # 1 mm is out of reach of the URDF alone on a robot whose hips give way
+
+
+def test_the_stopping_figure_is_the_one_calibrate_reports(rehearsed):
+    folder, _ = rehearsed
+    for batch in read_index(folder).batches[:2]:
+        report = yaml.safe_load((folder / batch.folder / "calibration" / "calibration.yaml").read_text())
+        entry = report["deliverables"]["urdf"]
+        assert batch.assessment.deliverable == "urdf" and batch.assessment.candidate == entry["candidate"]
+        expected = {c: e["mean_abs"]["z_mm"] for c, e in entry["predicted_error"].items()}
+        assert batch.assessment.predicted_z_mm == expected
+        assert batch.assessment.done == all(v <= SETTINGS.target_mm for v in expected.values())
+
+
+def test_status_counts_contacts_and_robot_time(rehearsed, capsys):
+    folder, _ = rehearsed
+    status = session_status(str(folder))
+    index = status.index
+    assert status.contacts == sum(b.recording.contacts for b in index.batches[:2])
+    assert status.spent_s == pytest.approx(sum(b.recording.duration_s for b in index.batches[:2]))
+    assert status.planned_s == index.batches[2].planned_s > 0
+    assert status.plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["session", "status", str(folder), "--plot", str(folder / "again.png")]) == 0
+    out = capsys.readouterr().out
+    assert f"{status.contacts} contacts" in out and "not done" in out and (folder / "again.png").is_file()
+
+
+def test_a_bag_added_twice_or_not_a_recording_is_refused_and_nothing_changes(rehearsed, backend):
+    folder, _ = rehearsed
+    before = (folder / INDEX_FILE).read_bytes()
+    with pytest.raises(InputError, match="already added"):
+        add_bag(str(folder), str(folder / "batch_001" / REHEARSAL_BAG), backend)
+    with pytest.raises(InputError, match="joint_states"):  # the bag to play, not the one recorded
+        add_bag(str(folder), str(folder / "batch_003" / "route_bag"), backend)
+    assert (folder / INDEX_FILE).read_bytes() == before
+
+
+def test_a_bag_of_another_route_or_robot_is_refused(started, rehearsed, backend, tmp_path):
+    copy = copy_of(started, tmp_path)
+    other = rehearsed[0] / "batch_002" / REHEARSAL_BAG
+    with pytest.raises(InputError, match="another route"):
+        add_bag(str(copy), str(other), backend)
+    robot = tmp_path / "robot_bag"
+    shutil.copytree(rehearsed[0] / "batch_001" / REHEARSAL_BAG, robot)
+    meta = yaml.safe_load((robot / "metadata.yaml").read_text())
+    custom = meta["rosbag2_bagfile_information"]["custom_data"]
+    custom["posegen"] = custom["posegen"].replace(read_index(copy).provenance["robot_model_sha256"], "0" * 64)
+    (robot / "metadata.yaml").write_text(yaml.safe_dump(meta))
+    with pytest.raises(InputError, match="another robot model"):
+        add_bag(str(copy), str(robot), backend)
+    assert read_index(copy) == read_index(started)
+
+
+def test_a_file_edited_by_hand_stops_every_command(rehearsed, tmp_path, capsys):
+    copy = copy_of(rehearsed[0], tmp_path)
+    selection = copy / "batch_002" / "selection.yaml"
+    selection.write_text(selection.read_text() + "# edited\n")
+    for argv in (
+        ["session", "status", str(copy)],
+        ["session", "add", str(copy), str(copy / "batch_001" / "route_bag")],
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert_one_line_error(err) and "changed since the session wrote it" in err
+
+
+def test_start_refuses_a_folder_that_holds_a_session(started, backend):
+    with pytest.raises(InputError, match="already holds a session"):
+        start_session(read_index(started).pool, str(started), SETTINGS, backend)
+
+
+def test_killed_while_planning_the_next_batch_the_same_add_finishes_it(
+    started, rehearsed, backend, tmp_path, monkeypatch
+):
+    copy = copy_of(started, tmp_path)
+    bag = str(rehearsed[0] / "batch_001" / REHEARSAL_BAG)
+    import posegen.session.workflow as workflow
+
+    planned = workflow.route_batch
+
+    def killed(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(workflow, "route_batch", killed)
+    with pytest.raises(KeyboardInterrupt):
+        add_bag(str(copy), bag, backend)
+    index = read_index(copy)  # the index names what is complete, nothing more
+    assert [b.state for b in index.batches] == [BatchState.ASSESSED]
+    monkeypatch.setattr(workflow, "route_batch", planned)
+    added = add_bag(str(copy), bag, backend)
+    done = read_index(rehearsed[0])  # the same steps, uninterrupted
+    first, second = added.index.batches
+    assert (first.recording, first.assessment) == (done.batches[0].recording, done.batches[0].assessment)
+    assert (second.pool_rows, second.planned_s) == (done.batches[1].pool_rows, done.batches[1].planned_s)
+
+
+def test_a_batch_played_in_part_plans_its_missing_postures_again(started, rehearsed, backend, tmp_path):
+    copy = copy_of(started, tmp_path)
+    full = RecordedBag(rehearsed[0] / "batch_001" / REHEARSAL_BAG)
+    topics = {"left": "/left_wrist_ft", "right": "/right_wrist_ft"}
+    joints, wrenches = full.read("/joint_states", list(topics.values()))
+    stop = 0.85 * joints.times_s[-1]  # the robot stopped before the end
+    keep = joints.times_s <= stop
+    cut = JointStates(joints.names, joints.times_s[keep], joints.positions[keep])
+    cut_wrenches = {
+        t: Wrenches(w.times_s[w.times_s <= stop], w.forces[w.times_s <= stop], w.torques[w.times_s <= stop])
+        for t, w in zip(topics.values(), wrenches, strict=True)
+    }
+    write_recording(tmp_path / "part", cut, "/joint_states", cut_wrenches, full.provenance)
+    added = add_bag(str(copy), str(tmp_path / "part"), backend)
+    recording = added.batch.recording
+    planned = read_index(started).batches[0].pool_rows
+    assert 0 < len(recording.missing) < len(planned) and recording.contacts + len(recording.missing) == len(planned)
+    assert recording.missing == planned[-len(recording.missing) :]  # the route's last postures
+    selection = yaml.safe_load((copy / "batch_002" / "selection.yaml").read_text())
+    rows = [p["pool_id"] for p in selection["postures"]]
+    assert rows[: len(recording.missing)] == list(recording.missing)  # planned again, first
+    follow_up = [p["pool_id"] for p in yaml.safe_load((copy / "batch_002" / "followup.yaml").read_text())["postures"]]
+    assert rows[len(recording.missing) :] == [r for r in follow_up if r not in recording.missing]
+    assert sorted(added.next_batch.pool_rows) == sorted(rows)  # routed (in the route's own order)
+    assert np.isfinite(list(added.batch.assessment.predicted_z_mm.values())).all()
+
+
+def test_the_session_stops_when_every_chain_meets_the_target(started, rehearsed, tmp_path, capsys):
+    copy = copy_of(started, tmp_path)
+    index = read_index(copy)
+    write_index(copy, dataclasses.replace(index, settings=dataclasses.replace(index.settings, target_mm=50.0)))
+    bag = str(rehearsed[0] / "batch_001" / REHEARSAL_BAG)
+    assert main(["session", "add", str(copy), bag, "--workers", "2", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "ok the target 50 mm" in out
+        and f"session: done -> the deliverables are in {copy}/batch_001/calibration/" in out
+    )
+    done = read_index(copy)
+    assert done.done and len(done.batches) == 1 and not (copy / "batch_002").exists()
+    assert (copy / "batch_001" / "calibration" / "calibrated.urdf").is_file()
+    assert main(["session", "add", str(copy), bag, "-q"]) == 2
+    assert "already added" in capsys.readouterr().err
+    assert main(["session", "rehearse", str(copy), "--seed", "3", "-q"]) == 0
+    assert "is done already" in capsys.readouterr().out
