@@ -33,7 +33,7 @@ demo: $(STAMP)
 	$(VENV)/bin/posegen measure $(DEMO)/session --route $(DEMO)/route.yaml --session sim -o $(DEMO)/measured.yaml
 	$(VENV)/bin/posegen simulate plans/talos/pool.yaml --seed 7 --compliance 0.3 -o $(DEMO)/sim_heldout.yaml
 	$(VENV)/bin/posegen calibrate $(DEMO)/measured.yaml --validate $(DEMO)/sim_heldout.yaml \
-		--candidates full_hip_pitch offsets_hip_pitch offsets_legs_hip_pitch -o $(DEMO)/calibration
+		--candidates full full_hip_pitch offsets_hip_pitch offsets_legs_hip_pitch -o $(DEMO)/calibration
 	$(VENV)/bin/posegen select $(DEMO)/pool.yaml --given $(DEMO)/measured.yaml \
 		--calibration $(DEMO)/calibration/calibration.yaml --k 10 -o $(DEMO)/next.yaml
 	$(VENV)/bin/posegen view $(DEMO)/selected.yaml --html $(DEMO)/selected.html
