@@ -3,6 +3,7 @@
 Layers, bottom first (README, "Architecture")::
 
     posegen (version), errors, progress
+    extras
     io | parallel | arguments
     robot
     model
@@ -29,6 +30,7 @@ MAX_LINES = 400
 
 LAYERS = {
     "posegen": 0,  # the root package: __version__ only
+    "posegen.extras": 0.5,  # optional packages: raises errors.ExtraError for io, parallel and view
     "posegen.errors": 0,
     "posegen.progress": 0,
     "posegen.io": 1,

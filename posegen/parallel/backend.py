@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from types import TracebackType
 from typing import Any, Generic, Protocol, TypeVar
 
+from posegen.extras import Extra, require
+
 StateT = TypeVar("StateT")
 ItemT = TypeVar("ItemT")
 ResultT = TypeVar("ResultT")
@@ -225,10 +227,12 @@ def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:
     Raises:
         BackendError: The scheduler cannot be reached, has no worker, or a worker runs
             another posegen version.
+        ExtraError: ``scheduler`` is given and Dask is not installed (``posegen[dask]``).
 
     """
     if scheduler is None:
         return ProcessBackend(workers)
+    require(Extra.DASK, "scheduler (a Dask cluster)")
     from posegen.parallel.cluster import DaskBackend
 
     return DaskBackend(scheduler)
