@@ -17,7 +17,7 @@ LOCK := constraints.txt
 $(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet -c $(LOCK) --upgrade pip setuptools
-	$(PY) -m pip install --quiet -c $(LOCK) --no-build-isolation -e '.[all,dev]'
+	$(PY) -m pip install --quiet -c $(LOCK) --no-build-isolation -e '.[all,dev,docs]'
 	touch $(STAMP)
 
 install: $(STAMP)
@@ -76,7 +76,7 @@ lock:
 	rm -rf .venv-lock
 	$(PYTHON) -m venv .venv-lock
 	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --upgrade pip setuptools
-	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --no-build-isolation -e '.[all,dev]'
+	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --no-build-isolation -e '.[all,dev,docs]'
 	echo "# The versions make test runs with (pip constraints); make lock refreshes them (README)." > $(LOCK).new
 	.venv-lock/bin/python -m pip freeze --all --exclude-editable >> $(LOCK).new
 	mv $(LOCK).new $(LOCK)

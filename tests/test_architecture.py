@@ -30,6 +30,7 @@ MAX_LINES = 400
 
 LAYERS = {
     "posegen": 0,  # the root package: __version__ only
+    "posegen.resources": 0,
     "posegen.extras": 0.5,  # optional packages: raises errors.ExtraError for io, parallel and view
     "posegen.errors": 0,
     "posegen.progress": 0,
