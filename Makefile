@@ -40,7 +40,7 @@ demo: $(STAMP)
 	$(VENV)/bin/posegen view $(DEMO)/route.yaml --html $(DEMO)/route.html
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check posegen tests benchmarks
+	$(VENV)/bin/ruff check posegen tests benchmarks examples
 	$(VENV)/bin/mypy posegen
 
 # Headless Chromium for the viewer's browser tests and benchmark: Debian's package, installed

@@ -14,7 +14,7 @@ from pathlib import Path
 SHIPPED = ("configs", "plans/talos")  # folders copied into the wheel, relative to the source tree
 DATA = Path(__file__).resolve().parent / "_data"  # the wheel's copy
 CHECKOUT = Path(__file__).resolve().parents[1]  # the source tree, when posegen runs from one
-EXAMPLE_POOL = "plans/talos/pool.yaml"  # 1 500 feasible postures of TALOS at its table
+EXAMPLE_POOL = "plans/talos/pool.yaml"  # 200 feasible postures of TALOS at its table
 DEFAULT_CONFIG = "configs/talos_table.yaml"  # TALOS at its table
 
 
