@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     )
     print(load_line(report))
     if missing:
-        print(f"posegen: {missing}", file=sys.stderr)
+        print(f"posegen: report.html not written: {missing}", file=sys.stderr)
     return 0
 
 

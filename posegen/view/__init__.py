@@ -9,7 +9,7 @@ holds the client, the meshes and the animation and opens offline.
 
 from posegen.extras import Extra, require
 
-require(Extra.VIEW, "the 3D view and the calibration report")
+require(Extra.VIEW, "the viewer (3D views, the calibration report)")
 
 from posegen.view.artefact import (
     Artefact,
