@@ -22,7 +22,7 @@ from pathlib import Path
 from types import FrameType, TracebackType
 from typing import Any, Generic, Protocol, TypeVar
 
-from posegen.errors import BackendError
+from posegen.errors import BackendError, reason
 from posegen.extras import Extra, require
 
 StateT = TypeVar("StateT")
@@ -146,15 +146,28 @@ def _end_with(pid: int) -> None:
     threading.Thread(target=watch, name="posegen-end-with-run", daemon=True).start()
 
 
+@dataclass(frozen=True)
+class _SetupFailed:
+    """A worker's ``setup`` raised: kept as its state, reported with each item it is given."""
+
+    reason: str  # the exception's type and first line
+
+
 def _init_process(job: Job[Any, Any, Any], run_pid: int | None = None) -> None:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     if run_pid is not None:
         _end_with(run_pid)
-    _STATES[job.name] = job.setup()
+    try:
+        _STATES[job.name] = job.setup()
+    except Exception as exc:  # raising here would kill the worker: the run would see only a broken pool
+        _STATES[job.name] = _SetupFailed(reason(exc))
 
 
 def _run_in_process(name: str, run: Callable[[Any, Any], Any], item: Any) -> Any:
-    return run(_STATES[name], item)
+    state = _STATES[name]
+    if isinstance(state, _SetupFailed):
+        raise BackendError(f"workers: a worker process could not set up its work ({state.reason})")
+    return run(state, item)
 
 
 GUARD = 'if __name__ == "__main__":'

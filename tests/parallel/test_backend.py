@@ -179,3 +179,17 @@ def test_a_worker_that_dies_is_a_backend_error_not_a_broken_pool():
     job = Job(name="dies", setup=_setup, run=_die)
     with pytest.raises(BackendError, match="ended abruptly"):
         list(ProcessBackend(2).map(job, range(4)))
+
+
+def _setup_fails():
+    raise RuntimeError("input stream error\nsecond line")
+
+
+def test_a_worker_whose_setup_fails_says_why_and_is_no_broken_pool():
+    job = Job(name="setup-fails", setup=_setup_fails, run=_run)
+    with pytest.raises(BackendError, match=r"could not set up its work \(RuntimeError: input stream error\)$"):
+        list(ProcessBackend(2).map(job, range(4)))
+    with ProcessBackend(2) as backend:  # the pool stays usable: a job that sets up runs after it
+        with pytest.raises(BackendError, match="could not set up"):
+            list(backend.map(job, range(4)))
+        assert [r[0] for r in backend.map(Job(name="squares", setup=_setup, run=_run), range(4))] == [0, 1, 4, 9]
