@@ -1,4 +1,4 @@
-"""Build hook: the wheel carries a copy of the shipped folders (posegen.resources.SHIPPED).
+"""Build hook: the wheel carries a copy of the shipped folders (read through posegen.resources.shipped_path).
 
 The top-level ``configs/`` and ``plans/talos/`` stay the source; ``build_py`` copies them
 into ``posegen/_data/`` of the build (an editable install reads them in place).
@@ -10,7 +10,7 @@ from pathlib import Path
 from setuptools import setup
 from setuptools.command.build_py import build_py
 
-SHIPPED = ("configs", "plans/talos")  # as posegen/resources.py (tests/test_resources.py checks they agree)
+SHIPPED = ("configs", "plans/talos")  # each inside a posegen.resources.ROOTS folder (tests/test_resources.py)
 
 
 class BuildWithData(build_py):

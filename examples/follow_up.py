@@ -14,8 +14,10 @@ import time
 from pathlib import Path
 
 from posegen.calibrate import Settings, calibrate_files, simulate_plan_file
-from posegen.resources import EXAMPLE_POOL, shipped_path
+from posegen.resources import shipped_path
 from posegen.select import SelectionSettings, follow_up_pool_file, select_pool_file
+
+EXAMPLE_POOL = "plans/talos/pool.yaml"  # shipped with posegen (its copy is read outside the checkout)
 
 
 def main(output: Path) -> None:

@@ -1,4 +1,4 @@
-"""The shipped files: found outside the checkout, the same list in setup.py as in posegen.resources."""
+"""The shipped files: found outside the checkout; setup.py ships folders the lookup covers."""
 
 from __future__ import annotations
 
@@ -8,28 +8,28 @@ import subprocess
 import sys
 from pathlib import Path
 
-from posegen.resources import CHECKOUT, DEFAULT_CONFIG, EXAMPLE_POOL, SHIPPED, shipped_files, shipped_path
+from posegen.resources import CHECKOUT, DEFAULT_CONFIG, ROOTS, shipped_path
 from posegen.robot import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_setup_py_copies_the_folders_resources_reads():
+def shipped_by_setup() -> tuple[str, ...]:
     tree = ast.parse((ROOT / "setup.py").read_text())
     [copied] = [
         ast.literal_eval(n.value)
         for n in tree.body
         if isinstance(n, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "SHIPPED" for t in n.targets)
     ]
-    assert tuple(copied) == SHIPPED
+    return tuple(copied)
+
+
+def test_setup_py_ships_the_default_config_and_the_example_pool_inside_the_looked_up_folders():
+    folders = shipped_by_setup()
+    assert all(Path(folder).parts[0] in ROOTS and (ROOT / folder).is_dir() for folder in folders)
+    shipped = {p.relative_to(ROOT).as_posix() for f in folders for p in (ROOT / f).rglob("*") if p.is_file()}
+    assert DEFAULT_CONFIG in shipped and "plans/talos/pool.yaml" in shipped
     assert CHECKOUT == ROOT
-
-
-def test_shipped_files_are_the_checkout_folders():
-    files = shipped_files()
-    assert DEFAULT_CONFIG in files and EXAMPLE_POOL in files
-    assert {f.split("/")[0] for f in files} == {"configs", "plans"}
-    assert len(files) == sum(1 for folder in SHIPPED for p in (ROOT / folder).rglob("*") if p.is_file())
 
 
 def test_a_shipped_config_is_found_from_elsewhere_and_a_local_file_wins(tmp_path, monkeypatch):
