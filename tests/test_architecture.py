@@ -1,6 +1,6 @@
 """The package layout: imports run only downward, and packages meet only at their public names.
 
-Layers, bottom first (README, "Architecture")::
+Layers, bottom first (docs/architecture.md)::
 
     posegen (version), errors, progress
     extras

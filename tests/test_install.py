@@ -16,7 +16,7 @@ from packaging.utils import canonicalize_name
 
 ROOT = Path(__file__).resolve().parents[1]
 LOCK = ROOT / "constraints.txt"
-REFRESH = "refresh the lock: make lock, then make test (README, Set-up)"
+REFRESH = "refresh the lock: make lock, then make test (docs/getting-started.md, Pinned install)"
 
 
 def pins() -> dict[str, str]:
