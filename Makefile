@@ -8,7 +8,7 @@ export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 DEMO := plans/demo
 
-.PHONY: install demo test lint bench clean browser lock kill-matrix fuzz
+.PHONY: install demo test lint bench clean browser lock kill-matrix fuzz docs
 
 LOCK := constraints.txt
 
@@ -17,7 +17,7 @@ LOCK := constraints.txt
 $(STAMP): pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet -c $(LOCK) --upgrade pip setuptools
-	$(PY) -m pip install --quiet -c $(LOCK) --no-build-isolation -e '.[dev]'
+	$(PY) -m pip install --quiet -c $(LOCK) --no-build-isolation -e '.[all,dev,docs]'
 	touch $(STAMP)
 
 install: $(STAMP)
@@ -40,7 +40,7 @@ demo: $(STAMP)
 	$(VENV)/bin/posegen view $(DEMO)/route.yaml --html $(DEMO)/route.html
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check posegen tests benchmarks
+	$(VENV)/bin/ruff check posegen tests benchmarks examples docs setup.py
 	$(VENV)/bin/mypy posegen
 
 # Headless Chromium for the viewer's browser tests and benchmark: Debian's package, installed
@@ -66,6 +66,11 @@ kill-matrix: $(STAMP)
 fuzz: $(STAMP)
 	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests/robustness/test_fuzz.py tests/robustness/test_readers.py
 
+# The documentation site (Sphinx: docs/*.md and the API from the docstrings); warnings are errors.
+docs: $(STAMP)
+	$(PY) -m sphinx -b html -W --keep-going -q docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
+
 bench: $(STAMP) browser
 	$(PY) benchmarks/run.py
 
@@ -76,11 +81,11 @@ lock:
 	rm -rf .venv-lock
 	$(PYTHON) -m venv .venv-lock
 	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --upgrade pip setuptools
-	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --no-build-isolation -e '.[dev]'
+	.venv-lock/bin/python -m pip install --quiet $(if $(UPGRADE),,-c $(LOCK)) --no-build-isolation -e '.[all,dev,docs]'
 	echo "# The versions make test runs with (pip constraints); make lock refreshes them (README)." > $(LOCK).new
 	.venv-lock/bin/python -m pip freeze --all --exclude-editable >> $(LOCK).new
 	mv $(LOCK).new $(LOCK)
 	rm -rf .venv-lock
 
 clean:
-	rm -rf $(VENV) .venv-lock $(DEMO) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .venv-lock $(DEMO) .pytest_cache .mypy_cache .ruff_cache docs/_build build dist

@@ -37,6 +37,10 @@ class InfeasibleError(PosegenError):
     """The problem has no solution (table out of reach, empty pool, rank-deficient design)."""
 
 
+class ExtraError(PosegenError, ImportError):
+    """An optional dependency is not installed: the message names the ``posegen[extra]`` to install."""
+
+
 def unknown_name(kind: str, name: str, valid: Iterable[str]) -> str:
     """Format the message for an unknown name, listing the valid choices.
 

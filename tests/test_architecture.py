@@ -1,8 +1,9 @@
 """The package layout: imports run only downward, and packages meet only at their public names.
 
-Layers, bottom first (README, "Architecture")::
+Layers, bottom first (docs/architecture.md)::
 
     posegen (version), errors, progress
+    extras
     io | parallel | arguments
     robot
     model
@@ -29,6 +30,8 @@ MAX_LINES = 400
 
 LAYERS = {
     "posegen": 0,  # the root package: __version__ only
+    "posegen.resources": 0,
+    "posegen.extras": 0.5,  # optional packages: raises errors.ExtraError for io, parallel and view
     "posegen.errors": 0,
     "posegen.progress": 0,
     "posegen.io": 1,

@@ -1,7 +1,7 @@
 """The install cannot drift: every package `make test` runs with is pinned in constraints.txt.
 
 The Makefile installs with ``-c constraints.txt``; these tests check that the lock covers
-everything posegen (with its ``dev`` extra) pulls in, at the versions installed here,
+everything posegen (with every extra: the optional parts and ``dev``) pulls in, at the versions installed here,
 and that the caps keeping pinocchio's native libraries loadable are declared.
 """
 
@@ -16,7 +16,7 @@ from packaging.utils import canonicalize_name
 
 ROOT = Path(__file__).resolve().parents[1]
 LOCK = ROOT / "constraints.txt"
-REFRESH = "refresh the lock: make lock, then make test (README, Set-up)"
+REFRESH = "refresh the lock: make lock, then make test (docs/getting-started.md, Pinned install)"
 
 
 def pins() -> dict[str, str]:
@@ -30,15 +30,32 @@ def pins() -> dict[str, str]:
     return out
 
 
-def declared() -> list[Requirement]:
-    """What pyproject.toml asks for, runtime and ``dev``."""
+def project() -> dict:
     tomllib = pytest.importorskip("tomllib", reason="Python 3.11+ reads pyproject.toml")
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    return [Requirement(r) for r in [*project["dependencies"], *project["optional-dependencies"]["dev"]]]
+    return tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+
+
+def declared() -> list[Requirement]:
+    """What pyproject.toml asks for, the core and every extra (``posegen[...]``, extras of extras, left out)."""
+    extras = [r for group in project()["optional-dependencies"].values() for r in group]
+    requirements = [Requirement(r) for r in [*project()["dependencies"], *extras]]
+    return [r for r in requirements if canonicalize_name(r.name) != "posegen"]
+
+
+def test_the_optional_parts_are_extras_and_all_holds_them():
+    """The core leaves the viewer, Dask and rosbags out; ``all`` is every optional part."""
+    core = {canonicalize_name(Requirement(r).name) for r in project()["dependencies"]}
+    extras = project()["optional-dependencies"]
+    assert not core & {"viser", "trimesh", "distributed", "dask", "rosbags"}, core
+    assert {"viser", "trimesh"} <= {canonicalize_name(Requirement(r).name) for r in extras["view"]}
+    assert {"distributed"} <= {canonicalize_name(Requirement(r).name) for r in extras["dask"]}
+    assert {"rosbags"} <= {canonicalize_name(Requirement(r).name) for r in extras["ros"]}
+    (everything,) = [Requirement(r) for r in extras["all"]]
+    assert everything.name == "posegen" and everything.extras == {"view", "dask", "ros"}
 
 
 def closure() -> dict[str, str]:
-    """Every distribution posegen[dev] needs, as installed here: name -> version."""
+    """Every distribution posegen[all,dev] (and its other extras) needs, as installed here: name -> version."""
     found: dict[str, str] = {}
     todo = [(r, "") for r in declared()]
     while todo:

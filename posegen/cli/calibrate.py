@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
+from pathlib import Path
 
 from posegen.cli.options import DEFAULT_CONFIG, positive, positive_size, seed
 from posegen.cli.progress import ProgressBar
@@ -51,8 +53,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Calibrate, write the calibration folder and its HTML report, and print the before/after table."""
     from posegen.calibrate import Settings, calibrate_files, format_table, load_line
+    from posegen.errors import ExtraError
     from posegen.parallel import open_backend
-    from posegen.view import REPORT_FILE, write_report_into
+
+    try:
+        from posegen.view import REPORT_FILE, write_report_into
+    except ExtraError as exc:  # the calibration needs no viewer: only its HTML report does
+        missing: ExtraError | None = exc
+    else:
+        missing = None
 
     settings = Settings(
         prior_scale=args.prior_scale,
@@ -62,10 +71,14 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
-    report_html = lambda folder: write_report_into(folder, args.config, shown_as=args.output)  # noqa: E731
+
+    def report_html(folder: Path) -> object:
+        return write_report_into(folder, args.config, shown_as=args.output)
+
+    finish = None if missing else report_html
     with ProgressBar(args.quiet) as bar, open_backend(args.workers) as backend:
         calibrated = calibrate_files(
-            args.measurements, args.validate, args.output, settings, config, bar, backend, report_html
+            args.measurements, args.validate, args.output, settings, config, bar, backend, finish
         )
     report = calibrated.report
     model = report["model"]
@@ -90,13 +103,16 @@ def run(args: argparse.Namespace) -> int:
     for warning in report["warnings"]:
         print(f"  warning: {warning}")
     print(format_table(report))
+    report_name = "no report.html" if missing else REPORT_FILE
     print(
         f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, offsets.yaml, residuals.csv, "
-        f"posterior.npz, parameters.png, residuals.png, cross_validation.png, {REPORT_FILE}"
+        f"posterior.npz, parameters.png, residuals.png, cross_validation.png, {report_name}"
         + (", with_compliance/" if "compensated" in report["deliverables"] else "")
         + ")"
     )
     print(load_line(report))
+    if missing:
+        print(f"posegen: report.html not written: {missing}", file=sys.stderr)
     return 0
 
 

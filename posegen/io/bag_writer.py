@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from posegen.errors import InputError
+from posegen.extras import Extra, require
 from posegen.io.atomic import staging_folder, swap_folder, write_atomic
 
 PROVENANCE_KEY = "posegen"
@@ -90,6 +91,7 @@ def writing_bag(
         InputError: ``path`` exists and is not a rosbag2 directory (it is never deleted).
 
     """
+    require(Extra.ROS, "writing rosbag2 bags")
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     path = Path(path)

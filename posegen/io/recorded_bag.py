@@ -31,6 +31,7 @@ import yaml
 from numpy.typing import NDArray
 
 from posegen.errors import InputError, reason
+from posegen.extras import Extra, require
 from posegen.io import cdr, mcap_index
 from posegen.io.bag_writer import PROVENANCE_KEY, writing_bag
 from posegen.io.cdr import FloatArray
@@ -63,6 +64,7 @@ class Wrenches:
 
 
 def _typestore() -> Any:
+    require(Extra.ROS, "reading rosbag2 bags")
     from rosbags.typesys import Stores, get_typestore
 
     return get_typestore(Stores.ROS2_HUMBLE)
@@ -209,6 +211,7 @@ class RecordedBag:
             raise InputError(f"{self.path}: storage file missing: {', '.join(missing) or 'none listed'}")
         indexed = self.storage == "mcap" and compression in ("", "none")
         self.summaries = [mcap_index.read_summary(f) for f in self.files] if indexed else []
+        require(Extra.ROS, "reading rosbag2 bags")
         try:
             from rosbags.rosbag2 import Reader
 

@@ -3,20 +3,27 @@
 from __future__ import annotations
 
 import abc
+import ast
 import collections
 import concurrent.futures
+import concurrent.futures.process
 import hashlib
 import itertools
 import json
 import multiprocessing
 import os
 import select
+import sys
 import threading
 import time
 from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass
-from types import TracebackType
+from pathlib import Path
+from types import FrameType, TracebackType
 from typing import Any, Generic, Protocol, TypeVar
+
+from posegen.errors import BackendError, reason
+from posegen.extras import Extra, require
 
 StateT = TypeVar("StateT")
 ItemT = TypeVar("ItemT")
@@ -139,15 +146,83 @@ def _end_with(pid: int) -> None:
     threading.Thread(target=watch, name="posegen-end-with-run", daemon=True).start()
 
 
+@dataclass(frozen=True)
+class _SetupFailed:
+    """A worker's ``setup`` raised: kept as its state, reported with each item it is given."""
+
+    reason: str  # the exception's type and first line
+
+
 def _init_process(job: Job[Any, Any, Any], run_pid: int | None = None) -> None:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     if run_pid is not None:
         _end_with(run_pid)
-    _STATES[job.name] = job.setup()
+    try:
+        _STATES[job.name] = job.setup()
+    except Exception as exc:  # raising here would kill the worker: the run would see only a broken pool
+        _STATES[job.name] = _SetupFailed(reason(exc))
 
 
 def _run_in_process(name: str, run: Callable[[Any, Any], Any], item: Any) -> Any:
-    return run(_STATES[name], item)
+    state = _STATES[name]
+    if isinstance(state, _SetupFailed):
+        raise BackendError(f"workers: a worker process could not set up its work ({state.reason})")
+    return run(state, item)
+
+
+GUARD = 'if __name__ == "__main__":'
+
+
+def _is_guard(node: ast.stmt) -> bool:
+    """Whether ``node`` is ``if __name__ == "__main__":`` (either operand order)."""
+    if not isinstance(node, ast.If) or not isinstance(node.test, ast.Compare) or len(node.test.ops) != 1:
+        return False
+    operands = [node.test.left, *node.test.comparators]
+    names = [o.id for o in operands if isinstance(o, ast.Name)]
+    texts = [o.value for o in operands if isinstance(o, ast.Constant)]
+    return isinstance(node.test.ops[0], ast.Eq) and names == ["__name__"] and texts == ["__main__"]
+
+
+def _unguarded_script_line(frame: FrameType | None) -> tuple[str, int] | None:
+    """The script and line running this call outside a ``__main__`` guard, if a script is.
+
+    Worker processes (forkserver, as spawn) import the main script again as
+    ``__mp_main__``: its top-level code outside the guard runs again there, and when it
+    starts workers itself they die (``BrokenProcessPool``). ``python -m pkg``, the
+    ``posegen`` command, ``python -c`` and notebooks are never re-run this way.
+    """
+    main = sys.modules.get("__main__")
+    spec_name = getattr(getattr(main, "__spec__", None), "name", None) or ""
+    if main is None or spec_name == "__main__" or spec_name.endswith(".__main__"):
+        return None
+    while frame is not None and not (frame.f_globals is vars(main) and frame.f_code.co_name == "<module>"):
+        frame = frame.f_back
+    if frame is None or not Path(frame.f_code.co_filename).is_file():
+        return None
+    path, line = frame.f_code.co_filename, frame.f_lineno
+    try:
+        body = ast.parse(Path(path).read_bytes()).body
+    except (OSError, SyntaxError, ValueError):
+        return None
+    guarded = any(_is_guard(n) and n.lineno <= line <= (n.end_lineno or n.lineno) for n in body)
+    return None if guarded else (path, line)
+
+
+def check_script_guard(workers: int) -> None:
+    """Refuse to start worker processes from a script they would run again.
+
+    Raises:
+        BackendError: ``workers`` > 1 asked from a script's top-level code outside
+            ``if __name__ == "__main__":`` (the message says what to add).
+
+    """
+    found = _unguarded_script_line(sys._getframe(1)) if workers > 1 else None
+    if found:
+        path, line = found
+        raise BackendError(
+            f"workers: {workers} worker processes would run {path} again (line {line} is outside "
+            f"'{GUARD}'): put the script's code under '{GUARD}', or use workers=1"
+        )
 
 
 class ProcessBackend(Backend):
@@ -188,8 +263,10 @@ class ProcessBackend(Backend):
                 yield job.run(state, item)
             return
         items = itertools.chain(head, iterator)
+        broken = False
         executor = self._executors.get(job.name)
         if executor is None:
+            check_script_guard(self.workers)
             context = multiprocessing.get_context("forkserver")
             executor = concurrent.futures.ProcessPoolExecutor(
                 max_workers=self.workers, mp_context=context, initializer=_init_process, initargs=(job, os.getpid())
@@ -200,8 +277,14 @@ class ProcessBackend(Backend):
                 items,
                 max(window or 0, WINDOW_PER_SLOT * self.workers),
             )
+        except concurrent.futures.process.BrokenProcessPool as exc:
+            broken = True
+            raise BackendError(
+                f"workers: a worker process ended abruptly (killed, out of memory, or a script without '{GUARD}' "
+                "re-run in it); rerun with workers=1 to see the cause"
+            ) from exc
         finally:
-            if self._keep:
+            if self._keep and not broken:
                 self._executors[job.name] = executor
             else:
                 executor.shutdown(wait=True, cancel_futures=True)
@@ -225,10 +308,12 @@ def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:
     Raises:
         BackendError: The scheduler cannot be reached, has no worker, or a worker runs
             another posegen version.
+        ExtraError: ``scheduler`` is given and Dask is not installed (``posegen[dask]``).
 
     """
     if scheduler is None:
         return ProcessBackend(workers)
+    require(Extra.DASK, "scheduler (a Dask cluster)")
     from posegen.parallel.cluster import DaskBackend
 
     return DaskBackend(scheduler)

@@ -37,8 +37,8 @@ class CandidateConfig:
     """A candidate model: which parameter kinds are fitted, and which effects are modelled.
 
     Contact offsets and table planes are always fitted. ``fit`` holds ``part.kind``
-    patterns, part one of leg, torso, arm or *, kind one of joint_offset, axis_tilt,
-    link_translation, frame_rotation or *; every other kind is held at the URDF.
+    patterns, part one of leg, torso, arm or ``*``, kind one of joint_offset, axis_tilt,
+    link_translation, frame_rotation or ``*``; every other kind is held at the URDF.
     """
 
     name: str

@@ -16,6 +16,7 @@ from typing import Any, TypeVar
 from posegen.arguments import is_finite_number
 from posegen.errors import ConfigError
 from posegen.io import load_yaml_file
+from posegen.resources import shipped_path
 from posegen.robot.additions import (
     CollisionConfig,
     FrameConfig,
@@ -325,11 +326,14 @@ def _section(top: Reader, key: str, defaults: _Section) -> _Section:
 def load_config(path: str | Path) -> Config:
     """Load and validate a scene configuration file.
 
+    A relative path into ``configs/`` that does not exist from here is read from
+    posegen's copy of that folder (:func:`posegen.resources.shipped_path`).
+
     Raises:
         ConfigError: The file is missing, not YAML, or not a valid configuration.
 
     """
-    path = Path(path)
+    path = shipped_path(path)  # a shipped config (configs/...) is found outside the checkout too
     data = load_yaml_file(path, ConfigError)
     try:
         return parse_config(data, str(path))

@@ -7,6 +7,10 @@ contact. Drawn with viser: its browser client ships in the Python wheel, so a pa
 holds the client, the meshes and the animation and opens offline.
 """
 
+from posegen.extras import Extra, require
+
+require(Extra.VIEW, "the viewer (3D views, the calibration report)")
+
 from posegen.view.artefact import (
     Artefact,
     ArtefactKind,

@@ -128,3 +128,68 @@ def test_inside_with_the_workers_and_their_states_last_from_one_map_to_the_next(
             again = list(backend.map(job, range(8)))
         assert [r[0] for r in again] == [i * i for i in range(8)]
         assert {(pid, built) for _, pid, built in again} <= {(pid, built) for _, pid, built in first}
+
+
+SCRIPT_JOB = """
+import operator
+from posegen.parallel import Job, ProcessBackend
+
+def squares():
+    job = Job(name="sums", setup=int, run=operator.add)  # builtins: picklable from any script
+    return list(ProcessBackend(2).map(job, range(6)))
+"""
+
+
+def _run_script(tmp_path, body):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = tmp_path / "script.py"
+    script.write_text(SCRIPT_JOB + body)
+    root = Path(__file__).resolve().parents[2]
+    env = {**os.environ, "PYTHONPATH": str(root), "OPENBLAS_NUM_THREADS": "1"}
+    return subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120
+    )
+
+
+def test_an_unguarded_script_with_workers_gets_told_what_to_add(tmp_path):
+    result = _run_script(tmp_path, "print('once')\nprint(squares())\n")
+    assert result.returncode == 1 and result.stdout == "once\n"  # stopped before any worker re-ran the script
+    assert "BrokenProcessPool" not in result.stderr
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith("posegen.errors.BackendError: workers: 2 worker processes would run")
+    assert 'if __name__ == "__main__":' in last and "line 9 is outside" in last
+
+
+def test_code_above_the_guard_is_refused_and_code_under_it_runs(tmp_path):
+    guarded = _run_script(tmp_path, "if __name__ == '__main__':\n    print(squares())\n")
+    assert guarded.returncode == 0, guarded.stderr
+    assert guarded.stdout == "[0, 1, 2, 3, 4, 5]\n"  # the script ran once: the workers did not re-run it
+    above = _run_script(tmp_path, "print(squares())\nif __name__ == '__main__':\n    pass\n")
+    assert above.returncode == 1 and "BackendError" in above.stderr and "line 8 is outside" in above.stderr
+
+
+def _die(state, item):
+    os._exit(3)
+
+
+def test_a_worker_that_dies_is_a_backend_error_not_a_broken_pool():
+    job = Job(name="dies", setup=_setup, run=_die)
+    with pytest.raises(BackendError, match="ended abruptly"):
+        list(ProcessBackend(2).map(job, range(4)))
+
+
+def _setup_fails():
+    raise RuntimeError("input stream error\nsecond line")
+
+
+def test_a_worker_whose_setup_fails_says_why_and_is_no_broken_pool():
+    job = Job(name="setup-fails", setup=_setup_fails, run=_run)
+    with pytest.raises(BackendError, match=r"could not set up its work \(RuntimeError: input stream error\)$"):
+        list(ProcessBackend(2).map(job, range(4)))
+    with ProcessBackend(2) as backend:  # the pool stays usable: a job that sets up runs after it
+        with pytest.raises(BackendError, match="could not set up"):
+            list(backend.map(job, range(4)))
+        assert [r[0] for r in backend.map(Job(name="squares", setup=_setup, run=_run), range(4))] == [0, 1, 4, 9]
