@@ -9,7 +9,9 @@ selection, route).
 
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig, ContactKind
+from posegen.robot.chain_frames import check_calibration_frames, declared_chain_frames
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
+from posegen.robot.collision_geometry import robot_geometry
 from posegen.robot.collision_matrix import PairSurvey
 from posegen.robot.config import (
     Config,
@@ -23,6 +25,7 @@ from posegen.robot.config import (
     load_config,
     parse_config,
 )
+from posegen.robot.coverage import GeometryCoverage, geometry_coverage
 from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf
 from posegen.robot.draft import Draft
 from posegen.robot.draft_text import survey_config_pairs, write_draft
@@ -102,6 +105,7 @@ __all__ = [
     "ContactKind",
     "Draft",
     "FloatArray",
+    "GeometryCoverage",
     "Indices",
     "Invariant",
     "MarginConfig",
@@ -127,11 +131,14 @@ __all__ = [
     "Worst",
     "WorstSoFar",
     "assess",
+    "check_calibration_frames",
     "check_for_planning",
     "contact_in_table",
     "contact_placement",
     "convex_hull_clockwise",
+    "declared_chain_frames",
     "flatten_on_floor",
+    "geometry_coverage",
     "gravity_torques",
     "is_route_file",
     "kinematic_urdf",
@@ -145,6 +152,7 @@ __all__ = [
     "pool_from_dict",
     "posture_from_dict",
     "read_route",
+    "robot_geometry",
     "route_arrays",
     "scene_for",
     "stamp",
