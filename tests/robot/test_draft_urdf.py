@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -166,3 +167,22 @@ def test_a_visual_hull_contains_the_visual_mesh(drafts):
     )
     with pytest.raises(ConfigError, match=r"robot\.collision\.shapes\.l_thigh: visual_hull, but the link has no"):
         robot_geometry(scene.model, scene.urdf_xml, (), CollisionConfig(shapes=(VisualHull("l_thigh"),)), convex=False)
+
+
+def test_check_says_what_it_checks_with_and_warns_of_bare_links(drafts, tmp_path, capsys):
+    draft, scene = drafts["z"]
+    primitives = sum(isinstance(s, Capsule) for s in draft.shapes)
+    pool = tmp_path / "pool.yaml"
+    config = scene.config.source_path
+    assert main(["pool", "--n", "2", "--seed", "1", "--workers", "1", "--config", config, "-q", "-o", str(pool)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(pool), "-q"]) == 0
+    out = capsys.readouterr().out
+    assert f"(4 meshes, {primitives} primitives; pinocchio" in out and "WARN" not in out
+    text = Path(config).read_text()
+    bare = tmp_path / "bare.yaml"  # the same robot without the drafted shapes: the thighs have nothing
+    bare.write_text(text[: text.index("    shapes:")] + text[text.index("\nstance:") :])
+    assert main(["check", str(pool), "--config", str(bare), "-q"]) in (0, 1)
+    out = capsys.readouterr().out
+    assert "(4 meshes; pinocchio" in out and f"WARN {len(draft.covered)} moving links have no collision geometry" in out
+    assert " l_thigh " in out + " "
