@@ -5,16 +5,58 @@ Imported by ``benchmarks/run.py`` (``make bench``); each function prints Markdow
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 
-from posegen.calibrate import CvResult, Perturbation, Settings, calibrate, estimate, held_out_residuals, simulate
-from posegen.calibrate.calibration import FLOOR_NOISE
+from posegen.calibrate import (
+    Calibration,
+    CvResult,
+    DeliverableKind,
+    Perturbation,
+    ScaleSearch,
+    Settings,
+    calibrate,
+    compensate,
+    estimate,
+    read_compliance,
+    simulate,
+    write_calibration,
+)
+from posegen.calibrate.deliverable_files import held_out_errors
 from posegen.calibrate.estimation import Noise, held_at_urdf
-from posegen.model import DEFAULT_NOISE, Contacts, Kind, candidate_spec, read_measurements, start_point
-from posegen.robot import CandidateConfig, Pool, Scene
+from posegen.calibrate.estimation import fit as fit_parameters
+from posegen.model import (
+    DEFAULT_FLOOR_NOISE,
+    DEFAULT_NOISE,
+    CalibrationModel,
+    Contacts,
+    Kind,
+    Spec,
+    candidate_spec,
+    read_measurements,
+    spec_for_rows,
+    start_point,
+)
+from posegen.parallel import ProcessBackend
+from posegen.robot import CandidateConfig, Pool, Scene, load_config
+
+ROOT = Path(__file__).resolve().parents[1]
+POSEGEN = str(Path(sys.executable).with_name("posegen"))
+EXHAUSTIVE_PICK = ROOT / "tests" / "calibrate" / "real_exhaustive_pick.yaml"
+CORRUPTIONS = {  # as in tests/calibrate/test_screening.py: (file, line, joint, rad)
+    1: [("right_train.csv", 12, "arm_right_4_joint", 0.3)],
+    2: [("right_train.csv", 12, "arm_right_4_joint", 0.3), ("left_train.csv", 9, "arm_left_2_joint", -0.05)],
+    3: [
+        ("right_train.csv", 12, "arm_right_4_joint", -0.1),
+        ("left_train.csv", 9, "arm_left_2_joint", 0.05),
+        ("right_train.csv", 20, "torso_2_joint", 0.08),
+    ],
+}
 
 SHOW = np.array([1e3, 180 / np.pi, 180 / np.pi])  # m, rad, rad -> mm, deg, deg
 SESSIONS = ["left_train", "right_train", "left_validation"]
@@ -31,67 +73,166 @@ def _real(scene: Scene, data: Path) -> tuple[Contacts, Contacts]:
     return train, read_measurements(data / "left_validation.csv", scene).contacts
 
 
-def bench_real(scene: Scene, data: Path, machine: str) -> tuple[str, float]:
-    """The whole ``calibrate`` on the real data: model selection, predicted error, held-out figures."""
+def judge_file(config: Path, compliance: Path | None, train: Contacts, held_out: Contacts) -> np.ndarray:
+    """A deliverable alone, as any stack sees it: its kinematics frozen, only the table plane (height, roll,
+    pitch) and the contact tilt fitted on the training rows (joints compensated first when it ships a
+    compliance), held-out rows judged with the plane of their chain's training session. Mean abs (3,) mm, deg."""
+    scene = Scene(load_config(config))
+    sessions = sorted(set(train.sessions) | set(held_out.sessions))
+    if compliance is not None:
+        law = read_compliance(compliance)
+        train = train.at(compensate(scene, train.joints, law))
+        held_out = held_out.at(compensate(scene, held_out.joints, law))
+    model = CalibrationModel(scene, sorted(set(train.chains)), sessions, {}, train.kinds_by_chain())
+    free = tuple(model.columns([Kind.PLANE, Kind.CONTACT_TILT]))
+    spec = spec_for_rows(model, Spec(free, np.full(model.size, np.inf), floor=False), set(train.sessions))
+    observations = model.observations(train)
+    noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
+    delta, _ = fit_parameters(model, observations, spec, noise, start_point(model, observations))
+    x = model.x_of(delta)
+    for session in set(held_out.sessions) - set(train.sessions):  # the plane of the chain's training session
+        chain = held_out.chains[held_out.sessions.index(session)]
+        source = train.sessions[train.chains.index(chain)]
+        x[model.contact.plane_columns(session)] = x[model.contact.plane_columns(source)]
+    residuals = model.evaluate(x, model.observations(held_out), floor=False).contact
+    return np.mean(np.abs(residuals), axis=0) * SHOW
+
+
+def _cli_seconds(data: Path, out: Path, runs: int = 3) -> list[float]:
+    """Wall time of the whole ``posegen calibrate`` command on the two training sets (every default candidate)."""
+    times = []
+    for k in range(runs):
+        start = time.perf_counter()
+        subprocess.run(
+            [
+                POSEGEN,
+                "calibrate",
+                str(data / "left_train.csv"),
+                str(data / "right_train.csv"),
+                "-q",
+                "-o",
+                str(out / f"cli{k}"),
+            ],
+            check=True,
+            capture_output=True,
+        )
+        times.append(time.perf_counter() - start)
+    return times
+
+
+def bench_real(scene: Scene, data: Path, machine: str, workdir: Path) -> None:
+    """The whole ``calibrate`` on the real data: timing, model selection, each deliverable alone, exhaustive pick."""
     train, held_out = _real(scene, data)
-    start = time.perf_counter()
-    cal = calibrate(scene, train, SESSIONS)
-    total = time.perf_counter() - start
-    selection = cal.selection
+    times = _cli_seconds(data, workdir)
     print(f"\n### calibration: real TALOS data, two chains ({machine})\n")
-    print(f"whole `posegen calibrate` (screening, {len(selection.results)} CV pairs, final fit): {total:.0f} s\n")
+    print(
+        f"whole `posegen calibrate` (2 workers), wall: median {np.median(times):.1f} s "
+        f"(runs {', '.join(f'{t:.1f}' for t in times)} s; target 20 s)\n"
+    )
+    with ProcessBackend(2) as backend:
+        cal = calibrate(scene, train, SESSIONS, Settings(), backend=backend)
+        exhaustive = calibrate(scene, train, SESSIONS, Settings(search=ScaleSearch.EXHAUSTIVE), backend=backend)
+    record_pick(exhaustive, EXHAUSTIVE_PICK)
+    same = pick_of(cal) == pick_of(exhaustive)
+    print(
+        f"valley search: {sum(r.plausible for r in cal.selection.results)} of "
+        f"{sum(r.plausible for r in exhaustive.selection.results)} plausible pairs cross-validated; "
+        f"same pick as the exhaustive search: {same} (recorded in {EXHAUSTIVE_PICK.name})\n"
+    )
     print("| candidate (best prior scale) | free | CV score +- SE | left z mm / roll / pitch deg | right |")
     print("|---|---|---|---|---|")
     best: dict[str, CvResult] = {}
-    for r in selection.results:
+    for r in exhaustive.selection.results:
         if r.plausible and (r.candidate not in best or r.score < best[r.candidate].score):
             best[r.candidate] = r
-    for r in sorted(best.values(), key=lambda r: r.score):
+    for r in [*sorted(best.values(), key=lambda r: r.score), exhaustive.selection.nominal]:
         left, right = (np.array(r.chains[c].mean_abs) * SHOW for c in ("left", "right"))
         score = f"{r.score:.1f} +- {r.se:.1f}"
         print(f"| {r.candidate} (x{r.prior_scale:g}) | {r.free} | {score} | {_fmt(left)} | {_fmt(right)} |")
-    chosen = selection.chosen
-    picks = ", ".join(f"{c} x{s:g}" for c, s in selection.seed_picks)
+    chosen = cal.selection.chosen
     print(
-        f"\nchosen: **{chosen.candidate} x{chosen.prior_scale:g}** (best {selection.best.candidate} "
-        f"x{selection.best.prior_scale:g}); same pick on {selection.stability:.0%} of the seeds ({picks}); "
-        f"{sum(not r.plausible for r in selection.results)} implausible pairs left out"
+        f"\nmodel (one-SE rule): **{chosen.candidate} x{chosen.prior_scale:g}**; same pick on "
+        f"{cal.selection.stability:.0%} of the seeds; rows left out: "
+        f"{', '.join(f.label.rsplit(':', 1)[0] for f in cal.flags) or 'none'}\n"
     )
-    for flag in cal.flags:
-        print(f"- left out: {flag.label} ({flag.reason}, {flag.value:.2f})")
-    compliance = {
-        g: round(v * 1e3, 3) for g, v in cal.model.compliances(cal.after.x).items() if g in cal.candidate.compliance
-    }
-    print(f"- compliance (rad/kN m): {compliance}; noise {_fmt(np.array(cal.after.noise.contact) * SHOW)}")
-    res = held_out_residuals(cal, held_out)
-    print("\n| left_validation (9 contacts), mean abs z mm / roll / pitch deg | before (URDF) | after |")
-    print("|---|---|---|")
-    for protocol in ("training_plane", "refitted_plane"):
-        b = np.mean(np.abs(res[protocol]["before"]), axis=0) * SHOW
-        a = np.mean(np.abs(res[protocol]["after"]), axis=0) * SHOW
-        print(f"| {protocol.replace('_', ' ')} | {_fmt(b)} | {_fmt(a)} |")
-    return chosen.candidate, chosen.prior_scale
+    out = workdir / "real"
+    write_calibration(cal, held_out, out, 0)
+    print(
+        "| deliverable alone (left_validation, plane from training) | model | CV-predicted left | CV-predicted right"
+        " | left_validation z mm / roll / pitch deg |"
+    )
+    print("|---|---|---|---|---|")
+    nominal = judge_file(ROOT / "configs" / "talos_table.yaml", None, train.subset(list(cal.kept)), held_out)
+    rows = [("nominal URDF", cal.selection.nominal, nominal)]
+    for d in cal.deliverables.all():
+        folder = out if d.kind == DeliverableKind.URDF else out / "with_compliance"
+        config = out / "calibrated.yaml"
+        if d.kind == DeliverableKind.COMPENSATED:
+            config = workdir / "compensated.yaml"
+            text = (
+                (out / "calibrated.yaml")
+                .read_text()
+                .replace(str((out / "calibrated.urdf").resolve()), str((folder / "calibrated.urdf").resolve()))
+            )
+            config.write_text(text)
+        compliance = folder / "compliance.yaml" if d.kind == DeliverableKind.COMPENSATED else None
+        rows.append(
+            (
+                f"`{folder.name}/calibrated.urdf`" + (" + compliance.yaml" if compliance else ""),
+                d.result,
+                judge_file(config, compliance, train.subset(list(cal.kept)), held_out),
+            )
+        )
+    for name, result, judged in rows:
+        left, right = (np.array(result.chains[c].mean_abs) * SHOW for c in ("left", "right"))
+        label = f"{result.candidate} x{result.prior_scale:g}"
+        print(f"| {name} | {label} | {_fmt(left)} | {_fmt(right)} | {_fmt(judged)} |")
 
 
-def bench_corrupted_row(scene: Scene, data: Path, candidate: str) -> None:
-    """One arm joint of one training row off by 0.3 rad: flagged, and the held-out error hardly moves."""
+def pick_of(cal: Calibration) -> dict[str, list[object]]:
+    """The choices a calibration made: the model and each deliverable, (candidate, prior scale)."""
+    out: dict[str, list[object]] = {"model": [cal.selection.chosen.candidate, cal.selection.chosen.prior_scale]}
+    for d in cal.deliverables.all():
+        out[d.kind.value] = [d.candidate.name, d.result.prior_scale]
+    return out
+
+
+def record_pick(cal: Calibration, path: Path) -> None:
+    """Record the exhaustive search's pick on the real data (tests compare the valley search's with it)."""
+    path.write_text(
+        yaml.safe_dump(
+            {"note": "written by make bench (exhaustive scale search, real data)", **pick_of(cal)}, sort_keys=False
+        )
+    )
+
+
+def bench_corrupted_rows(scene: Scene, data: Path) -> None:
+    """One to three corrupted rows (every default candidate): never an error, every one flagged, held-out kept."""
     train, held_out = _real(scene, data)
-    joints = train.joints.copy()
-    row = 5
-    joints[row, scene.joint_index(f"arm_{train.chains[row]}_4_joint")] += 0.3
-    bad = Contacts(joints, train.chains, train.sessions, train.labels)
-    settings = Settings(candidates=(candidate,))
-    where = f"candidate {candidate}; arm joint 4 of row {train.labels[row]} + 0.3 rad"
-    print(f"\n### one corrupted row (real data, {where})\n")
-    print("| training set | rows left out | CV-predicted left / right z (mm) | left_validation z mm / roll / pitch |")
+    print("\n### corrupted rows (real data, every candidate)\n")
+    print(
+        "| corrupted rows | rows left out | model | left_validation z mm / roll / pitch deg (model; URDF; URDF + "
+        "compensation) |"
+    )
     print("|---|---|---|---|")
-    for name, data_ in (("clean", train), ("corrupted", bad)):
-        cal = calibrate(scene, data_, SESSIONS, settings)
-        chains = cal.selection.chosen.chains
-        after = np.mean(np.abs(held_out_residuals(cal, held_out)["training_plane"]["after"]), axis=0) * SHOW
-        left_out = ", ".join(f.label.split(":", 2)[1] for f in cal.flags) or "none"
-        predicted = f"{chains['left'].mean_abs[0] * 1e3:.2f} / {chains['right'].mean_abs[0] * 1e3:.2f}"
-        print(f"| {name} | lines {left_out} | {predicted} | {_fmt(after)} |")
+    with ProcessBackend(2) as backend:
+        for edits in ([], *CORRUPTIONS.values()):
+            joints = train.joints.copy()
+            for file, line, joint, error in edits:
+                row = next(i for i, label in enumerate(train.labels) if label.startswith(f"{file}:{line}:"))
+                joints[row, scene.joint_index(joint)] += error
+            cal = calibrate(scene, train.at(joints), SESSIONS, Settings(), backend=backend)
+            figures = [
+                held_out_errors(cal, x, held_out)["all"]["mean_abs"]
+                for x in (cal.after.x, *(d.estimate.x for d in cal.deliverables.all()))
+            ]
+            shown = "; ".join(f"{f['z_mm']:.2f} / {f['roll_deg']:.2f} / {f['pitch_deg']:.2f}" for f in figures)
+            flags = ", ".join(f.label.rsplit(":", 1)[0] for f in cal.flags)
+            name = "clean" if not edits else "; ".join(f"{f}:{n} {j} {e:+g} rad" for f, n, j, e in edits)
+            print(
+                f"| {name} | {flags} | {cal.selection.chosen.candidate} x{cal.selection.chosen.prior_scale:g} | "
+                f"{shown} |"
+            )
 
 
 def bench_recovery(scene: Scene, pool: Pool) -> None:
@@ -120,7 +261,7 @@ def bench_recovery(scene: Scene, pool: Pool) -> None:
                 candidate = CandidateConfig("c", fit, floor, compliance)
                 spec = candidate_spec(model, candidate, scene.calibration.prior, 10.0)
                 start = held_at_urdf(model, spec, start_point(model, observations))
-                est = estimate(model, observations, spec, Noise(DEFAULT_NOISE, FLOOR_NOISE), start)
+                est = estimate(model, observations, spec, Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE), start)
                 error = np.mean(np.abs(model.evaluate(est.x, test_obs, floor=False).contact), axis=0) * SHOW
                 value = f"{est.x[hip[0]] * 1e3:.3f}" if compliance else "-"
                 name = ("full" if fit == ("*.*",) else "offsets + legs") + (" + hip pitch" if compliance else "")

@@ -235,15 +235,15 @@ def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
     print(f"| for comparison: rosbags iterating the {count} raw JointState messages alone | {iterate:.1f} s |")
 
 
-def bench_calibration() -> None:
-    from calibration_bench import bench_corrupted_row, bench_real, bench_recovery  # beside this script
+def bench_calibration(workdir: Path) -> None:
+    from calibration_bench import bench_corrupted_rows, bench_real, bench_recovery  # beside this script
 
     from posegen.robot import Scene, load_config, load_pool
 
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
     data = real_data()
-    candidate, _ = bench_real(scene, data, machine())
-    bench_corrupted_row(scene, data, candidate)
+    bench_real(scene, data, machine(), workdir / "calibration")
+    bench_corrupted_rows(scene, data)
     bench_recovery(scene, load_pool(ROOT / "plans" / "talos" / "pool.yaml"))
 
 
@@ -345,7 +345,7 @@ def main() -> None:
     if "bag" in args.only:
         bench_bag(pool_path, workdir)
     if "calibration" in args.only:
-        bench_calibration()
+        bench_calibration(workdir)
     if "view" in args.only:
         bench_view(pool_path, workdir)
     if "scale" in args.only:

@@ -13,7 +13,6 @@ import yaml
 
 from posegen.model import ChainModel
 from posegen.robot import Scene, load_config, load_pool, write_pool
-from posegen.robot.chain_frames import declared_chain_frames
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
@@ -107,11 +106,5 @@ def test_shipped_config_runs_end_to_end(config, tmp_path, capsys):
     assert "FAIL" not in run("check", str(route), "-q")
     measurements = tmp_path / "sim.yaml"
     run("simulate", str(pool), "--seed", "1", "-o", str(measurements))
-    argv = ("calibrate", str(measurements), "--prior-scale", "5", "-q", "-o", str(tmp_path / "cal"))
-    if declared_chain_frames(Scene(load_config(path))):
-        # The chain ends at frames the config declares: calibrate identifies them but cannot write
-        # them into the URDF yet (the export of declared frames). Fails loudly once it can.
-        assert main(list(argv)) == 2 and "no joint with child" in capsys.readouterr().err
-        pytest.xfail("calibrate cannot export frames declared in the config yet")
-    run(*argv)
+    run("calibrate", str(measurements), "--prior-scale", "5", "-q", "-o", str(tmp_path / "cal"))
     assert (tmp_path / "cal" / "calibrated.urdf").exists()

@@ -10,9 +10,13 @@ perturbed robot, the calibrated URDF, the report and the folder read back
 
 from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
+from posegen.calibrate.compliance import Compliance, ComplianceGroup, compensate, read_compliance, uncompensate
+from posegen.calibrate.deliverable_files import load_line
+from posegen.calibrate.deliverables import Deliverable, DeliverableKind, Deliverables
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, levenberg_marquardt
 from posegen.calibrate.folds import Fold, repeated_folds, spot_of
-from posegen.calibrate.model_selection import RULE, CvResult, ModelSelection, select_model
+from posegen.calibrate.model_selection import ModelSelection, ScaleSearch, select_model
+from posegen.calibrate.offsets import JointOffset, apply_offsets, joint_offsets, read_offsets
 from posegen.calibrate.record import (
     CALIBRATION_FILE,
     CALIBRATION_FORMAT,
@@ -28,9 +32,10 @@ from posegen.calibrate.record import (
     write_record,
 )
 from posegen.calibrate.report import format_table, residual_stats, write_calibration
+from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
-from posegen.calibrate.urdf_export import calibrated_urdf
+from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
 from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
 
 __all__ = [
@@ -42,34 +47,49 @@ __all__ = [
     "Calibrated",
     "Calibration",
     "CalibrationRecord",
+    "Compliance",
+    "ComplianceGroup",
     "ContactResidual",
     "ContactSet",
     "CvResult",
+    "Deliverable",
+    "DeliverableKind",
+    "Deliverables",
     "Estimate",
     "Flag",
     "Fold",
+    "JointOffset",
     "Measured",
     "ModelSelection",
     "Noise",
     "Perturbation",
     "Posterior",
+    "ScaleSearch",
     "Settings",
     "Simulated",
     "SimulatedSession",
+    "apply_offsets",
     "calibrate",
     "calibrate_files",
+    "calibrated_config",
     "calibrated_urdf",
+    "check_exportable",
+    "compensate",
     "contact_residuals",
     "estimate",
     "fit",
     "format_table",
     "held_out_residuals",
     "held_out_x",
+    "joint_offsets",
     "levenberg_marquardt",
+    "load_line",
     "measure_bag",
     "posterior_of",
     "read_calibration",
+    "read_compliance",
     "read_contacts",
+    "read_offsets",
     "repeated_folds",
     "residual_stats",
     "select_model",
@@ -78,6 +98,7 @@ __all__ = [
     "simulate_route_bag",
     "spot_of",
     "true_parameters",
+    "uncompensate",
     "write_calibration",
     "write_record",
 ]

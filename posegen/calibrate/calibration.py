@@ -5,8 +5,12 @@
 2. Bad rows are screened with a robust fit (:mod:`posegen.calibrate.screening`), the
    model (candidate and prior scale) is chosen by repeated, grouped cross-validation
    without them (:mod:`posegen.calibrate.model_selection`), and the rows are screened
-   again with the chosen model, until nothing more is flagged. A flagged row shapes
-   nothing: not the noise, not the model choice, not the base parameters.
+   again with the chosen model; if it flags more, the model is chosen once more without
+   them. Screening is monotone and bounded: a flagged row stays out and shapes nothing
+   (not the noise, the model choice or the base parameters), at most
+   ``calibration.max_left_out`` of the rows are left out, and it never fails.
+   The deliverables (the URDF alone, and the URDF with its compliance compensation)
+   are chosen from the same cross-validation (:mod:`posegen.calibrate.deliverables`).
 3. "After" is the chosen candidate fitted on every kept row; "before" is the URDF with
    only the contact offsets and planes fitted. Base parameters (QR) are computed for
    identifiability and reporting only: the fit itself regularises every parameter by
@@ -22,17 +26,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from posegen.arguments import check_count, check_seed, check_size
+from posegen.calibrate.deliverables import Deliverables, choose_deliverables
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec
 from posegen.calibrate.folds import repeated_folds, spot_of
-from posegen.calibrate.model_selection import ModelSelection, select_model
-from posegen.calibrate.screening import (
-    Flag,
-    chi_thresholds,
-    feet_off_the_floor,
-    feet_offsets,
-    robust_residuals,
-    row_dof,
-)
+from posegen.calibrate.model_selection import ModelSelection, ScaleSearch, select_model
+from posegen.calibrate.screening import Flag, Screening, feet_off_the_floor, feet_offsets
+from posegen.calibrate.urdf_export import check_exportable
 from posegen.errors import InfeasibleError, InputError
 from posegen.model import (
     DEFAULT_FLOOR_NOISE,
@@ -51,11 +50,12 @@ from posegen.model import (
     spec_for_rows,
     start_point,
 )
+from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
-MAX_ROUNDS = 6  # screening rounds (each re-selects the model) before giving up dropping rows
+SELECTIONS = 2  # model selections at most: on the screened rows, then again if the chosen model flags more
 
 
 @dataclass(frozen=True)
@@ -68,6 +68,7 @@ class Settings:
     drop_outliers: bool = True
     seed: int = 0  # the first fold seed
     structural_postures: int = STRUCTURAL_POSTURES  # per (chain, session) pair, for the base parameters
+    search: ScaleSearch = ScaleSearch.VALLEY  # which prior scales each candidate is cross-validated at
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,8 @@ class Calibration:
     after: Estimate
     base: BaseParameters
     base_with_floor: int | None  # base parameters of contacts and floor equations (None: one leg only)
+    deliverables: Deliverables  # the files a robot loads, each with its predicted error
+    warnings: tuple[str, ...] = ()  # what the user must know (screening at its limit, a URDF kept)
 
 
 def check_settings(settings: Settings) -> None:
@@ -197,12 +200,42 @@ def _files_of(labels: Sequence[str]) -> str:
     return f" ({shown})"
 
 
+def _select_screened(
+    model: CalibrationModel,
+    everything: Observations,
+    screen: Screening,
+    setup: tuple[CalibrationConfig, list[CandidateConfig]],
+    settings: Settings,
+    progress: ProgressCallback,
+    backend: Backend | None,
+) -> ModelSelection:
+    """Select the model on the rows ``screen`` keeps; screen again with it and, if it flags more, select once more."""
+    config, candidates = setup
+    seeds = range(settings.seed, settings.seed + config.fold_seeds)
+    sessions = set(everything.contacts.subset(screen.kept).sessions)
+    noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
+    for selection_round in range(1, SELECTIONS + 1):
+        check_enough(model, everything.contacts.subset(screen.kept), config, screen.dropped)
+        observations = everything.subset(screen.kept)
+        folds = repeated_folds(model.contact, observations.contacts, config.folds, seeds)
+        selection = select_model(
+            model, observations, config, folds, noise, candidates, progress, backend, settings.search
+        )
+        chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
+        spec = spec_for_rows(model, candidate_spec(model, chosen, config.prior, selection.chosen.prior_scale), sessions)
+        best = selection.estimates[chosen.name, selection.chosen.prior_scale]
+        if selection_round == SELECTIONS or not screen.run(spec, best.noise, best.x):
+            break  # the chosen model flags no new row (or the last selection is made): done
+    return selection
+
+
 def calibrate(
     scene: Scene,
     train: Contacts,
     sessions: Sequence[str],
     settings: Settings | None = None,
     progress: ProgressCallback = ignore_progress,
+    backend: Backend | None = None,
 ) -> Calibration:
     """Calibrate the chains seen in ``train``.
 
@@ -212,62 +245,41 @@ def calibrate(
         sessions: Every session the model must know (training and held-out).
         settings: How to run; defaults if None.
         progress: Told when each cross-validation step starts.
+        backend: Where the candidates' cross-validations run; None: this process.
+
+    Returns:
+        The calibration, with its warnings (rows left out at the screening's limit,
+        a URDF kept as it was): bad rows never stop it.
 
     Raises:
         InputError: Unknown candidate names, or too few usable rows.
-        InfeasibleError: Screening does not settle.
+
+    Example:
+        >>> calibration = calibrate(scene, contacts, ["left_train", "right_train"])
+        >>> calibration.deliverables.urdf.result.chains["left"].mean_abs  # predicted held-out error
 
     """
     settings = settings or Settings()
     config, candidates = _settings(scene, settings)
     model = CalibrationModel(scene, sorted(set(train.chains)), sessions, config.compliance, train.kinds_by_chain())
+    check_exportable(model.contact)  # a layout the URDF cannot carry costs milliseconds, not a calibration
     everything = model.observations(train)
     flags = unusable_rows(model, everything, config)
-    kept = [i for i in range(len(train)) if i not in {f.row for f in flags}]
-    check_enough(model, train.subset(kept), config, flags)
-    usable = list(kept)
-    noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
-    seeds = range(settings.seed, settings.seed + config.fold_seeds)
-    middle = config.prior_scales[len(config.prior_scales) // 2]
+    usable = [i for i in range(len(train)) if i not in {f.row for f in flags}]
+    check_enough(model, train.subset(usable), config, flags)
     sessions_in = set(train.subset(usable).sessions)
+    middle = sorted(config.prior_scales)[len(config.prior_scales) // 2]
     spec = spec_for_rows(model, candidate_spec(model, candidates[0], config.prior, middle), sessions_in)
     start = held_at_urdf(model, spec, start_point(model, everything.subset(usable)))
-    selection: ModelSelection | None = None
-    screened: list[Flag] = []
-    for round_ in range(1, MAX_ROUNDS + 1):
-        # every usable row is screened again with the current model: a row flagged by a poorer model comes back
-        studentised, _, _ = robust_residuals(model, everything.subset(usable), spec, noise, start)
-        bounds = chi_thresholds(row_dof(everything.subset(usable), spec.floor), config.outlier_false_alarm)
-        screened = [
-            Flag(row, train.labels[row], "residual", float(value), round_)
-            for row, value, bound in zip(usable, studentised, bounds, strict=True)
-            if value > bound
-        ]
-        flagged = {f.row for f in screened} if settings.drop_outliers else set()
-        now = [i for i in usable if i not in flagged]
-        if selection is not None and now == kept:
-            break
-        kept = now
-        check_enough(model, train.subset(kept), config, [*flags, *(f for f in screened if f.row in flagged)])
-        observations = everything.subset(kept)
-        folds = repeated_folds(model.contact, observations.contacts, config.folds, seeds)
-        selection = select_model(model, observations, config, folds, noise, candidates, progress)
-        chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
-        spec = spec_for_rows(
-            model, candidate_spec(model, chosen, config.prior, selection.chosen.prior_scale), sessions_in
-        )
-        best = selection.estimates[chosen.name, selection.chosen.prior_scale]
-        start = best.x
-        noise = best.noise
-    else:
-        raise InfeasibleError(
-            f"screening still changes the rows after {MAX_ROUNDS} rounds: the data are not consistent"
-        )
-    for flag in screened:
+    screen = Screening(model, everything, train.labels, usable, config, settings.drop_outliers)
+    screen.run(spec, Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE), start)
+    selection = _select_screened(model, everything, screen, (config, candidates), settings, progress, backend)
+    flags.extend(screen.flags)
+    for flag in screen.flags:
         LOG.warning("bad row %s: studentised residual %.1f", flag.label, flag.value)
-    flags.extend(screened)
-    assert selection is not None
+    kept = screen.kept
     chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
+    spec = spec_for_rows(model, candidate_spec(model, chosen, config.prior, selection.chosen.prior_scale), sessions_in)
     observations = everything.subset(kept)
     after = selection.estimates[chosen.name, selection.chosen.prior_scale]
     sides = tuple(model.columns([Kind.CONTACT_HEIGHT, Kind.CONTACT_TILT, Kind.CONTACT_POINT, Kind.PLANE]))
@@ -276,6 +288,7 @@ def calibrate(
     postures = level_postures(model.contact, observations.contacts, settings.structural_postures, settings.seed)
     base = base_at(model.contact, postures, DEFAULT_NOISE)
     base_with_floor = base_at(model.contact, postures, DEFAULT_NOISE, DEFAULT_FLOOR_NOISE).size if model.floor else None
+    deliverables = choose_deliverables(selection, candidates)
     return Calibration(
         model=model,
         config=config,
@@ -289,6 +302,8 @@ def calibrate(
         after=after,
         base=base,
         base_with_floor=base_with_floor,
+        deliverables=deliverables,
+        warnings=(*screen.warnings, *deliverables.warnings),
     )
 
 

@@ -1,38 +1,44 @@
 """Choosing the model by repeated, grouped cross-validation on the training rows only.
 
-Every candidate model is fitted at every prior scale; each fit is judged on the rows
-that the folds of :mod:`posegen.calibrate.folds` hold out (regions of the table, or
-sessions), with the held-out rows' sessions' planes from training (re-fitted on a new
-session). A fold's fit starts from the fit on all rows at the same candidate and scale
-and takes ``fold_iterations`` Levenberg-Marquardt steps, at that fit's noise.
+Every candidate model is fitted at prior scales of the config's grid; each fit is judged
+on the rows that the folds of :mod:`posegen.calibrate.folds` hold out (regions of the
+table, or sessions), with the held-out rows' sessions' planes from training (re-fitted
+on a new session). A fold's fit starts from the fit on all rows at the same candidate and
+scale and takes ``fold_iterations`` Gauss-Newton steps, at that fit's noise. Scores and
+the rules that read them: :mod:`posegen.calibrate.scoring`.
 
-Score: the mean over held-out contacts of sum_c (e_c / u_c)^2, with u = (1 mm, 0.1 deg,
-0.1 deg) the units the experiment design weighs in, averaged over the chains (each
-chain counts alike, however many rows it has). It counts measured rows: three times the
-mean of (e_c / u_c)^2 over the rows measured, which is the above for flush contacts and
-weighs a point contact (its height only) as one row, not three. Its standard error is that of one
-repetition: the spread of the fold scores over the square root of their number, per
-chain, combined over the chains and averaged over the seeds.
-
-**Rule.** Among the (candidate, scale) pairs whose score is within one standard error
-of the best, take the candidate with the fewest free parameters, then its strongest
-prior (smallest scale) within that bound. Stability: the same rule applied to each
-seed's folds alone; the share of seeds that pick the same pair.
+**Scale search.** A candidate's score over the prior scale is a valley: too strong a
+prior cannot move the parameters, too weak a one fits the noise (and then leaves the
+plausible range). The search starts at the grid's middle scale and walks up while the
+score falls, then down from the middle while a scale may still be within reach of the
+rules (its score within two standard errors of the candidate's best). Every fit is
+warm-started from its neighbour towards the middle, so the scales it computes are
+computed exactly as the exhaustive search (:attr:`ScaleSearch.EXHAUSTIVE`, every scale)
+computes them; a test compares the two picks on the real recordings.
 
 **Plausibility.** Every measurement is zero, so a model whose contact height does not
 depend on the posture at all fits, and "predicts", every height exactly: with a weak
 prior a flexible model finds such solutions (a leg 380 mm longer, a sole and the table
 tilted 27 deg), and cross-validation scores them well on the height. A pair whose fit
 on all rows moves any length by more than ``plausible_mm`` or any angle by more than
-``plausible_deg`` from the URDF is not a calibration of this robot: it is reported and
-left out of the rule (and not cross-validated).
+``plausible_deg`` from the URDF is not a calibration of this robot, nor is one whose
+joints give way against their load (a negative compliance): it is reported and left out
+of the rules (and not cross-validated); weaker priors of that candidate are not tried.
+
+**Workers.** Candidates are independent: they run over the backend's workers, each
+candidate's scales in one process, and come back in the config's order, so the result
+is the same bytes for any number of workers.
 """
 
 from __future__ import annotations
 
+import enum
+import hashlib
 import logging
+import pickle
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -47,53 +53,23 @@ from posegen.calibrate.estimation import (
     refit_frozen,
 )
 from posegen.calibrate.folds import Fold
+from posegen.calibrate.scoring import CvResult, implausible, one_standard_error, score_folds
 from posegen.errors import InfeasibleError
-from posegen.model import (
-    DEFAULT_NOISE,
-    CalibrationModel,
-    Kind,
-    Observations,
-    Spec,
-    candidate_spec,
-    masked,
-    spec_for_rows,
-    start_point,
-)
+from posegen.model import CalibrationModel, Kind, Observations, Spec, candidate_spec, masked, spec_for_rows, start_point
+from posegen.parallel import Backend, Job, ProcessBackend
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray
 
 LOG = logging.getLogger(__name__)
-RULE = (
-    "among the (candidate, prior scale) pairs scoring within one standard error of the best, the candidate with "
-    "the fewest free parameters, then its strongest prior (smallest scale) within that bound"
-)
-SCORE_UNITS = np.array(DEFAULT_NOISE)  # (1 mm, 0.1 deg, 0.1 deg): how the score weighs the components
+NOMINAL = CandidateConfig("nominal URDF", ())  # only the contact offsets and planes: the URDF as it is
+REACH_SE = 2.0  # a smaller scale is still tried while its score is within this many standard errors of the best
 
 
-@dataclass(frozen=True)
-class ChainError:
-    """Cross-validated prediction error of one chain's contacts."""
+class ScaleSearch(str, enum.Enum):
+    """Which prior scales of the grid a candidate is cross-validated at."""
 
-    mean_abs: tuple[float, float, float]  # m, rad, rad
-    rms: tuple[float, float, float]  # m, rad, rad
-    score: float
-
-
-@dataclass(frozen=True)
-class CvResult:
-    """One candidate at one prior scale, as cross-validation judged it."""
-
-    candidate: str
-    prior_scale: float
-    free: int  # number of free parameters
-    score: float
-    se: float
-    seed_scores: tuple[float, ...]
-    seed_se: tuple[float, ...]
-    chains: dict[str, ChainError]
-    noise: Noise  # estimated on all training rows
-    largest: tuple[float, float]  # largest deviation of the fit on all rows from the URDF: mm, deg
-    plausible: bool = True  # within the config's plausible deviations (else not cross-validated)
+    VALLEY = "valley"  # from the middle scale, while the score falls or may still be within reach
+    EXHAUSTIVE = "exhaustive"  # every scale (benchmarks, and the test of the valley search)
 
 
 @dataclass(frozen=True)
@@ -105,12 +81,25 @@ class ModelSelection:
     chosen: CvResult
     seed_picks: tuple[tuple[str, float], ...]  # (candidate, scale) the rule picks on each seed alone
     estimates: dict[tuple[str, float], Estimate]  # the fit on all training rows of each pair
+    nominal: CvResult  # the URDF as it is (contact offsets and planes fitted), scored alike
 
     @property
     def stability(self) -> float:
         """Share of the seeds whose own pick is the chosen pair."""
         key = (self.chosen.candidate, self.chosen.prior_scale)
         return sum(p == key for p in self.seed_picks) / max(len(self.seed_picks), 1)
+
+
+@dataclass(frozen=True)
+class Problem:
+    """What every candidate's cross-validation shares (sent once to each worker)."""
+
+    model: CalibrationModel
+    observations: Observations
+    config: CalibrationConfig
+    folds: tuple[Fold, ...]
+    noise: Noise
+    search: ScaleSearch
 
 
 def cross_validate(
@@ -167,93 +156,83 @@ def largest_deviations(model: CalibrationModel, delta: FloatArray) -> tuple[floa
     return float(lengths.max(initial=0.0) * 1e3), float(np.degrees(angles.max(initial=0.0)))
 
 
-def fold_loss(predicted: FloatArray) -> tuple[float, int]:
-    """Sum of (e_c / u_c)^2 over the measured rows of (t, 3) residuals (NaN: not measured), and their number."""
-    measured = np.isfinite(predicted)
-    return float(np.sum(np.where(measured, predicted / SCORE_UNITS, 0.0) ** 2)), int(measured.sum())
-
-
-def column_stats(errors: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Mean absolute and RMS of each column of (t, 3) residuals over its measured rows (NaN: none). Shapes (3,)."""
-    measured = np.isfinite(errors)
-    count = measured.sum(axis=0)
-    values = np.where(measured, errors, 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_abs = np.where(count > 0, np.abs(values).sum(axis=0) / count, np.nan)
-        rms = np.where(count > 0, np.sqrt((values**2).sum(axis=0) / count), np.nan)
-    return mean_abs, rms
-
-
-def score_folds(
-    candidate: str,
-    scale: float,
-    free: int,
-    folds: Sequence[Fold],
-    predicted: Sequence[FloatArray],
-    noise: Noise,
-    largest: tuple[float, float],
-) -> CvResult:
-    """Score, standard error, per-seed and per-chain figures of one pair's fold predictions."""
-    seeds = sorted({f.seed for f in folds})
-    chains = sorted({f.chain for f in folds})
-    seed_scores, seed_se = [], []
-    errors: dict[str, list[FloatArray]] = {c: [] for c in chains}
-    for seed in seeds:
-        chain_scores, chain_var = [], []
-        for chain in chains:
-            mine = [p for f, p in zip(folds, predicted, strict=True) if f.seed == seed and f.chain == chain]
-            losses = [fold_loss(p) for p in mine]  # (sum, measured rows) per fold
-            chain_scores.append(3.0 * sum(v for v, _ in losses) / max(sum(m for _, m in losses), 1))
-            fold_means = np.array([3.0 * v / max(m, 1) for v, m in losses])
-            chain_var.append(float(np.var(fold_means, ddof=1) / len(fold_means)) if len(fold_means) > 1 else 0.0)
-            errors[chain].append(np.vstack(mine))
-        seed_scores.append(float(np.mean(chain_scores)))
-        seed_se.append(float(np.sqrt(np.sum(chain_var)) / len(chains)))
-    per_chain = {}
-    for chain in chains:
-        stats = [column_stats(e) for e in errors[chain]]
-        mean_abs = np.mean([m for m, _ in stats], axis=0)
-        rms = np.mean([r for _, r in stats], axis=0)
-        score = np.mean([3.0 * v / max(m, 1) for v, m in (fold_loss(e) for e in errors[chain])])
-        per_chain[chain] = ChainError(
-            (float(mean_abs[0]), float(mean_abs[1]), float(mean_abs[2])),
-            (float(rms[0]), float(rms[1]), float(rms[2])),
-            float(score),
+def score_pair(
+    problem: Problem, candidate: CandidateConfig, scale: float, start: FloatArray
+) -> tuple[CvResult, Estimate]:
+    """Fit one (candidate, scale) pair on all rows from ``start`` (nx,) and cross-validate it (unless implausible)."""
+    model, observations, config = problem.model, problem.observations, problem.config
+    sessions = set(observations.contacts.sessions)
+    spec = spec_for_rows(model, candidate_spec(model, candidate, config.prior, scale), sessions)
+    full = estimate(model, observations, spec, problem.noise, held_at_urdf(model, spec, start))
+    largest = largest_deviations(model, full.delta)
+    negative = sorted(g for g, c in model.compliances(full.x).items() if g in candidate.compliance and c < 0.0)
+    if largest[0] > config.plausible_mm or largest[1] > config.plausible_deg or negative:
+        LOG.info(
+            "%s at prior x%g: %.0f mm, %.1f deg from the URDF, negative compliance %s: implausible",
+            candidate.name,
+            scale,
+            *largest,
+            negative,
         )
-    return CvResult(
-        candidate=candidate,
-        prior_scale=scale,
-        free=free,
-        score=float(np.mean(seed_scores)),
-        se=float(np.sqrt(np.mean(np.square(seed_se)))),
-        seed_scores=tuple(seed_scores),
-        seed_se=tuple(seed_se),
-        chains=per_chain,
-        noise=noise,
-        largest=largest,
-    )
+        return implausible(candidate.name, scale, len(spec.free), full.noise, largest, problem.folds), full
+    predicted = cross_validate(model, observations, spec, full, problem.folds, config.fold_iterations)
+    return score_folds(candidate.name, scale, len(spec.free), problem.folds, predicted, full.noise, largest), full
 
 
-def implausible(
-    candidate: str, scale: float, free: int, noise: Noise, largest: tuple[float, float], folds: Sequence[Fold]
-) -> CvResult:
-    """A pair left out of the rule: no score (inf)."""
-    seeds = len({f.seed for f in folds})
-    nan3 = (float("nan"),) * 3
-    chains = {f.chain: ChainError(nan3, nan3, float("inf")) for f in folds}
-    inf = float("inf")
-    return CvResult(candidate, scale, free, inf, inf, (inf,) * seeds, (inf,) * seeds, chains, noise, largest, False)
+def _walk(
+    problem: Problem,
+    candidate: CandidateConfig,
+    scales: Sequence[float],
+    start: FloatArray,
+    upward: bool,
+    seen: Sequence[CvResult] = (),
+) -> list[tuple[CvResult, Estimate]]:
+    """Score ``scales`` in order, each warm-started from the previous fit; stop as the search rule says.
+
+    ``seen`` are the candidate's results at other scales (the best of them counts in the rule).
+    """
+    out: list[tuple[CvResult, Estimate]] = []
+    x = start
+    for scale in scales:
+        # warm-started from the neighbouring scale's fit, but never from its noise: the noise and the
+        # prior's weight are estimated together, and from a weaker prior's small noise a strong prior
+        # would barely pull (a fixed point of its own, far from the one the default noise leads to)
+        result, full = score_pair(problem, candidate, scale, x)
+        out.append((result, full))
+        if not result.plausible:
+            if upward and problem.search == ScaleSearch.VALLEY:
+                break  # weaker priors are more flexible still
+            continue
+        x = full.x
+        plausible = [r for r in seen if r.plausible] + [r for r, _ in out[:-1] if r.plausible]
+        if problem.search == ScaleSearch.EXHAUSTIVE or not plausible:
+            continue
+        best = min(plausible, key=lambda r: r.score)
+        if upward and result.score > best.score:
+            break
+        if not upward and result.score > best.score + REACH_SE * max(best.se, result.se):
+            break
+    return out
 
 
-def one_standard_error(results: Sequence[CvResult], scores: FloatArray, errors: FloatArray) -> int:
-    """Index of the pair the rule picks among the plausible ones, given each pair's score and standard error."""
-    plausible = [i for i, r in enumerate(results) if r.plausible]
-    best = min(plausible, key=lambda i: scores[i])
-    bound = scores[best] + errors[best]
-    eligible = [i for i in plausible if scores[i] <= bound]
-    fewest = min(results[i].free for i in eligible)
-    simplest = [i for i in eligible if results[i].free == fewest]
-    return min(simplest, key=lambda i: (results[i].prior_scale, results[i].candidate))
+def score_candidate(problem: Problem, candidate: CandidateConfig) -> list[tuple[CvResult, Estimate]]:
+    """Every scale the search tries for one candidate, in ascending scale order."""
+    scales = sorted(problem.config.prior_scales)
+    middle = len(scales) // 2
+    start = start_point(problem.model, problem.observations)
+    if candidate.name == NOMINAL.name:  # the URDF as it is: the scale only weighs the contact offsets' prior
+        return _walk(problem, candidate, scales[middle : middle + 1], start, upward=True)
+    up = _walk(problem, candidate, scales[middle:], start, upward=True)
+    first = up[0]
+    down_start = first[1].x if first[0].plausible else start
+    down = _walk(problem, candidate, scales[:middle][::-1], down_start, upward=False, seen=[r for r, _ in up])
+    return sorted(up + down, key=lambda pair: pair[0].prior_scale)
+
+
+def _problem_state(payload: bytes) -> Problem:
+    problem = pickle.loads(payload)
+    assert isinstance(problem, Problem)
+    return problem
 
 
 def select_model(
@@ -264,8 +243,10 @@ def select_model(
     noise: Noise,
     candidates: Sequence[CandidateConfig] | None = None,
     progress: ProgressCallback = ignore_progress,
+    backend: Backend | None = None,
+    search: ScaleSearch = ScaleSearch.VALLEY,
 ) -> ModelSelection:
-    """Cross-validate every candidate at every prior scale and apply the one-standard-error rule.
+    """Cross-validate every candidate over the prior scales and apply the one-standard-error rule.
 
     Args:
         model: Calibration model.
@@ -275,34 +256,37 @@ def select_model(
         noise: Starting noise of each fit.
         candidates: Candidates to try; None: the config's. Floor candidates are skipped
             when the chains do not reach both soles.
-        progress: Told when each candidate's fits start.
+        progress: Told when each candidate is done.
+        backend: Where the candidates run; None: this process.
+        search: Which prior scales are tried.
+
+    Raises:
+        InfeasibleError: Every candidate's fit is implausible.
 
     """
     usable = [c for c in (candidates or settings.candidates) if not (c.floor and model.floor is None)]
     for skipped in set(candidates or settings.candidates) - set(usable):
         LOG.info("candidate %s skipped: the floor equations need a chain from each sole", skipped.name)
-    say = Steps(len(usable) * len(settings.prior_scales), progress)
-    results: list[CvResult] = []
-    estimates: dict[tuple[str, float], Estimate] = {}
-    start = start_point(model, observations)
-    sessions = set(observations.contacts.sessions)
-    for candidate in usable:
-        x = start
-        for scale in settings.prior_scales:
-            say(f"cross-validation: {candidate.name}, prior x{scale:g}")
-            spec = spec_for_rows(model, candidate_spec(model, candidate, settings.prior, scale), sessions)
-            full = estimate(model, observations, spec, noise, held_at_urdf(model, spec, x))
-            largest = largest_deviations(model, full.delta)
-            estimates[candidate.name, scale] = full
-            if largest[0] > settings.plausible_mm or largest[1] > settings.plausible_deg:
-                LOG.info(
-                    "%s at prior x%g: %.0f mm, %.1f deg from the URDF: implausible", candidate.name, scale, *largest
-                )
-                results.append(implausible(candidate.name, scale, len(spec.free), full.noise, largest, folds))
-                continue
-            x = full.x  # warm start of the next scale
-            predicted = cross_validate(model, observations, spec, full, folds, settings.fold_iterations)
-            results.append(score_folds(candidate.name, scale, len(spec.free), folds, predicted, full.noise, largest))
+    problem = Problem(model, observations, settings, tuple(folds), noise, search)
+    payload = pickle.dumps(problem)
+    job: Job[Problem, CandidateConfig, list[tuple[CvResult, Estimate]]] = Job(
+        name=f"calibrate-cv-{hashlib.sha256(payload).hexdigest()[:16]}",
+        setup=partial(_problem_state, payload),
+        run=score_candidate,
+    )
+    say = Steps(len(usable) + 1, progress)
+    items = [*usable, NOMINAL]
+    # the costliest first (floor equations, then the most free parameters): no worker waits long for the last
+    cost = {c.name: (c.floor, len(candidate_spec(model, c, settings.prior, 1.0).free)) for c in items}
+    order = sorted(range(len(items)), key=lambda i: cost[items[i].name], reverse=True)
+    by_item: dict[int, list[tuple[CvResult, Estimate]]] = {}
+    runner = backend or ProcessBackend(1)
+    for i, scored in zip(order, runner.map(job, [items[i] for i in order], len(items)), strict=True):
+        say(f"cross-validation: {items[i].name}")
+        by_item[i] = scored
+    *scored_candidates, nominal = [by_item[i] for i in range(len(items))]  # the config's order, whatever ran first
+    results = [r for pairs in scored_candidates for r, _ in pairs]
+    estimates = {(r.candidate, r.prior_scale): e for pairs in scored_candidates for r, e in pairs}
     if not any(r.plausible for r in results):
         raise InfeasibleError("every candidate's fit is implausible (see calibration.plausible_mm, plausible_deg)")
     scores = np.array([r.score for r in results])
@@ -314,10 +298,13 @@ def select_model(
         seed_errors = np.array([r.seed_se[s] for r in results])
         pick = results[one_standard_error(results, seed_scores, seed_errors)]
         picks.append((pick.candidate, pick.prior_scale))
+    nominal_best = min(nominal, key=lambda pair: (pair[0].score, pair[0].prior_scale))
+    estimates[NOMINAL.name, nominal_best[0].prior_scale] = nominal_best[1]
     return ModelSelection(
         results=tuple(results),
         best=results[min((i for i, r in enumerate(results) if r.plausible), key=lambda i: scores[i])],
         chosen=results[chosen],
         seed_picks=tuple(picks),
         estimates=estimates,
+        nominal=nominal_best[0],
     )

@@ -5,8 +5,12 @@ Output folder::
     calibration.yaml     model selection, predicted error, rows left out, noise, parameters, residuals, provenance
     residuals.csv        every contact's residuals before and after, and its joint angles
     posterior.npz        posterior covariance of the fitted directions, conditioning of their regressor
-    calibrated.urdf      same links and joints, calibrated origins (compliance is not a URDF quantity)
+    calibrated.urdf      the URDF alone: any stack loads it (same links and joints, calibrated origins;
+                         a <link>_mount where a sole or gripper is a moving joint's link)
     calibrated.yaml      a scene config that uses calibrated.urdf
+    offsets.yaml         calibrated.urdf as joint angle offsets and placement changes of the nominal URDF
+    with_compliance/     the URDF, compliance.yaml and offsets.yaml of a compliant model, when one predicts best
+                         (:mod:`posegen.calibrate.deliverable_files`)
     parameters.png       fitted deviations (mm, deg)
     residuals.png        held-out residuals before/after (or training ones without held-out data)
     cross_validation.png CV score of every candidate over the prior scale
@@ -21,10 +25,10 @@ from typing import Any
 import numpy as np
 
 from posegen.calibrate.calibration import Calibration, held_out_residuals
-from posegen.calibrate.model_selection import RULE, CvResult, column_stats
+from posegen.calibrate.deliverable_files import deliverables_report, write_deliverable
 from posegen.calibrate.plots import plot_cross_validation, plot_parameters, plot_residuals
 from posegen.calibrate.record import CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
-from posegen.calibrate.urdf_export import calibrated_urdf
+from posegen.calibrate.scoring import RULE, CvResult, column_stats
 from posegen.io import dump_yaml, write_atomic
 from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas, masked
 from posegen.robot import ContactKind, FloatArray
@@ -216,7 +220,8 @@ def calibration_report(
             },
         },
         "predicted_error": predicted,
-        "warnings": warnings,
+        "warnings": [*calibration.warnings, *warnings],
+        "deliverables": deliverables_report(calibration, held_out),
         "model_selection": selection_report(calibration),
         "noise": _noise(calibration),
         "left_out": left_out_rows(calibration),
@@ -267,19 +272,10 @@ def write_calibration(
         rejected_rows: Input rows left out as unusable, one message each.
 
     """
-    scene = calibration.model.scene
     out_dir.mkdir(parents=True, exist_ok=True)
     report = calibration_report(calibration, held_out, seed, rejected_rows)
-    theta = calibration.model.theta(calibration.after.x)
-    urdf = calibrated_urdf(scene.files.urdf.read_text(), calibration.model.contact, theta)
-    write_atomic(out_dir / "calibrated.urdf", urdf)
-    config = scene.config.to_dict()
-    config["robot"]["source"] = {
-        "urdf": str((out_dir / "calibrated.urdf").resolve()),
-        "srdf": str(scene.files.srdf),
-        "package_dirs": list(scene.files.package_dirs),
-    }
-    write_atomic(out_dir / "calibrated.yaml", dump_yaml(config))
+    for deliverable in calibration.deliverables.all():
+        write_deliverable(calibration, deliverable, out_dir, seed)
     plot_parameters([r for r in report["parameters"] if r["unit"] in ("mm", "deg")], out_dir / "parameters.png")
     chosen = calibration.selection.chosen
     plot_cross_validation(

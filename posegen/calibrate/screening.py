@@ -10,12 +10,14 @@
   and by sqrt(1 - leverage) of the weighted fit) and flagged above the chi bound
   (3 dof for a flush contact, 1 for a point contact, 6 more with the floor equations)
   at which a clean set of n rows shows any with probability ``false_alarm``
-  (Bonferroni). The caller drops flagged rows, re-estimates the noise and re-selects
-  the model without them, and screens again, until nothing more is flagged.
+  (Bonferroni). Flagged rows are left out and the rest screened again (:class:`Screening`):
+  monotone (a row left out stays out), bounded (at most ``calibration.max_left_out`` of
+  the rows, then it stops and warns) and never fails.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,10 +25,11 @@ import scipy.stats
 
 from posegen.calibrate.estimation import Noise, fit, frozen_jacobian
 from posegen.model import CalibrationModel, Observations, Spec, row_counts, row_mask
-from posegen.robot import FloatArray
+from posegen.robot import CalibrationConfig, FloatArray
 
 CAUCHY_SCALE = 2.385  # Cauchy constant of 95 % efficiency, per degree of freedom of a row
 ROBUST_ITERATIONS = 8
+MAX_ROUNDS = 6  # robust fits of one screening run, each without the rows the last one flagged
 
 
 @dataclass(frozen=True)
@@ -116,3 +119,93 @@ def robust_residuals(
         noise = Noise.of(rms[:3], rms[3:] if spec.floor else np.array(noise.floor))
         weights = 1.0 / (1.0 + studentised**2 / (dof * CAUCHY_SCALE**2))
     return studentised, x, noise
+
+
+class Screening:
+    """Monotone screening of the usable rows: a row left out stays out, and at most a share of them.
+
+    Each :meth:`run` fits the kept rows robustly with a given model, leaves out the rows
+    beyond their bound, and repeats without them (a gross error can hide a smaller one:
+    masking) until nothing more is flagged, at most ``max_rounds`` times. Rows are never
+    taken back, so the rows kept can only shrink: the screening ends. It stops leaving
+    rows out at ``config.max_left_out`` of the usable rows and says so in
+    :attr:`warnings`; it never fails.
+
+    Example:
+        >>> screen = Screening(model, observations, labels, usable, config, drop=True)
+        >>> screen.run(spec, noise, start)  # True: new rows were flagged
+        >>> screen.kept, screen.flags, screen.warnings
+
+    """
+
+    def __init__(
+        self,
+        model: CalibrationModel,
+        observations: Observations,
+        labels: Sequence[str],
+        usable: Sequence[int],
+        config: CalibrationConfig,
+        drop: bool,
+        max_rounds: int = MAX_ROUNDS,
+    ) -> None:
+        self._model = model
+        self._observations = observations
+        self._labels = tuple(labels)
+        self._usable = tuple(usable)
+        self._false_alarm = config.outlier_false_alarm
+        self._drop = drop
+        self._max_rounds = max_rounds
+        self._share = config.max_left_out
+        self.limit = int(np.floor(config.max_left_out * len(usable)))  # rows that may be left out
+        self.flags: list[Flag] = []
+        self.warnings: list[str] = []
+        self._round = 0
+
+    @property
+    def kept(self) -> list[int]:
+        """Rows the fits use: the usable ones less those left out (all of them with ``drop`` off)."""
+        out = {f.row for f in self.flags} if self._drop else set()
+        return [i for i in self._usable if i not in out]
+
+    @property
+    def dropped(self) -> list[Flag]:
+        """The flags of the rows left out."""
+        return list(self.flags) if self._drop else []
+
+    def run(self, spec: Spec, noise: Noise, start: FloatArray) -> bool:
+        """Screen the kept rows with a model until nothing more is flagged; whether any new row was.
+
+        Args:
+            spec: The model (free directions, prior, floor equations) of the robust fit.
+            noise: Starting noise of the robust fit.
+            start: (nx,) starting parameters.
+
+        """
+        flagged_any = False
+        for _ in range(self._max_rounds):
+            self._round += 1
+            rows = [i for i in self._usable if i not in {f.row for f in self.flags}]
+            subset = self._observations.subset(rows)
+            studentised, _, noise = robust_residuals(self._model, subset, spec, noise, start)
+            bounds = chi_thresholds(row_dof(subset, spec.floor), self._false_alarm)
+            beyond = sorted(
+                ((float(v), row) for row, v, b in zip(rows, studentised, bounds, strict=True) if v > b), reverse=True
+            )
+            if not beyond:
+                return flagged_any
+            room = self.limit - len(self.flags)
+            for value, row in beyond[: max(room, 0)]:
+                self.flags.append(Flag(row, self._labels[row], "residual", value, self._round))
+                flagged_any = True
+            if len(beyond) > room:
+                self.warnings.append(
+                    f"screening stopped at its limit of {self.limit} rows left out ({self._share:.0%} of "
+                    f"{len(self._usable)}, calibration.max_left_out): "
+                    f"{len(beyond) - max(room, 0)} more row(s) beyond their bound kept, largest residual "
+                    f"{beyond[max(room, 0)][0]:.1f}; the data may hold a systematic error the model lacks"
+                )
+                return flagged_any
+            if not self._drop:
+                return flagged_any  # flagged rows stay in: the next round would see the same
+        self.warnings.append(f"screening still flagged rows after {self._max_rounds} rounds; the rest are kept")
+        return flagged_any

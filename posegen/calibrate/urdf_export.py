@@ -1,78 +1,244 @@
-"""Write a calibrated URDF: the original file with calibrated joint origins.
+"""Write a calibrated URDF: the robot's own file, its bodies at their calibrated places.
 
-Link and joint names are unchanged. A placement identified in pinocchio's convention
-(relative to the parent *joint* frame) is written back as the URDF origin relative to
-the parent *link*, undoing any fixed joints pinocchio merged in between. The contact
-offsets are folded into the gripper frame's fixed joint, so that posegen's contact
-frame (derived from the fingertips) of the calibrated URDF is the calibrated one.
+A stack that loads only this file (pinocchio, RViz, MoveIt, a controller) finds every
+link where the calibration puts it, whatever the chain's layout:
+
+* Each chain joint's origin is its identified placement (pinocchio's convention: in the
+  parent *joint* frame) written back relative to the parent *link*, undoing the fixed
+  joints pinocchio merged in between.
+* A sole or gripper placement moves a *body*, never only a frame: it is written into the
+  deepest fixed joint of the URDF above the frame that also carries everything the
+  contact is read from (fingertip frames, the point frame). When there is none (the
+  frame is the link of a moving joint, as iCub's hand, or the frames hang from that
+  link), the joint's child becomes an empty link ``<link>_mount`` and a fixed joint
+  ``<link>_calibration_joint`` holds the placement: the link, with its meshes, inertia
+  and every frame on it, moves as a whole. A revolute joint's origin never receives a
+  fixed frame's placement.
+* The frames the config declares (``robot.frames``) are not written into the file: they
+  stand for frames a user's stack defines its own way (a tool frame, a sole, a tip)
+  relative to the same links, and ride on the moved links, so that the stack's own
+  definitions stay valid and become calibrated. The calibrated scene config
+  (:func:`calibrated_config`) declares them again, unchanged but for point frames.
+* The flush contact offsets are folded into the gripper's placement (G C Off C^-1, C the
+  contact frame in the gripper frame), so that posegen's contact frame, derived from the
+  fingertips relative to the gripper, is the calibrated one; the contact frame itself is
+  posegen's and is not written. A point contact's offsets (and the fold's effect on it)
+  go to the point frame's own placement: its fixed joint when the URDF has it, the
+  calibrated config's ``robot.frames`` when the config declares it.
+
+The file is reloaded and checked against the model before it is returned: a layout
+these rules cannot represent is an error naming the frame, never a silently wrong file;
+:func:`check_exportable` runs that check before any work.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import enum
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from posegen.errors import InputError
-from posegen.model import ContactModel, offset_matrix, placement_matrix
-from posegen.robot import ContactKind, FloatArray
+from posegen.calibrate.urdf_placement import PlacementWriter, UrdfTree, inverse
+from posegen.errors import ConfigError
+from posegen.model import ChainModel, ContactModel, placement_matrix
+from posegen.robot import ContactKind, FloatArray, Scene, contact_placement, with_declared_frames
+
+TOLERANCE = 1e-9  # m and rad: the reloaded file against the model
+CHECK_DEVIATION = 1e-3  # m and rad: the deviation of every parameter in check_exportable
 
 
-def _format(values: FloatArray) -> str:
-    return " ".join(f"{float(v):.12g}" for v in values)
+class _Item(enum.Enum):
+    """What the reloaded file is checked for."""
+
+    JOINT = "joint"  # a moving joint's placement in its parent joint frame
+    FRAME = "frame"  # a sole or gripper frame's placement in its parent joint frame
+    CONTACT = "the contact frame of chain"  # a chain's flush contact frame in its gripper frame
+    POINT = "the point frame of chain"  # a chain's point frame in its gripper frame
 
 
-def _joint_element(root: ET.Element, *, name: str | None = None, child: str | None = None) -> ET.Element:
-    for joint in root.findall("joint"):
-        if name is not None and joint.get("name") == name:
-            return joint
-        child_el = joint.find("child")
-        if child is not None and child_el is not None and child_el.get("link") == child:
-            return joint
-    raise InputError(f"the URDF has no joint {'named ' + name if name else 'with child ' + str(child)}")
+@dataclass(frozen=True)
+class _Expected:
+    """What the reloaded file must give."""
+
+    item: _Item
+    name: str  # the joint or frame; the chain for CONTACT and POINT
+    transform: FloatArray  # (4, 4)
 
 
-def _set_origin(joint: ET.Element, transform: FloatArray) -> None:
-    origin = joint.find("origin")
-    if origin is None:
-        origin = ET.SubElement(joint, "origin")
-    origin.set("xyz", _format(transform[:3, 3]))
-    origin.set("rpy", _format(pin.rpy.matrixToRpy(transform[:3, :3])))
+def _triple(values: FloatArray) -> tuple[float, float, float]:
+    return float(values[0]), float(values[1]), float(values[2])
+
+
+def _load(urdf_text: str) -> pin.Model:
+    try:
+        return pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
+    except (RuntimeError, ValueError) as exc:
+        raise ConfigError(f"cannot load the URDF to calibrate: {str(exc).strip()}") from exc
+
+
+@dataclass(frozen=True)
+class _Export:
+    """The calibrated file and the config's frames that go with it."""
+
+    urdf: str  # without the config's frames
+    frames: tuple[Any, ...]  # the config's frames (FrameConfig), point frames at their calibrated placement
+
+
+def _export(urdf_text: str, model: ContactModel, theta: FloatArray) -> _Export:
+    if theta.shape != (model.size,):
+        raise ValueError(f"theta has shape {theta.shape}, the model {model.size} parameters")
+    scene = model.scene
+    declared = scene.config.frames
+    root = ET.fromstring(with_declared_frames(urdf_text, _load(urdf_text), declared))
+    tree = UrdfTree(root, {f.name for f in declared})
+    writer = PlacementWriter(scene, tree)
+    expected: list[_Expected] = []
+    done: set[str] = set()
+    for chain in model.chains.values():
+        placements = {e.name: placement_matrix(theta[model.placement_columns(e.name)]) for e in chain.elements}
+        for element in chain.elements[1:-1]:
+            if element.name not in done:
+                writer.joint(element.name, placements[element.name])
+                expected.append(_Expected(_Item.JOINT, element.name, placements[element.name]))
+                done.add(element.name)
+        expected.extend(_write_ends(writer, model, chain, placements, theta))
+    tree.drop_declared()
+    ET.indent(root, space="  ")  # an added mount one element per line, like the rest
+    text = ET.tostring(root, encoding="unicode", xml_declaration=True)
+    frames = tuple(
+        dataclasses.replace(
+            f,
+            xyz_m=_triple(writer.moved[f.name][:3, 3]),
+            rpy_deg=_triple(np.rad2deg(pin.rpy.matrixToRpy(writer.moved[f.name][:3, :3]))),
+        )
+        if f.name in writer.moved
+        else f
+        for f in declared
+    )
+    _check(with_declared_frames(text, _load(text), frames), scene, expected)
+    return _Export(text, frames)
 
 
 def calibrated_urdf(urdf_text: str, model: ContactModel, theta: FloatArray) -> str:
-    """The URDF text with every chain placement set from ``theta``.
+    """The URDF text with every chain placement set from ``theta`` (the config's frames not in it).
 
     Args:
         urdf_text: The original (nominal) URDF.
         model: The measurement model the parameters belong to.
         theta: (p,) identified parameters.
 
+    Raises:
+        ConfigError: A chain's layout cannot carry its placements (the frame is named).
+
     """
-    root = ET.fromstring(urdf_text)
-    pin_model = model.scene.model
-    for chain in model.chains.values():
-        for element in chain.elements:
-            params = theta[model.placement_columns(element.name)]
-            placement = placement_matrix(params)
-            if element.axis is not None:  # a revolute joint: its placement in the parent joint frame
-                joint = _joint_element(root, name=element.name)
-                parent_link = joint.find("parent")
-                assert parent_link is not None
-                parent_frame = pin_model.frames[pin_model.getFrameId(parent_link.get("link"))]
-            else:  # a fixed frame (sole, gripper): the fixed joint whose child it is
-                joint = _joint_element(root, child=element.name)
-                parent_link = joint.find("parent")
-                assert parent_link is not None
-                parent_frame = pin_model.frames[pin_model.getFrameId(parent_link.get("link"))]
-                c_nom = chain.contact_nominal
-                if element.name == chain.elements[-1].name and model.kinds[chain.chain] == (ContactKind.FLUSH,):
-                    # gripper: absorb the flush contact offsets (with point contacts too, they
-                    # would move the point: the offsets stay in calibration.yaml)
-                    assert c_nom is not None
-                    offsets = theta[model.contact_columns(chain.contact_frame)]
-                    placement = placement @ c_nom @ offset_matrix(*offsets) @ np.linalg.inv(c_nom)
-            # origin = (parent link in parent joint frame)^-1 * placement in parent joint frame
-            _set_origin(joint, np.linalg.inv(parent_frame.placement.homogeneous) @ placement)
-    return ET.tostring(root, encoding="unicode", xml_declaration=True)
+    return _export(urdf_text, model, theta).urdf
+
+
+def calibrated_config(model: ContactModel, theta: FloatArray, urdf_path: Path) -> dict[str, Any]:
+    """The scene config of the calibrated robot: the file at ``urdf_path``, and the config's frames.
+
+    The frames keep their placements (they ride on the calibrated links) but a point
+    frame the config declares, which takes its contact's offsets.
+
+    Args:
+        model: The measurement model the parameters belong to.
+        theta: (p,) identified parameters.
+        urdf_path: Where the calibrated URDF (:func:`calibrated_urdf`) is written.
+
+    Raises:
+        ConfigError: A chain's layout cannot carry its placements (the frame is named).
+
+    """
+    scene = model.scene
+    export = _export(scene.files.urdf.read_text(), model, theta)
+    config = dataclasses.replace(scene.config, frames=export.frames).to_dict()
+    config["robot"]["source"] = {
+        "urdf": str(urdf_path.resolve()),
+        "srdf": str(scene.files.srdf),
+        "package_dirs": list(scene.files.package_dirs),
+    }
+    return config
+
+
+def _write_ends(
+    writer: PlacementWriter,
+    model: ContactModel,
+    chain: ChainModel,
+    placements: dict[str, FloatArray],
+    theta: FloatArray,
+) -> list[_Expected]:
+    """Write a chain's sole, gripper (with the flush offsets folded) and point (with its offsets)."""
+    cfg = writer.scene.chain(chain.chain)
+    where = f"chains.{chain.chain}"
+    sole, grip = chain.elements[0].name, chain.elements[-1].name
+    kinds = model.kinds[chain.chain]
+    gripper = placements[grip]  # in the file: with the flush offsets folded in
+    if ContactKind.FLUSH in kinds:
+        offsets = theta[model.tip_columns(chain.chain, ContactKind.FLUSH)]
+        gripper = gripper @ chain.tip(offsets, ContactKind.FLUSH) @ inverse(chain.tip_nominal(ContactKind.FLUSH))
+    carried = [*cfg.fingertip_frames, *([cfg.point_frame] if cfg.point_frame else [])]
+    writer.frame(sole, writer.parent_joint_world(sole), placements[sole], [], f"{where}.sole_frame")
+    writer.frame(grip, writer.parent_joint_world(grip), gripper, carried, f"{where}.gripper_frame")
+    out = [_Expected(_Item.FRAME, sole, placements[sole]), _Expected(_Item.FRAME, grip, gripper)]
+    if ContactKind.FLUSH in kinds:
+        out.append(_Expected(_Item.CONTACT, chain.chain, chain.tip_nominal(ContactKind.FLUSH)))
+    if ContactKind.POINT in kinds:
+        offsets = theta[model.tip_columns(chain.chain, ContactKind.POINT)]
+        point = inverse(gripper) @ placements[grip] @ chain.tip(offsets, ContactKind.POINT)  # in the file's gripper
+        writer.point(chain.point_frame, writer.frame_world(grip), point, f"{where}.point_frame")
+        out.append(_Expected(_Item.POINT, chain.chain, point))
+    return out
+
+
+def _check(text: str, scene: Scene, expected: list[_Expected]) -> None:
+    """Reload the file: every placement and contact frame as the model has it, else a ConfigError."""
+    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    data = model.createData()
+    q = pin.neutral(model)
+    for name, value in scene.config.locked_joints.items():
+        q[model.joints[model.getJointId(name)].idx_q] = value
+    pin.framesForwardKinematics(model, data, q)
+    nominal = scene.model
+    for item in expected:
+        if item.item == _Item.JOINT:
+            found = model.jointPlacements[model.getJointId(item.name)].homogeneous
+            same_parent = (
+                model.names[model.parents[model.getJointId(item.name)]]
+                == nominal.names[nominal.parents[nominal.getJointId(item.name)]]
+            )
+        elif item.item == _Item.FRAME:
+            frame = model.frames[model.getFrameId(item.name)]
+            found = frame.placement.homogeneous
+            parent = nominal.frames[scene.frame_id(item.name)].parentJoint
+            same_parent = model.names[frame.parentJoint] == nominal.names[parent]
+        else:
+            cfg = scene.chain(item.name)
+            grip = data.oMf[model.getFrameId(cfg.gripper_frame)]
+            if item.item == _Item.CONTACT:
+                found = contact_placement(model, cfg, q).homogeneous
+            else:
+                found = grip.actInv(data.oMf[model.getFrameId(cfg.point_frame)]).homogeneous
+            same_parent = True
+        gap = float(np.abs(found - item.transform).max())
+        if not same_parent or gap > TOLERANCE:
+            raise ConfigError(
+                f"the calibrated URDF cannot hold the placement of {item.item.value} '{item.name}' "
+                f"(this layout of frames and fixed joints: off by {gap:.3g})"
+            )
+
+
+def check_exportable(model: ContactModel) -> None:
+    """Check, before any work, that a calibration of this model can be written as a URDF.
+
+    Exports every parameter off its nominal value by :data:`CHECK_DEVIATION` and reloads.
+
+    Raises:
+        ConfigError: A chain's layout cannot carry its placements (the frame is named).
+
+    """
+    _export(model.scene.files.urdf.read_text(), model, model.nominal() + CHECK_DEVIATION)

@@ -23,6 +23,7 @@ from posegen.model import (
     read_measurements,
     write_measurements,
 )
+from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene, load_config, load_plan, scene_for
 
@@ -183,6 +184,7 @@ def calibrate_files(
     settings: Settings,
     config_path: str | None,
     progress: ProgressCallback = ignore_progress,
+    backend: Backend | None = None,
 ) -> Calibrated:
     """Calibrate from measurement files and write the calibration folder.
 
@@ -194,6 +196,7 @@ def calibrate_files(
         config_path: Scene config; None: the one saved in the first measurement file
             that has one (posegen's format; recorded CSV files have none).
         progress: Told when each step starts.
+        backend: Where the candidates' cross-validations run; None: this process.
 
     Raises:
         PosegenError: Bad config or input, or too few contacts.
@@ -213,7 +216,7 @@ def calibrate_files(
         _check_trained(train, validation)
     sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
     with claim_output(out_dir, OutputKind.FOLDER):
-        calibration = calibrate(scene, train, sessions, settings, progress)
+        calibration = calibrate(scene, train, sessions, settings, progress, backend)
         report = write_calibration(calibration, validation, out_dir, settings.seed, rejected)
     return Calibrated(report=report, training_contacts=len(train))
 

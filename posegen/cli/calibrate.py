@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 from posegen.cli.options import DEFAULT_CONFIG, positive, positive_size, seed
 from posegen.cli.progress import ProgressBar
@@ -34,12 +35,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--keep-outliers", action="store_true", help="report bad rows but keep them in the fit")
     parser.add_argument("--seed", type=seed, default=0, help="first seed of the CV folds (default 0)")
+    parser.add_argument(
+        "--workers",
+        type=positive,
+        default=os.cpu_count() or 1,
+        help="processes the candidate models are cross-validated on (default: cores; the same result for any count)",
+    )
     parser.add_argument("-o", "--output", default="plans/calibration", help="output folder (default plans/calibration)")
 
 
 def run(args: argparse.Namespace) -> int:
     """Calibrate, write the calibration folder and its HTML report, and print the before/after table."""
-    from posegen.calibrate import Settings, calibrate_files, format_table
+    from posegen.calibrate import Settings, calibrate_files, format_table, load_line
+    from posegen.parallel import open_backend
     from posegen.view import write_report
 
     settings = Settings(
@@ -49,9 +57,9 @@ def run(args: argparse.Namespace) -> int:
         drop_outliers=not args.keep_outliers,
         seed=args.seed,
     )
-    with ProgressBar(args.quiet) as bar:
-        config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
-        calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar)
+    config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
+    with ProgressBar(args.quiet) as bar, open_backend(args.workers) as backend:
+        calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar, backend)
     report = calibrated.report
     model = report["model"]
     chosen = report["model_selection"]["chosen"]
@@ -77,9 +85,12 @@ def run(args: argparse.Namespace) -> int:
     print(format_table(report))
     report_path = write_report(args.output, args.config)
     print(
-        f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, residuals.csv, posterior.npz, "
-        f"parameters.png, residuals.png, cross_validation.png, {report_path.name})"
+        f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, offsets.yaml, residuals.csv, "
+        f"posterior.npz, parameters.png, residuals.png, cross_validation.png, {report_path.name}"
+        + (", with_compliance/" if "compensated" in report["deliverables"] else "")
+        + ")"
     )
+    print(load_line(report))
     return 0
 
 

@@ -34,7 +34,7 @@ from posegen.model.floor_model import SESSION_FIELDS, FloorModel
 from posegen.model.kinds import Direction, Kind, Part, kind_basis
 from posegen.model.kinematics import ChainModel
 from posegen.model.planes import initial_planes
-from posegen.robot import ContactKind, FloatArray, Indices, Scene, gravity_torques
+from posegen.robot import Config, ContactKind, FloatArray, Indices, Scene, gravity_torques
 
 
 @dataclass(frozen=True)
@@ -96,6 +96,7 @@ class CalibrationModel:
         kinds: Mapping[str, Sequence[ContactKind]] | None = None,
     ) -> None:
         self.scene = scene
+        self._arguments = (tuple(chains), tuple(sessions), {g: tuple(j) for g, j in compliance.items()}, kinds)
         self.contact = ContactModel(scene, chains, sessions, kinds)
         self.floor: FloorModel | None
         try:
@@ -112,6 +113,14 @@ class CalibrationModel:
         self._basis_inverse = np.linalg.inv(self.basis)
         self._compliance_start = self.contact.size
         self._floor_start = self.contact.size + len(self.compliance)
+
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]:
+        """Pickled as its scene's config and arguments, rebuilt on loading (worker processes).
+
+        The pinocchio model itself does not always survive pickling (some joint types fail to
+        load back), and the config is far smaller.
+        """
+        return (_rebuild, (self.scene.config, *self._arguments))
 
     def nominal(self) -> FloatArray:
         """The URDF, no compliance, floor constants zero. Shape (nx,)."""
@@ -198,6 +207,17 @@ class CalibrationModel:
         for k, indices in enumerate(self.compliance.values()):
             load = observations.torques[:, indices].mean(axis=1)  # (n,) N m
             jac[:, :, self._compliance_start + k] = -d_joints[:, :, indices].sum(axis=2) * load[:, None]
+
+
+def _rebuild(
+    config: Config,
+    chains: Sequence[str],
+    sessions: Sequence[str],
+    compliance: Mapping[str, Sequence[str]],
+    kinds: Mapping[str, Sequence[ContactKind]] | None,
+) -> CalibrationModel:
+    """A calibration model built again from its scene's config (see :meth:`CalibrationModel.__reduce__`)."""
+    return CalibrationModel(Scene(config), chains, sessions, compliance, kinds)
 
 
 def start_point(model: CalibrationModel, observations: Observations) -> FloatArray:

@@ -145,6 +145,7 @@ class ChainModel:
         self.point_frame = cfg.point_frame
         self.point_radius_m = cfg.point_radius_m
         self.placement_names = tuple(e.name for e in elements)
+        self._rotation_cache: dict[tuple[int, bytes], FloatArray] = {}
 
     @property
     def joint_indices(self) -> list[int]:
@@ -198,14 +199,14 @@ class ChainModel:
         """
         n = joints.shape[0]
         out = []
-        for e in self.elements:
+        for k, e in enumerate(self.elements):
             if legs_only and not e.reverse:
                 break
             m = placement_matrix(placements[e.name])
             if e.axis is None:
                 t = np.broadcast_to(rigid_inverse(m) if e.reverse else m, (n, 4, 4))
             else:
-                rot = _rotations(e.axis, joints[:, e.joint])  # (n, 4, 4)
+                rot = self._rotations(k, e.axis, joints[:, e.joint])  # (n, 4, 4)
                 t = rigid_inverse(m @ rot) if e.reverse else m @ rot
             out.append(t)
         return out, np.eye(4) if legs_only else self.tip(contact, kind)
@@ -223,6 +224,26 @@ class ChainModel:
         for t in elements[1:]:
             total = total @ t
         return np.asarray(total @ tip)
+
+    def _rotations(self, element: int, axis: FloatArray, angles: FloatArray) -> FloatArray:
+        """:func:`_rotations` of an element's joint angles, remembered (fits evaluate the same angles often).
+
+        The arrays returned are read-only: they are shared by every caller with the same angles.
+        """
+        key = (element, np.ascontiguousarray(angles).tobytes())
+        found = self._rotation_cache.get(key)
+        if found is None:
+            if len(self._rotation_cache) >= ROTATION_CACHE_SIZE:
+                self._rotation_cache.clear()
+            found = _rotations(axis, angles)
+            found.flags.writeable = False
+            self._rotation_cache[key] = found
+        return found
+
+    def __getstate__(self) -> dict[str, object]:
+        state = dict(self.__dict__)
+        state["_rotation_cache"] = {}  # a cache, not state: not sent to worker processes
+        return state
 
     def nominal_placements(self) -> dict[str, FloatArray]:
         """Placement name -> nominal (6,) parameters (copies)."""
@@ -274,6 +295,9 @@ def joint_derivative(element: Element, transforms: FloatArray) -> FloatArray:
     generator = np.zeros((4, 4))
     generator[:3, :3] = pin.skew(element.axis)
     return np.asarray(-generator @ transforms if element.reverse else transforms @ generator)
+
+
+ROTATION_CACHE_SIZE = 8192  # joint rotations a chain model remembers (~40 MB at most for 40 postures)
 
 
 def _rotations(axis: FloatArray, angles: FloatArray) -> FloatArray:

@@ -9,7 +9,6 @@ selection, route).
 
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig, ContactKind
-from posegen.robot.chain_frames import check_calibration_frames, declared_chain_frames
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
 from posegen.robot.collision_geometry import robot_geometry
 from posegen.robot.collision_matrix import PairSurvey
@@ -26,7 +25,7 @@ from posegen.robot.config import (
     parse_config,
 )
 from posegen.robot.coverage import GeometryCoverage, geometry_coverage
-from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf
+from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf, with_declared_frames
 from posegen.robot.draft import Draft
 from posegen.robot.draft_text import survey_config_pairs, write_draft
 from posegen.robot.feasibility import (
@@ -131,12 +130,10 @@ __all__ = [
     "Worst",
     "WorstSoFar",
     "assess",
-    "check_calibration_frames",
     "check_for_planning",
     "contact_in_table",
     "contact_placement",
     "convex_hull_clockwise",
-    "declared_chain_frames",
     "flatten_on_floor",
     "geometry_coverage",
     "gravity_torques",
@@ -159,6 +156,7 @@ __all__ = [
     "summarize",
     "survey_config_pairs",
     "tilt_angles",
+    "with_declared_frames",
     "worst_case",
     "write_draft",
     "write_pool",

@@ -74,6 +74,7 @@ class CalibrationConfig:
     fold_iterations: int = 3  # Levenberg-Marquardt iterations of a fold's fit, started from the full fit
     target_error_mm: float = 4.0  # warn when a chain's predicted held-out height error is above
     outlier_false_alarm: float = 0.01  # chance of flagging any row of a clean data set (Bonferroni)
+    max_left_out: float = 0.2  # screening stops (and warns) before leaving out more than this share of the rows
     feet_tolerance_mm: float = 5.0  # a second sole further than this from its place (URDF) did not stand
     feet_tolerance_deg: float = 1.0  # ... or tilted more than this
     plausible_mm: float = 25.0  # a fit moving a length further from the URDF is not this robot (degenerate)
@@ -198,6 +199,7 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         fold_iterations=_integer(data, "fold_iterations", defaults.fold_iterations, where, 1),
         target_error_mm=_number(data, "target_error_mm", defaults.target_error_mm, where),
         outlier_false_alarm=_probability(data, "outlier_false_alarm", defaults.outlier_false_alarm, where),
+        max_left_out=_probability(data, "max_left_out", defaults.max_left_out, where),
         feet_tolerance_mm=_number(data, "feet_tolerance_mm", defaults.feet_tolerance_mm, where),
         feet_tolerance_deg=_number(data, "feet_tolerance_deg", defaults.feet_tolerance_deg, where),
         plausible_mm=_number(data, "plausible_mm", defaults.plausible_mm, where),

@@ -45,7 +45,7 @@ class Scene:
         stance, chains, table, margins, sampling, route, calibration: Its typed sub-configs, which
             the stages read.
         files: The robot description files.
-        urdf_xml, declared_xml: The augmented URDF (with contact frames); the URDF with the declared frames only.
+        urdf_xml: The augmented URDF (with contact frames).
         model: pinocchio model with a free-flyer root.
         joint_names: The actuated (1-dof) joints, in model order.
         lower, upper: Joint limits (rad), shape (nj,).
@@ -73,7 +73,7 @@ class Scene:
             nominal = pin.buildModelFromXML(nominal_text, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
             raise ConfigError(f"cannot load URDF {self.files.urdf}: {exc}") from exc
-        self.declared_xml = declared_text = with_declared_frames(nominal_text, nominal, config.frames)
+        declared_text = with_declared_frames(nominal_text, nominal, config.frames)
         declared = pin.buildModelFromXML(declared_text, pin.JointModelFreeFlyer())
         for chain in self.chains:
             for field, frames in (

@@ -89,6 +89,41 @@ def _summary(report: dict[str, Any], artefact: CalibrationArtefact) -> str:
     return table(("", "value"), rows, names=2) + warnings
 
 
+def _deliverables(report: dict[str, Any]) -> str:
+    """What to load for which stack, each file's model and its predicted (and held-out) error."""
+    section = report.get("deliverables") or {}
+    rows = []
+    for kind in ("urdf", "compensated", "nominal_urdf"):
+        entry = section.get(kind)
+        if not isinstance(entry, dict):
+            continue
+        files = ", ".join(entry.get("files") or ["the URDF as it is (not written)"])
+        model = f"{entry.get('candidate', 'nominal URDF')}, prior x{entry.get('prior_scale', '-')}"
+        for chain, error in (entry.get("predicted_error") or {}).items():
+            rows.append(
+                (
+                    files,
+                    entry.get("load_with", "for comparison"),
+                    model,
+                    f"{chain}: CV predicted",
+                    _components(error.get("mean_abs") or {}),
+                )
+            )
+        held = (entry.get("held_out_training_plane") or {}).get("all")
+        if held:
+            rows.append(
+                (
+                    files,
+                    entry.get("load_with", ""),
+                    model,
+                    f"held-out ({held.get('contacts')} contacts)",
+                    _components(held.get("mean_abs") or {}),
+                )
+            )
+    note = f'<p class="muted">{_e(section.get("rule", ""))}; mean absolute errors, plane from training</p>'
+    return table(("files", "load with", "model", "error", "height / roll / pitch"), rows, names=3) + note
+
+
 def _components(values: dict[str, Any]) -> str:
     shown = (values.get(c, "") for c in COMPONENTS)
     return " / ".join("-" if v is None else f"{v}" for v in shown) + " (mm / deg / deg)"
@@ -184,6 +219,7 @@ def report_html(artefact: CalibrationArtefact) -> str:
     view = html_page(artefact).html
     sections = [
         ("Summary", _summary(report, artefact)),
+        ("What to load: the deliverables", _deliverables(report)),
         ("Residuals before and after calibration", _residual_tables(report)),
         (
             "Every contact",

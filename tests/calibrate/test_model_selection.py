@@ -1,9 +1,11 @@
 """The one-standard-error rule, plausibility and stability, on made-up scores (no fits)."""
 
+from pathlib import Path
+
 import numpy as np
 
 from posegen.calibrate import CvResult, Noise
-from posegen.calibrate.model_selection import ChainError, one_standard_error
+from posegen.calibrate.scoring import ChainError, one_standard_error
 
 NOISE = Noise((1e-3, 1e-3, 1e-3), (1e-4,) * 6)
 
@@ -44,3 +46,55 @@ def test_implausible_pairs_never_win():
         result("small", 10.0, 40, 53.0, 2.0),
     ]
     assert pick(results) == ("big", 10.0)
+
+
+def test_the_valley_search_picks_what_the_exhaustive_search_picked(scene, real_data):
+    """On the real recordings, every default candidate: the same model and deliverables as ``make bench`` recorded."""
+    import yaml
+
+    from posegen.calibrate import calibrate
+    from posegen.model import read_measurements
+    from posegen.parallel import ProcessBackend
+
+    recorded = yaml.safe_load((Path(__file__).parent / "real_exhaustive_pick.yaml").read_text())
+    train = read_measurements(real_data / "left_train.csv", scene).contacts.concat(
+        read_measurements(real_data / "right_train.csv", scene).contacts
+    )
+    with ProcessBackend(2) as backend:
+        calibration = calibrate(scene, train, ["left_train", "right_train", "left_validation"], backend=backend)
+    chosen = calibration.selection.chosen
+    assert [chosen.candidate, chosen.prior_scale] == recorded["model"]
+    for deliverable in calibration.deliverables.all():
+        assert [deliverable.candidate.name, deliverable.result.prior_scale] == recorded[deliverable.kind.value]
+    assert {d.kind.value for d in calibration.deliverables.all()} == set(recorded) - {"note", "model"}
+
+
+def test_the_same_bytes_for_any_number_of_workers(lean_scene, example_pool, tmp_path):
+    """Candidates cross-validated in this process or over two workers: the same calibration folder."""
+    import numpy as np
+
+    from posegen.calibrate import Perturbation, Settings, calibrate, simulate, write_calibration
+    from posegen.model import Contacts
+    from posegen.parallel import ProcessBackend
+
+    rows = list(range(30))
+    plan = Contacts(
+        example_pool.joints()[rows],
+        tuple(example_pool.postures[i].chain for i in rows),
+        ("sim",) * len(rows),
+        tuple(f"sim.yaml:{i}:c{i}" for i in rows),
+    )
+    recorded, _, _ = simulate(lean_scene, plan, Perturbation(compliance_rad_per_nm=3e-4), seed=5)
+    folders = []
+    for workers in (1, 2):
+        with ProcessBackend(workers) as backend:
+            calibration = calibrate(lean_scene, recorded, ["sim"], Settings(fold_seeds=1), backend=backend)
+        folders.append(tmp_path / f"w{workers}")
+        write_calibration(calibration, None, folders[-1], seed=0)
+    names = ["calibration.yaml", "calibrated.urdf", "offsets.yaml", "residuals.csv"]
+    names += [f"with_compliance/{n}" for n in ("calibrated.urdf", "compliance.yaml")]
+    for name in names:
+        assert (folders[0] / name).read_bytes() == (folders[1] / name).read_bytes(), name
+    assert np.load(folders[0] / "posterior.npz")["covariance"].tobytes() == np.load(
+        folders[1] / "posterior.npz"
+    )["covariance"].tobytes()

@@ -14,7 +14,6 @@ from posegen.cli.main import main
 from posegen.errors import ConfigError
 from posegen.robot import Scene, load_config, write_draft
 from posegen.robot.additions import Capsule, CollisionConfig, VisualHull
-from posegen.robot.chain_frames import check_calibration_frames, declared_chain_frames
 from posegen.robot.coverage import geometry_coverage
 from posegen.robot.draft import draft_robot
 from posegen.robot.validation import check_for_planning
@@ -71,12 +70,6 @@ def test_every_moving_link_gets_collision_geometry_and_the_check_says_so(drafts)
     pairs = CollisionConfig(disabled_pairs=scene.config.collision.disabled_pairs)
     bare = Scene(dataclasses.replace(scene.config, collision=pairs))  # the URDF's geometry alone
     assert "l_thigh" in geometry_coverage(bare).bare_links and "l_foot" not in geometry_coverage(bare).bare_links
-
-
-def test_the_drafted_chain_frames_are_what_calibration_needs(drafts):
-    _, scene = drafts["y"]
-    check_calibration_frames(scene)
-    assert declared_chain_frames(scene) == ("left_sole", "left_gripper", "right_sole", "right_gripper")
 
 
 def test_a_visual_hull_replaces_missing_collision_geometry():

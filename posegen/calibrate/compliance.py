@@ -1,0 +1,241 @@
+"""Compliance compensation: from the encoders' angles to the angles the joints have, and back.
+
+A URDF cannot hold a joint that gives way under load. A calibration whose model has
+compliance ships it beside its URDF as ``compliance.yaml``, and this module applies it
+exactly as the calibration model does (:meth:`posegen.model.CalibrationModel.deflected`)::
+
+    q_true[j] = q_encoder[j] - c_g * tau_g(q_encoder)      for every joint j of group g
+
+with ``c_g`` the group's compliance (rad/N m; its stiffness is 1 / c_g, N m/rad) and
+``tau_g`` the mean over the group's joints of the torque (N m, about each joint's axis,
+positive along it) that holds the posture still against gravity: both soles loaded
+(the split of the weight between them of least size, forces in N and moments in N m
+over a 0.1 m lever weighed alike), the arm in contact unloaded, the URDF's masses
+(:func:`posegen.robot.gravity_torques`). A stack with its own estimate of the holding
+torques (a whole-body controller's) passes them instead.
+
+The inverse, for commanding a posture: the encoder angles that put the joints at
+``q_true`` solve ``q_encoder = q_true + c_g * tau_g(q_encoder)``, by fixed-point
+iteration (the deflection changes the torque by a tiny fraction of itself).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from posegen.errors import InputError
+from posegen.io import dump_yaml, read_yaml, write_atomic
+from posegen.robot import FloatArray, Scene, gravity_torques
+
+COMPLIANCE_FORMAT = "posegen-compliance"
+COMPLIANCE_FILE = "compliance.yaml"
+FORMULA = "q_true[j] = q_encoder[j] - c_g * tau_g(q_encoder) for every joint j of group g"
+TORQUE_MODEL = (
+    "tau_g: mean over the group's joints of the joint torque (N m, about the joint axis, positive along it) that "
+    "holds the posture still against gravity, from the URDF's masses (pinocchio); both soles loaded, their wrenches "
+    "the least-size split of the weight (forces in N, moments in N m over a 0.1 m lever weighed alike); the arm in "
+    "contact unloaded"
+)
+INVERSE_ITERATIONS = 50  # fixed-point steps of :func:`uncompensate` at most
+INVERSE_TOLERANCE_RAD = 1e-13
+
+
+@dataclass(frozen=True)
+class ComplianceGroup:
+    """Joints that give way together under their mean holding torque."""
+
+    name: str
+    joints: tuple[str, ...]
+    compliance_rad_per_nm: float
+    std_rad_per_nm: float = 0.0  # posterior standard deviation of the calibration
+
+    @property
+    def stiffness_nm_per_rad(self) -> float:
+        """1 / compliance (inf for a rigid group)."""
+        return float("inf") if self.compliance_rad_per_nm == 0.0 else 1.0 / self.compliance_rad_per_nm
+
+
+@dataclass(frozen=True)
+class Compliance:
+    """The compliance a calibration found, and the stance its holding torques assume.
+
+    Example:
+        >>> compliance = read_compliance("plans/calibration/with_compliance/compliance.yaml")
+        >>> true_joints = compensate(scene, encoder_joints, compliance)
+
+    """
+
+    groups: tuple[ComplianceGroup, ...]
+    sole_frames: tuple[str, ...]  # both soles loaded
+
+    def indices(self, joint_names: Sequence[str]) -> list[list[int]]:
+        """Per group, the indices of its joints in ``joint_names``.
+
+        Raises:
+            InputError: Joints of the compliance that ``joint_names`` lacks (all of them named).
+
+        """
+        missing = sorted({j for g in self.groups for j in g.joints if j not in joint_names})
+        if missing:
+            raise InputError(f"the compliance names joints the robot does not have: {', '.join(missing)}")
+        position = {name: i for i, name in enumerate(joint_names)}
+        return [[position[j] for j in g.joints] for g in self.groups]
+
+
+def _torques(scene: Scene, joints: FloatArray, torques: FloatArray | None) -> FloatArray:
+    """The holding torques (n, nj) N m: given (checked), or from the URDF's masses at ``joints``."""
+    if torques is None:
+        return gravity_torques(scene, joints)
+    given = np.array(torques, dtype=float, ndmin=2)
+    if given.shape != joints.shape or not np.all(np.isfinite(given)):
+        raise InputError(f"torques: expected finite values of shape {joints.shape}, got {given.shape}")
+    return given
+
+
+def _joints(scene: Scene, joints: FloatArray, name: str) -> FloatArray:
+    array = np.array(joints, dtype=float, ndmin=2)  # a copy: the caller's array is never changed
+    if array.ndim != 2 or array.shape[1] != len(scene.joint_names) or not np.all(np.isfinite(array)):
+        raise InputError(
+            f"{name}: expected finite joint angles of shape (n, {len(scene.joint_names)}) in the scene's joint "
+            f"order, got shape {array.shape}"
+        )
+    return array
+
+
+def _deflection(compliance: Compliance, indices: list[list[int]], torques: FloatArray) -> FloatArray:
+    """c_g * tau_g on every joint of every group (n, nj), rad."""
+    out = np.zeros_like(torques)
+    for group, joints in zip(compliance.groups, indices, strict=True):
+        load = torques[:, joints].mean(axis=1, keepdims=True)  # (n, 1) N m
+        out[:, joints] += group.compliance_rad_per_nm * load
+    return out
+
+
+def compensate(
+    scene: Scene, joints: FloatArray, compliance: Compliance, torques: FloatArray | None = None
+) -> FloatArray:
+    """The angles the joints have, from the encoders' angles: ``q - c tau(q)``.
+
+    Args:
+        scene: The robot (its joint order and masses).
+        joints: (n, nj) or (nj,) encoder angles, rad, in ``scene.joint_names`` order.
+        compliance: The calibration's compliance (:func:`read_compliance`).
+        torques: (n, nj) holding torques, N m, in the same order; None: from the URDF's
+            masses at ``joints`` (the calibration's own model).
+
+    Returns:
+        (n, nj) joint angles, rad.
+
+    Raises:
+        InputError: Joints the robot lacks, or arrays of the wrong shape or not finite.
+
+    Example:
+        >>> true_joints = compensate(scene, encoder_joints, read_compliance("with_compliance/compliance.yaml"))
+
+    """
+    indices = compliance.indices(scene.joint_names)
+    q = _joints(scene, joints, "joints")
+    return np.asarray(q - _deflection(compliance, indices, _torques(scene, q, torques)))
+
+
+def uncompensate(
+    scene: Scene, joints: FloatArray, compliance: Compliance, torques: FloatArray | None = None
+) -> FloatArray:
+    """The encoder angles at which the joints have the angles ``joints``: the inverse of :func:`compensate`.
+
+    Args:
+        scene: The robot (its joint order and masses).
+        joints: (n, nj) or (nj,) true joint angles, rad, in ``scene.joint_names`` order.
+        compliance: The calibration's compliance.
+        torques: (n, nj) holding torques, N m, at the encoder angles sought; None: from the
+            URDF's masses, solved with them (fixed-point iteration).
+
+    Returns:
+        (n, nj) encoder angles, rad.
+
+    Raises:
+        InputError: Joints the robot lacks, arrays of the wrong shape or not finite, or a
+            compliance so large that the iteration does not converge.
+
+    Example:
+        >>> command = uncompensate(scene, wanted_joints, compliance)  # what to send to the joint drivers
+
+    """
+    indices = compliance.indices(scene.joint_names)
+    target = _joints(scene, joints, "joints")
+    if torques is not None:
+        return np.asarray(target + _deflection(compliance, indices, _torques(scene, target, torques)))
+    encoder = target.copy()
+    for _ in range(INVERSE_ITERATIONS):
+        step = target + _deflection(compliance, indices, gravity_torques(scene, encoder))
+        change = float(np.max(np.abs(step - encoder), initial=0.0))
+        encoder = step
+        if change <= INVERSE_TOLERANCE_RAD:
+            return encoder
+    raise InputError(f"uncompensate: no convergence in {INVERSE_ITERATIONS} steps (is the compliance plausible?)")
+
+
+def compliance_data(compliance: Compliance, urdf: str, provenance: dict[str, Any]) -> dict[str, Any]:
+    """The content of ``compliance.yaml``."""
+    return {
+        "format": COMPLIANCE_FORMAT,
+        "format_version": 1,
+        "urdf": urdf,
+        "formula": FORMULA,
+        "torque_model": TORQUE_MODEL,
+        "sole_frames": list(compliance.sole_frames),
+        "groups": {
+            g.name: {
+                "joints": list(g.joints),
+                "compliance_rad_per_nm": float(g.compliance_rad_per_nm),
+                "compliance_rad_per_knm": round(g.compliance_rad_per_nm * 1e3, 6),
+                "stiffness_nm_per_rad": None if g.compliance_rad_per_nm == 0.0 else round(g.stiffness_nm_per_rad, 3),
+                "std_rad_per_knm": round(g.std_rad_per_nm * 1e3, 6),
+            }
+            for g in compliance.groups
+        },
+        "provenance": provenance,
+    }
+
+
+def write_compliance(path: Path, compliance: Compliance, urdf: str, provenance: dict[str, Any]) -> None:
+    """Write ``compliance.yaml`` (atomically); ``urdf`` names the URDF it goes with (beside it)."""
+    write_atomic(path, dump_yaml(compliance_data(compliance, urdf, provenance)))
+
+
+def read_compliance(path: str | Path) -> Compliance:
+    """Read and check a ``compliance.yaml``.
+
+    Raises:
+        InputError: Not a compliance file, or a group without joints or with a compliance
+            that is not a finite number.
+
+    Example:
+        >>> compliance = read_compliance("plans/calibration/with_compliance/compliance.yaml")
+
+    """
+    data = read_yaml(path, COMPLIANCE_FORMAT)
+    groups_data = data.get("groups")
+    soles = data.get("sole_frames")
+    if not isinstance(groups_data, dict) or not isinstance(soles, list) or not all(isinstance(s, str) for s in soles):
+        raise InputError(f"{path}: expected 'groups' (a mapping) and 'sole_frames' (a list of frame names)")
+    groups = []
+    for name, group in groups_data.items():
+        joints = group.get("joints") if isinstance(group, dict) else None
+        value = group.get("compliance_rad_per_nm") if isinstance(group, dict) else None
+        std = group.get("std_rad_per_knm", 0.0) if isinstance(group, dict) else None
+        if not isinstance(joints, list) or not joints or not all(isinstance(j, str) for j in joints):
+            raise InputError(f"{path}: groups.{name}.joints: expected a non-empty list of joint names")
+        if not _finite(value) or not _finite(std):
+            raise InputError(f"{path}: groups.{name}: compliance_rad_per_nm and std_rad_per_knm must be finite numbers")
+        groups.append(ComplianceGroup(str(name), tuple(joints), float(value), float(std) * 1e-3))  # type: ignore[arg-type]
+    return Compliance(tuple(groups), tuple(soles))
+
+
+def _finite(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and bool(np.isfinite(value))
