@@ -159,7 +159,7 @@ def calibrated_config(model: ContactModel, theta: FloatArray, urdf_path: Path) -
     config = dataclasses.replace(scene.config, frames=export.frames).to_dict()
     config["robot"]["source"] = {
         "urdf": str(urdf_path.resolve()),
-        "srdf": str(scene.files.srdf),
+        **({"srdf": str(scene.files.srdf)} if scene.files.srdf is not None else {}),  # a robot may have none
         "package_dirs": list(scene.files.package_dirs),
     }
     return config

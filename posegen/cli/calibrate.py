@@ -90,10 +90,10 @@ def run(args: argparse.Namespace) -> int:
         f"+- {chosen['se']}; picked by {stability:.0%} of the fold seeds)"
     )
     for chain, error in report["predicted_error"].items():
-        m = error["mean_abs"]
+        m = {k: "-" if v is None else f"{v:.2f}" for k, v in error["mean_abs"].items()}  # None: not measured (point)
         print(
-            f"  predicted held-out error, {chain}: {m['z_mm']:.2f} mm, {m['roll_deg']:.2f} deg, "
-            f"{m['pitch_deg']:.2f} deg (mean absolute, grouped CV)"
+            f"  predicted held-out error, {chain}: {m['z_mm']} mm, {m['roll_deg']} deg, "
+            f"{m['pitch_deg']} deg (mean absolute, grouped CV)"
         )
     for message in report["rejected_rows"]:
         print(f"  row left out: {message}")

@@ -39,7 +39,11 @@ def run(args: argparse.Namespace) -> int:
         else:
             result = check_pool_file(args.file, args.config, bar, backend)
     unit = "point" if is_route else "posture"
-    print(f"checked {result.checked} {unit}s of {args.file} (meshes, pinocchio; not the planner's word)")
+    geometry = "meshes" if result.geometry is None else result.geometry.describe()
+    print(f"checked {result.checked} {unit}s of {args.file} ({geometry}; pinocchio; not the planner's word)")
+    if result.geometry is not None and result.geometry.bare_links:
+        bare = result.geometry.bare_links
+        print(f"  WARN {len(bare)} moving links have no collision geometry (nothing collides with them):", *bare)
     for worst in result.worst:
         if not worst.checked:
             print(f"  SKIP {worst.invariant.value:<13} {worst.detail}")

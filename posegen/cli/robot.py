@@ -16,14 +16,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(dest="action", required=True)
     init = actions.add_parser(
         "init",
-        help="draft a config for an example-robot-data robot (frames, limits, table, collision pairs)",
-        description="Study an example-robot-data humanoid and write a starting config to edit: legs and "
-        "soles, arms, joints to lock, contact frames, a table from the arms' reach, velocity limits the "
-        "URDF lacks, collision pairs to disable (sampled, as MoveIt's setup assistant).",
+        help="draft a config for a humanoid: example-robot-data name or URDF file (soles, posture, contacts, pairs)",
+        description="Study a humanoid (an example-robot-data name or a URDF file; no SRDF needed) and write a "
+        "starting config to edit: up axis, legs and soles, a standing posture, arms, joints to lock, a contact "
+        "per hand, collision geometry for links that have none, a table from the arms' reach, velocity limits "
+        "the URDF lacks, collision pairs to disable (sampled, as MoveIt's setup assistant). Every guess is "
+        "marked '# CHECK:' in the draft.",
     )
-    init.add_argument("name", help="example-robot-data name (as example_robot_data.load takes it)")
+    init.add_argument("name", metavar="SOURCE", help="example-robot-data name, or a URDF file")
     init.add_argument("-o", "--output", required=True, help="config file to write (e.g. configs/NAME_table.yaml)")
-    init.add_argument("--srdf", default=None, help="SRDF to use instead of the loader's (path or package:// URI)")
+    init.add_argument("--srdf", default=None, help="an SRDF (path or package:// URI): its first state, disabled pairs")
+    init.add_argument(
+        "--package-dir",
+        action="append",
+        default=[],
+        help="where package://NAME/ mesh paths are found (repeatable; folders above the URDF named NAME are tried too)",
+    )
     init.add_argument("--samples", type=positive, default=400, help="random postures for collision pairs (400)")
     init.add_argument("--seed", type=seed, default=0, help="seed of those postures (default 0)")
     pairs = actions.add_parser(
@@ -42,11 +50,20 @@ def run(args: argparse.Namespace) -> int:
     if args.action == "init":
         from posegen.robot import write_draft
 
-        draft = write_draft(args.name, args.output, args.srdf, args.samples, args.seed)
+        command = " ".join(
+            ["posegen robot init", args.name, *(f"--srdf {args.srdf}" for _ in [0] if args.srdf)]
+            + [f"--package-dir {d}" for d in args.package_dir]
+            + [f"-o {args.output}"]
+        )
+        draft = write_draft(
+            args.name, args.output, args.srdf, args.samples, args.seed, tuple(args.package_dir), command
+        )
         left, right = draft.chains
+        contact = "flush" if left.contact.flush else "point"
         print(f"robot init: {args.name} -> {args.output}")
-        print(f"  soles {draft.soles[0]}, {draft.soles[1]}; hands {left.hand}, {right.hand}")
-        print(f"  arms of {len(left.joints)} joints; {len(draft.locked)} joints locked")
+        print(f"  up axis {draft.up_axis}; soles {draft.soles[0].frame}, {draft.soles[1].frame}")
+        print(f"  hands {left.hand}, {right.hand} ({contact} contact); arms of {len(left.joints)} joints")
+        print(f"  {len(draft.locked)} joints locked; {len(draft.covered)} links given collision geometry")
         print(f"  table top {list(draft.table_center_m)} m (arm reach {draft.reach_m:.2f} m)")
         print(
             f"  {len(draft.survey.disabled)} collision pairs disabled of {draft.survey.pairs_surveyed} "
@@ -54,6 +71,9 @@ def run(args: argparse.Namespace) -> int:
         )
         for note in draft.notes:
             print(f"  note: {note}")
+        print(f"still to decide ({len(draft.checks)} '# CHECK:' lines in the draft):")
+        for check in draft.checks:
+            print(f"  - {check}")
         return 0
     from posegen.robot import survey_config_pairs
 

@@ -19,6 +19,7 @@ from posegen.model.parameters import Group
 from posegen.model.planes import initial_planes, level_planes
 from posegen.model.settle import settle
 from posegen.model.weights import DEFAULT_NOISE, UNIT_PRIOR_LENGTH_M, prior_scale, weights_for
+from posegen.robot import ContactKind, FloatArray
 
 STRUCTURAL_POSTURES = 100  # generated per (chain, session, contact kind)
 
@@ -74,6 +75,9 @@ def base_at(
     return base_parameters(regressor, scale, [planes, robot])
 
 
+LEG_SPREAD_RAD = 0.3  # legs perturbed by up to this in level_postures
+
+
 def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -> Contacts:
     """Random standing contacts of each (chain, session, kind) of ``contacts``.
 
@@ -84,35 +88,21 @@ def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -
     combinations that varying heights would show). Each is a training contact with
     every joint perturbed at random (legs by up to 0.3 rad, the rest by up to 0.5 rad),
     the second leg closed onto its sole and the contact settled by the smallest arm and
-    torso motion.
+    torso motion. A robot whose leg limits leave no room to close a perturbed stance
+    (legs that stand only straight) gets its legs unperturbed.
     """
     scene = model.scene
     rng = np.random.default_rng(seed)
     legs = scene.stance_leg_joints()
-    spread = np.full(len(scene.joint_names), 0.5)
-    spread[legs] = 0.3
     theta = level_planes(model, initial_planes(model, contacts, model.nominal()))  # at the measured heights
     keys = list(zip(contacts.chains, contacts.sessions, contacts.kinds, strict=True))
     parts: list[Contacts] = []
     for chain, session, kind in sorted(set(keys)):
         seeds = contacts.joints[[i for i, key in enumerate(keys) if key == (chain, session, kind)]]
-        found = 0
-        for _attempt in range(50):
-            samples = []
-            for _ in range(2 * (n - found)):
-                base = seeds[rng.integers(len(seeds))]
-                sample = np.clip(base + rng.uniform(-spread, spread), scene.lower, scene.upper)
-                closed = scene.close_stance(sample)
-                if closed is not None:
-                    samples.append(closed)
-            if not samples:
-                continue
-            m = len(samples)
-            batch = Contacts(np.array(samples), (chain,) * m, (session,) * m, ("",) * m, (kind,) * m)
-            settled, converged = settle(model, theta, batch)
-            keep = np.flatnonzero(converged)[: n - found]
-            parts.append(settled.subset(keep))
-            found += len(keep)
+        for leg_spread in (LEG_SPREAD_RAD, 0.0):
+            spread = np.full(len(scene.joint_names), 0.5)
+            spread[legs] = leg_spread
+            found = _perturbed(model, theta, seeds, (chain, session, kind), spread, n, rng, parts)
             if found >= n:
                 break
         else:
@@ -121,3 +111,38 @@ def level_postures(model: ContactModel, contacts: Contacts, n: int, seed: int) -
     for part in parts[1:]:
         out = out.concat(part)
     return out
+
+
+def _perturbed(
+    model: ContactModel,
+    theta: FloatArray,
+    seeds: FloatArray,
+    key: tuple[str, str, ContactKind],
+    spread: FloatArray,
+    n: int,
+    rng: np.random.Generator,
+    parts: list[Contacts],
+) -> int:
+    """Append to ``parts`` up to ``n`` settled perturbations of ``seeds`` (joints, (s, nj)); how many were."""
+    scene = model.scene
+    chain, session, kind = key
+    found = 0
+    for _attempt in range(50):
+        samples = []
+        for _ in range(2 * (n - found)):
+            base = seeds[rng.integers(len(seeds))]
+            sample = np.clip(base + rng.uniform(-spread, spread), scene.lower, scene.upper)
+            closed = scene.close_stance(sample)
+            if closed is not None:
+                samples.append(closed)
+        if not samples:
+            continue
+        m = len(samples)
+        batch = Contacts(np.array(samples), (chain,) * m, (session,) * m, ("",) * m, (kind,) * m)
+        settled, converged = settle(model, theta, batch)
+        keep = np.flatnonzero(converged)[: n - found]
+        parts.append(settled.subset(keep))
+        found += len(keep)
+        if found >= n:
+            break
+    return found

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
@@ -18,6 +19,7 @@ from posegen.robot import (
     Scene,
     Verification,
     check_for_planning,
+    geometry_coverage,
     load_config,
     pool_from_dict,
     scene_for,
@@ -95,4 +97,5 @@ def check_pool_file(
     scene.check_made_for(pool.provenance, path)
     pool.check_joints(scene.joint_names, path)
     progress(Progress(0, len(pool.postures), "posture"))
-    return verify_postures(scene, pool.postures, progress, workers)
+    result = verify_postures(scene, pool.postures, progress, workers)
+    return dataclasses.replace(result, geometry=geometry_coverage(scene))

@@ -10,6 +10,7 @@ selection, route).
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig, ContactKind
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
+from posegen.robot.collision_geometry import robot_geometry
 from posegen.robot.collision_matrix import PairSurvey
 from posegen.robot.config import (
     Config,
@@ -23,6 +24,7 @@ from posegen.robot.config import (
     load_config,
     parse_config,
 )
+from posegen.robot.coverage import GeometryCoverage, geometry_coverage
 from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf, with_declared_frames
 from posegen.robot.draft import Draft
 from posegen.robot.draft_text import survey_config_pairs, write_draft
@@ -107,6 +109,7 @@ __all__ = [
     "ContactKind",
     "Draft",
     "FloatArray",
+    "GeometryCoverage",
     "Indices",
     "Invariant",
     "MarginConfig",
@@ -137,6 +140,7 @@ __all__ = [
     "contact_placement",
     "convex_hull_clockwise",
     "flatten_on_floor",
+    "geometry_coverage",
     "gravity_torques",
     "is_route_file",
     "kinematic_urdf",
@@ -151,6 +155,7 @@ __all__ = [
     "pool_from_dict",
     "posture_from_dict",
     "read_route",
+    "robot_geometry",
     "route_arrays",
     "scene_for",
     "stamp",

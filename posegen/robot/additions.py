@@ -67,7 +67,14 @@ class Box:
     rpy_deg: Vector3 = (0.0, 0.0, 0.0)  # the box's orientation in the link frame
 
 
-Shape = Capsule | Box
+@dataclass(frozen=True)
+class VisualHull:
+    """The convex hull of each of a link's visual meshes, as its collision geometry."""
+
+    link: str
+
+
+Shape = Capsule | Box | VisualHull
 
 
 @dataclass(frozen=True)
@@ -143,14 +150,19 @@ def _read_shapes(by_link: Reader, link: str) -> list[Shape]:
     items = by_link.raw(link)
     where = f"{by_link.where}.{link}"
     if not isinstance(items, list) or not items:
-        raise ConfigError(f"{where}: expected a list of shapes ({{capsule: ...}} or {{box: ...}})")
+        raise ConfigError(f"{where}: expected a list of shapes ({{capsule: ...}}, {{box: ...}}, {{visual_hull: {{}}}})")
     out: list[Shape] = []
     for k, item in enumerate(items):
-        if not isinstance(item, dict) or len(item) != 1 or next(iter(item)) not in ("capsule", "box"):
-            raise ConfigError(f"{where}[{k}]: expected {{capsule: {{...}}}} or {{box: {{...}}}}, got {item!r}")
+        if not isinstance(item, dict) or len(item) != 1 or next(iter(item)) not in ("capsule", "box", "visual_hull"):
+            raise ConfigError(
+                f"{where}[{k}]: expected {{capsule: {{...}}}}, {{box: {{...}}}} or {{visual_hull: {{}}}}, got {item!r}"
+            )
         kind = next(iter(item))
-        entry = Reader(item[kind], f"{where}[{k}].{kind}")
-        if kind == "capsule":
+        entry = Reader(item[kind] if item[kind] is not None else {}, f"{where}[{k}].{kind}")
+        if kind == "visual_hull":
+            entry.keys_within(())
+            out.append(VisualHull(link))
+        elif kind == "capsule":
             entry.keys_within(("from_m", "to_m", "radius_m"))
             out.append(Capsule(link, _vector(entry, "from_m"), _vector(entry, "to_m"), _positive(entry, "radius_m")))
         else:
@@ -183,6 +195,8 @@ def additions_to_dict(
                 entry: dict[str, Any] = {
                     "capsule": {"from_m": list(shape.from_m), "to_m": list(shape.to_m), "radius_m": shape.radius_m}
                 }
+            elif isinstance(shape, VisualHull):
+                entry = {"visual_hull": {}}
             else:
                 box = {"center_m": list(shape.center_m), "size_m": list(shape.size_m), "rpy_deg": list(shape.rpy_deg)}
                 entry = {"box": box}

@@ -33,12 +33,13 @@ class ChainConfig:
     fingertip_length_m: float  # from a fingertip link origin to its end, along -z of gripper_frame
     contact_frame: str  # name given to the flush contact frame that posegen adds to the model
     spot_y_range_m: tuple[float, float]  # table-frame y range of the spots this arm serves
-    recorded_as: str = ""  # the name recordings give this gripper (e.g. "robot/left_gripper")
+    recorded_as: str = ""  # the name recordings give this gripper (e.g. "robot/gripper_a")
     wrench_topic: str = ""  # rosbag2 topic of this wrist's force/torque sensor (geometry_msgs/WrenchStamped)
     contact_kind: ContactKind = ContactKind.FLUSH  # what `pool` plans
     point_frame: str = ""  # the point contact's frame ("": no point contact)
     point_radius_m: float = 0.0  # the tip's rounding: its centre stays this far above the table
     point_cone_deg: float = 30.0  # largest tilt of the point frame's z from the table normal
+    touching_links: tuple[str, ...] = ()  # links that may touch the table too at this chain's contact (fingers)
 
     def frame(self, kind: ContactKind) -> str:
         """The frame whose pose a contact of this kind constrains."""
@@ -56,6 +57,7 @@ CHAIN_DEFAULTS = {
     "point_frame": "",
     "point_radius_m": 0.0,
     "point_cone_deg": 30.0,
+    "touching_links": (),
 }
 
 
@@ -89,4 +91,5 @@ def read_chain(ch: Reader, name: str) -> ChainConfig:
         point_frame=point,
         point_radius_m=ch.number("point_radius_m", 0.0, minimum=0.0),
         point_cone_deg=cone,
+        touching_links=ch.texts("touching_links", []),
     )

@@ -39,8 +39,8 @@ class CollisionChecker:
     """Self, table and floor collisions of a scene's robot.
 
     The soles' links may touch the floor; the links carrying a chain's contact points
-    (fingertips, point frame) may touch the table when that chain is in contact
-    (``contact_chain``), never otherwise.
+    (fingertips, point frame) and its declared ``touching_links`` may touch the table when
+    that chain is in contact (``contact_chain``), never otherwise.
     """
 
     def __init__(self, scene: Scene, convex: bool = True) -> None:
@@ -48,7 +48,7 @@ class CollisionChecker:
         model = scene.model
         geom = robot_geometry(model, scene.urdf_xml, scene.files.package_dirs, scene.config.collision, convex)
         n_robot = len(geom.geometryObjects)
-        add_self_pairs(model, geom, str(scene.files.srdf), scene.config.collision)
+        add_self_pairs(model, geom, scene.files.srdf_path(), scene.config.collision)
 
         size = scene.table.size_m
         table_placement = pin.SE3(scene.table_pose) * pin.SE3(np.eye(3), np.array([0.0, 0.0, -size[2] / 2]))
@@ -72,7 +72,7 @@ class CollisionChecker:
         self._exempt: dict[str | None, list[int]] = {None: []}
         for chain in scene.chains:
             touching = (*chain.fingertip_frames, *((chain.point_frame,) if chain.point_frame else ()))
-            tips = carrying_links(model, touching, set(frame_of))
+            tips = carrying_links(model, touching, set(frame_of)) | set(chain.touching_links)
             self._exempt[chain.name] = [
                 k
                 for k, p in enumerate(geom.collisionPairs)

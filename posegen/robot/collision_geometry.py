@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError, unknown_name
-from posegen.robot.additions import Box, Capsule, CollisionConfig, Shape
+from posegen.robot.additions import Box, Capsule, CollisionConfig, Shape, VisualHull
 
 
 def robot_geometry(
@@ -36,11 +36,17 @@ def robot_geometry(
         doomed = [str(o.name) for o in geom.geometryObjects if str(model.frames[o.parentFrame].name) in replaced]
         for name in doomed:
             geom.removeGeometryObject(name)
+        visual = None
         for k, shape in enumerate(collision.shapes):
+            name = f"{shape.link}_shape_{k}"
+            if isinstance(shape, VisualHull):
+                if visual is None:
+                    visual = pin.buildGeomFromUrdfString(model, urdf_xml, pin.VISUAL, package_dirs=list(package_dirs))
+                _add_visual_hulls(model, geom, visual, shape.link, name)
+                continue
             frame = model.frames[model.getFrameId(shape.link, pin.FrameType.BODY)]
             geometry, local = _primitive(shape)
             parent = model.getFrameId(shape.link)
-            name = f"{shape.link}_shape_{k}"
             placement = frame.placement * local
             geom.addGeometryObject(pin.GeometryObject(name, frame.parentJoint, parent, placement, geometry))
     if convex:
@@ -52,6 +58,25 @@ def robot_geometry(
                 obj.geometry.buildConvexHull(True, "Qt")
                 obj.geometry = obj.geometry.convex
     return geom
+
+
+def _add_visual_hulls(
+    model: pin.Model, geom: pin.GeometryModel, visual: pin.GeometryModel, link: str, name: str
+) -> None:
+    """Add the convex hull of each of a link's visual meshes to ``geom``.
+
+    Raises:
+        ConfigError: The link has no visual mesh (``robot.collision.shapes``).
+
+    """
+    parent = model.getFrameId(link, pin.FrameType.BODY)
+    found = [o for o in visual.geometryObjects if o.parentFrame == parent and isinstance(o.geometry, coal.BVHModelBase)]
+    if not found:
+        raise ConfigError(f"robot.collision.shapes.{link}: visual_hull, but the link has no visual mesh")
+    for k, obj in enumerate(found):
+        obj.geometry.buildConvexHull(True, "Qt")
+        hull = obj.geometry.convex
+        geom.addGeometryObject(pin.GeometryObject(f"{name}_{k}", obj.parentJoint, parent, obj.placement, hull))
 
 
 def _primitive(shape: Shape) -> tuple[coal.CollisionGeometry, pin.SE3]:
@@ -90,10 +115,13 @@ def link_of(model: pin.Model, geom: pin.GeometryModel) -> list[str]:
     return [str(model.frames[o.parentFrame].name) for o in geom.geometryObjects]
 
 
-def add_self_pairs(model: pin.Model, geom: pin.GeometryModel, srdf: str, collision: CollisionConfig) -> None:
-    """Add every pair of links except those the SRDF or the config disables."""
+def add_self_pairs(
+    model: pin.Model, geom: pin.GeometryModel, srdf: str | None, collision: CollisionConfig
+) -> None:
+    """Add every pair of links except those the SRDF (if any) or the config disables."""
     geom.addAllCollisionPairs()
-    pin.removeCollisionPairs(model, geom, srdf, False)
+    if srdf is not None:
+        pin.removeCollisionPairs(model, geom, srdf, False)
     if not collision.disabled_pairs:
         return
     disabled = {frozenset((pair.link_a, pair.link_b)) for pair in collision.disabled_pairs}

@@ -51,6 +51,7 @@ def survey_pairs(
     margin_m: float,
     samples: int = DEFAULT_SAMPLES,
     seed: int = 0,
+    rest_margin_m: float | None = None,
 ) -> PairSurvey:
     """Find the link pairs to disable.
 
@@ -62,6 +63,7 @@ def survey_pairs(
         margin_m: Pairs closer than this count as touching.
         samples: Number of random configurations.
         seed: Seed of the generator.
+        rest_margin_m: Pairs closer than this at the reference are "default" (None: ``margin_m``).
 
     """
     owner = link_of(model, geom)
@@ -73,7 +75,9 @@ def survey_pairs(
     for request in geom_data.collisionRequests:
         request.security_margin = margin_m
 
-    def touching(q: FloatArray) -> FloatArray:
+    def touching(q: FloatArray, margin: float = margin_m) -> FloatArray:
+        for request in geom_data.collisionRequests:
+            request.security_margin = margin
         pin.computeCollisions(model, data, geom, geom_data, q, False)
         hit = np.array([r.isCollision() for r in geom_data.collisionResults], dtype=bool)
         out = np.zeros(len(link_pairs), dtype=bool)
@@ -85,7 +89,7 @@ def survey_pairs(
     for a, b in link_pairs:
         if _adjacent(model, joint_of[a], joint_of[b], set(joint_of.values())):
             reasons[(a, b)] = PairReason.ADJACENT
-    for k in np.flatnonzero(touching(reference)):
+    for k in np.flatnonzero(touching(reference, margin_m if rest_margin_m is None else rest_margin_m)):
         reasons.setdefault(link_pairs[k], PairReason.DEFAULT)
     rng = np.random.default_rng(seed)
     counts = np.zeros(len(link_pairs))
@@ -129,7 +133,7 @@ def survey_scene_pairs(scene: Scene, samples: int = DEFAULT_SAMPLES, seed: int =
     """:func:`survey_pairs` for a scene's robot: its shapes, SRDF and locked joints, not its disabled pairs."""
     collision = CollisionConfig(shapes=scene.config.collision.shapes)
     geom = robot_geometry(scene.model, scene.urdf_xml, scene.files.package_dirs, collision, convex=True)
-    add_self_pairs(scene.model, geom, str(scene.files.srdf), collision)
+    add_self_pairs(scene.model, geom, scene.files.srdf_path(), collision)
     margin = scene.margins.joint_limit_rad
 
     def sample(rng: np.random.Generator) -> FloatArray:

@@ -36,8 +36,9 @@ PACKAGE_URI = "package://"
 class RobotSource:
     """Where the robot model comes from: an example-robot-data name or URDF/SRDF paths.
 
-    With ``example_robot_data``, ``srdf`` may name another SRDF than the loader's (some
-    loaders have none): a path, or a ``package://`` URI resolved in the package dirs.
+    With ``example_robot_data``, ``srdf`` may name another SRDF than the loader's: a
+    path, or a ``package://`` URI resolved in the package dirs. No SRDF is needed: without
+    one, the reference posture and the disabled collision pairs come from the config.
     """
 
     example_robot_data: str | None = None
@@ -56,6 +57,7 @@ class StanceConfig:
     foot_y_m: tuple[float, float]  # sole rectangle along the sole frame's y
     floor_contact_frames: tuple[str, ...]  # links allowed to touch the floor
     reference_joints: dict[str, float] = dataclasses.field(default_factory=dict)  # rad, overriding the state
+    root_rpy_deg: tuple[float, float, float] | None = None  # root orientation at the reference (a y-up model)
 
 
 @dataclass(frozen=True)
@@ -166,10 +168,14 @@ class Config:
             for key in ("contact_kind", "point_frame", "point_radius_m", "point_cone_deg"):
                 if fields[key] == CHAIN_DEFAULTS[key] or not chain.point_frame:
                     del fields[key]  # a flush-only chain saves as before
+            if not chain.touching_links:
+                del fields["touching_links"]
             chains[fields.pop("name")] = fields
         stance = dataclasses.asdict(self.stance)
         if not stance["reference_joints"]:
             del stance["reference_joints"]  # only what a config says: older artefacts stay identical
+        if stance["root_rpy_deg"] is None:
+            del stance["root_rpy_deg"]
         robot = {"source": source, "locked_joints": dict(self.locked_joints)}
         robot.update(additions_to_dict(self.frames, self.velocity_limits, self.collision))
         data = {
@@ -220,9 +226,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         package_dirs=tuple(str(absolute(d)) for d in src.texts("package_dirs", [])),
     )
     if (source.example_robot_data is None) == (source.urdf is None):
-        raise ConfigError("robot.source: give either example_robot_data or urdf (with srdf)")
-    if source.urdf is not None and source.srdf is None:
-        raise ConfigError("robot.source.srdf: missing (needed with urdf)")
+        raise ConfigError("robot.source: give either example_robot_data or urdf")
     robot.keys_within(("source", "locked_joints", "frames", "velocity_limits_rad_s", "collision"))
     locked = robot.raw("locked_joints", {})
     if not isinstance(locked, dict) or not all(is_finite_number(v) for v in locked.values()):
@@ -239,6 +243,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         foot_y_m=st.interval("foot_y_m"),
         floor_contact_frames=st.texts("floor_contact_frames"),
         reference_joints=st.angles("reference_joints"),
+        root_rpy_deg=_root_rpy(st),
     )
 
     chains_raw = top.raw("chains")
@@ -297,6 +302,14 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         velocity_limits=read_velocity_limits(robot),
         collision=read_collision(robot),
     )
+
+
+def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:
+    """``stance.root_rpy_deg``: the root's roll, pitch, yaw (deg) at the reference, or None."""
+    if stance.raw("root_rpy_deg", None) is None:
+        return None
+    roll, pitch, yaw = stance.numbers("root_rpy_deg", 3)
+    return (roll, pitch, yaw)
 
 
 _Section = TypeVar("_Section", RouteConfig, RecordingConfig)

@@ -9,7 +9,9 @@ URDF, so every stage agrees on where the contact is.
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import os
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError, unknown_name
+from posegen.io import read_text_file
 from posegen.robot.additions import FrameConfig
 from posegen.robot.config import PACKAGE_URI, ChainConfig, Config, RobotSource
 from posegen.robot.geometry import FloatArray
@@ -29,15 +32,29 @@ class RobotFiles:
     """Resolved robot description files."""
 
     urdf: Path
-    srdf: Path
+    srdf: Path | None  # None: no SRDF (reference posture and disabled pairs from the config)
     package_dirs: tuple[str, ...]
 
     def sha256(self) -> str:
         """Hash of the URDF and SRDF contents (the model identity saved in artefacts)."""
         digest = hashlib.sha256()
         for path in (self.urdf, self.srdf):
-            digest.update(path.read_bytes())
+            if path is not None:
+                digest.update(path.read_bytes())
         return digest.hexdigest()
+
+    def srdf_path(self) -> str | None:
+        """The SRDF's path as text, or None without one."""
+        return None if self.srdf is None else str(self.srdf)
+
+    def urdf_text(self) -> str:
+        """The URDF's text, its relative mesh paths made absolute (from the URDF's folder).
+
+        Raises:
+            ConfigError: The file cannot be read as text.
+
+        """
+        return absolute_mesh_paths(read_text_file(self.urdf, ConfigError), self.urdf.parent)
 
 
 def resolve_robot_files(config: Config) -> RobotFiles:
@@ -50,10 +67,11 @@ def resolve_source(source: RobotSource) -> RobotFiles:
 
     An example-robot-data robot is named as ``example_robot_data.load`` names it. Its
     SRDF is the loader's unless ``srdf`` names another (a path, or a ``package://`` URI
-    resolved in the package dirs).
+    resolved in the package dirs); it may have none. A URDF's ``package://NAME/`` mesh
+    paths are also looked up beside a folder NAME above the URDF (the ROS layout).
 
     Raises:
-        ConfigError: The files do not exist, the robot name is unknown or has no SRDF.
+        ConfigError: The files do not exist or the robot name is unknown.
 
     """
     if source.example_robot_data is not None:
@@ -68,36 +86,83 @@ def resolve_source(source: RobotSource) -> RobotFiles:
         data_dir = Path(os.path.normpath(robots_dir / loader.path))
         urdf = data_dir / loader.urdf_subpath / loader.urdf_filename
         package_dirs: tuple[str, ...] = (os.path.normpath(robots_dir / ".." / ".."), *source.package_dirs)
+        srdf: Path | None
         if source.srdf is not None:
-            srdf = _resolve(source.srdf, package_dirs)
-        elif loader.srdf_filename:
-            srdf = data_dir / loader.srdf_subpath / loader.srdf_filename
+            srdf = resolve_path(source.srdf, package_dirs)
         else:
-            found = sorted(p.name for p in (data_dir / loader.srdf_subpath).glob("*.srdf"))
-            raise ConfigError(
-                f"robot.source.srdf: example-robot-data '{key}' has no SRDF of its own; name one "
-                f"(files in {data_dir / loader.srdf_subpath}: {', '.join(found) or 'none'})"
-            )
+            srdf = data_dir / loader.srdf_subpath / loader.srdf_filename if loader.srdf_filename else None
     else:
-        package_dirs = source.package_dirs
-        urdf = _resolve(str(source.urdf), package_dirs)
-        srdf = _resolve(str(source.srdf), package_dirs)
+        urdf = resolve_path(str(source.urdf), source.package_dirs)
+        package_dirs = (*source.package_dirs, *_ancestor_package_dirs(urdf))
+        srdf = None if source.srdf is None else resolve_path(source.srdf, package_dirs)
     for path in (urdf, srdf):
-        if not path.is_file():
+        if path is not None and not path.is_file():
             raise ConfigError(f"robot.source: file not found: {path}")
     return RobotFiles(urdf=urdf, srdf=srdf, package_dirs=package_dirs)
 
 
-def _resolve(path: str, package_dirs: tuple[str, ...]) -> Path:
-    """A file path, or a ``package://NAME/...`` URI looked up in the package dirs."""
+def _ancestor_package_dirs(urdf: Path) -> tuple[str, ...]:
+    """Folders above the URDF that hold a package its ``package://NAME/`` paths name."""
+    if not urdf.is_file():
+        return ()
+    names = set(re.findall(r"package://([^/\s\"']+)/", urdf.read_text(errors="replace")))
+    found = []
+    for folder in urdf.resolve().parents:
+        if folder.name in names and str(folder.parent) not in found:
+            found.append(str(folder.parent))
+    return tuple(found)
+
+
+def absolute_mesh_paths(urdf_text: str, folder: Path) -> str:
+    """The URDF text with its relative mesh file names made absolute (relative to ``folder``).
+
+    ``package://`` and ``file://`` URIs and absolute paths are left as they are.
+    """
+
+    def fix(match: re.Match[str]) -> str:
+        name = match.group(2)
+        if "://" in name or Path(name).is_absolute():
+            return match.group(0)
+        return f"{match.group(1)}{(folder / name).resolve()}{match.group(3)}"
+
+    return re.sub(r"(<mesh\b[^>]*?\bfilename\s*=\s*[\"'])([^\"']+)([\"'])", fix, urdf_text)
+
+
+def resolve_path(path: str, package_dirs: tuple[str, ...]) -> Path:
+    """A file path, or a ``package://NAME/...`` URI looked up in the package dirs, else in Python package NAME.
+
+    A description installed from PyPI (``pip install NAME``) is its own package dir.
+    """
     if not path.startswith(PACKAGE_URI):
         return Path(path)
     relative = path[len(PACKAGE_URI) :]
-    for directory in package_dirs:
+    for directory in (*package_dirs, *python_package_parent(relative.split("/")[0])):
         candidate = Path(directory) / relative
         if candidate.is_file():
             return candidate
     return Path(package_dirs[0] if package_dirs else ".") / relative  # reported as not found
+
+
+def python_package_parent(name: str) -> tuple[str, ...]:
+    """The folder holding an installed Python package called ``name`` (none if there is no such package)."""
+    if not name.isidentifier():
+        return ()
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):
+        return ()
+    if spec is None or not spec.submodule_search_locations:
+        return ()
+    return tuple(str(Path(location).parent) for location in spec.submodule_search_locations)
+
+
+def package_uri(path: Path) -> str | None:
+    """``package://NAME/...`` for a file inside an installed Python package NAME, else None."""
+    resolved = path.resolve()
+    for folder in resolved.parents:
+        if str(folder.parent) in python_package_parent(folder.name):
+            return f"{PACKAGE_URI}{resolved.relative_to(folder.parent).as_posix()}"
+    return None
 
 
 def frame_id(model: pin.Model, name: str) -> int:

@@ -3,18 +3,22 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 from typing import Any
 
 import yaml
 
 from posegen.errors import ConfigError
 from posegen.io import check_apart, claim_output, write_atomic
-from posegen.robot.additions import Capsule, DisabledPair
+from posegen.robot.additions import Box, Capsule, DisabledPair, VisualHull
+from posegen.robot.collision import CollisionChecker
 from posegen.robot.collision_matrix import PairSurvey, survey_scene_pairs
 from posegen.robot.config import load_config, parse_config
 from posegen.robot.draft import Draft, draft_robot
 from posegen.robot.scene import Scene
 from posegen.robot.validation import check_for_planning
+
+POINT_CONE_DEG = 60.0  # a drafted point contact: the hand may tilt this far from the table's normal
 
 
 def _flow(value: Any) -> str:
@@ -29,26 +33,37 @@ def pairs_text(pairs: tuple[DisabledPair, ...], indent: str = "    ") -> list[st
     return lines
 
 
-def render_draft(draft: Draft, seed: int) -> str:
-    """The config text of a draft, ready to edit."""
+def render_draft(draft: Draft, seed: int, command: str = "") -> str:
+    """The config text of a draft, ready to edit: every guess has a ``# CHECK:`` line."""
+    made = command or f"posegen robot init {draft.robot}"
     lines = [
-        f"# posegen scene: {draft.robot} at a table (drafted by `posegen robot init {draft.robot}`).",
-        "# Every value below was found from the robot description by heuristics: check each one,",
-        "# in particular the lines marked EDIT. Units: m, rad (angles in *_deg keys are degrees).",
+        f"# posegen scene: {Path(draft.robot).stem} at a table (drafted by `{made}`).",
+        "# Every value below was found from the robot description by heuristics. The `# CHECK:` lines say",
+        "# what was guessed and how to check it. Units: m, rad (angles in *_deg keys are degrees).",
+        *[f"# CHECK: {check}" for check in draft.checks],
         "robot:",
         "  source:",
-        f"    example_robot_data: {draft.robot}",
     ]
-    if draft.srdf:
-        lines.append(f"    srdf: {draft.srdf}")
-    lines.append("  locked_joints:                     # held fixed (rad): off the legs and arms (head, fingers)")
-    lines += [f"    {name}: {value:.4g}" for name, value in draft.locked.items()]
-    lines.append("  frames:                            # EDIT: where the hands touch the table (declared here)")
-    for chain in draft.chains:
-        for frame in chain.touch:
-            lines.append(f"    {frame.name}: {{parent: {frame.parent}, xyz_m: {_flow(list(frame.xyz_m))}}}")
+    source = draft.source
+    if source.example_robot_data:
+        lines.append(f"    example_robot_data: {source.example_robot_data}")
+    else:
+        lines.append(f"    urdf: {source.urdf}")
+    if source.srdf:
+        lines.append(f"    srdf: {source.srdf}")
+    if source.package_dirs:
+        lines.append(f"    package_dirs: {_flow(list(source.package_dirs))}")
+    if draft.locked:
+        lines.append("  locked_joints:                     # held fixed (rad): off the legs and arms (head, fingers)")
+        lines += [f"    {name}: {value:.4g}" for name, value in draft.locked.items()]
+    lines.append("  frames:                            # declared here, added to the description at load")
+    for frame in draft.frames:
+        entry = f"{{parent: {frame.parent}, xyz_m: {_flow(list(frame.xyz_m))}"
+        if any(frame.rpy_deg):
+            entry += f", rpy_deg: {_flow(list(frame.rpy_deg))}"
+        lines.append(f"    {frame.name}: {entry}}}")
     if draft.velocity_limits:
-        lines.append("  velocity_limits_rad_s:             # EDIT: the URDF gives none or an implausible one")
+        lines.append("  velocity_limits_rad_s:             # CHECK: the URDF gives none or an implausible one")
         for name, value in draft.velocity_limits.items():
             lines.append(f"    {name}: {value}    # URDF: {draft.urdf_velocity[name]:g} rad/s")
     lines.append("  collision:")
@@ -58,78 +73,137 @@ def render_draft(draft: Draft, seed: int) -> str:
         f"{len(draft.survey.disabled)} of {draft.survey.pairs_surveyed} link pairs"
     )
     if draft.shapes:
-        lines.append("    shapes:                          # EDIT: these links' meshes miss their centre of mass")
-        for link, gap in draft.misplaced.items():
-            lines.append(f"      {link}:                    # CoM {1e3 * gap:.0f} mm outside its collision geometry")
-            for shape in draft.shapes:
-                if isinstance(shape, Capsule) and shape.link == link:
-                    entry = {"from_m": list(shape.from_m), "to_m": list(shape.to_m), "radius_m": shape.radius_m}
-                    lines.append(f"        - capsule: {_flow(entry)}")
-    left, right = draft.chains
+        lines += _shapes_text(draft)
+    lines += _stance_text(draft)
+    lines += _chains_text(draft)
+    half_standoff = round(0.06 * draft.reach_m / 0.9, 3)
     lines += [
         "",
-        "stance:",
-        f"  reference_posture: {draft.reference_posture or '~'}"
-        + ("      # the SRDF's first group state" if draft.reference_posture else "      # every joint at 0"),
-        f"  sole_frames: {_flow(list(draft.soles))}   # the first one anchors the floating base",
-        f"  foot_x_m: {_flow(list(draft.foot_x_m))}   # sole rectangle in the sole frame (lowest foot vertices)",
-        f"  foot_y_m: {_flow(list(draft.foot_y_m))}",
-        f"  floor_contact_frames: {_flow(list(draft.floor_contact))}   # links that may touch the floor",
-        "",
-        "chains:",
-    ]
-    half = 0.1 * (draft.spots_y_m[-1] - draft.spots_y_m[0])
-    ranges = {
-        "left": [round(-half, 3), round(draft.spots_y_m[-1], 3)],
-        "right": [round(draft.spots_y_m[0], 3), round(half, 3)],
-    }
-    for chain in (left, right):
-        lines += [
-            f"  {chain.name}:                            # arm: {', '.join(chain.joints)}",
-            f"    sole_frame: {chain.sole}",
-            f"    gripper_frame: {chain.hand}",
-            f"    fingertip_frames: {_flow([f.name for f in chain.touch])}   # EDIT (see robot.frames)",
-            "    fingertip_length_m: 0.0",
-            f"    contact_frame: {chain.name}_contact",
-            f"    spot_y_range_m: {_flow(ranges[chain.name])}",
-        ]
-    lines += [
-        "",
-        f"table:                               # from the arm's reach ({draft.reach_m:.2f} m, shoulder to hand)",
+        f"table:                               # CHECK: from the arm's reach ({draft.reach_m:.2f} m, shoulder to hand)",
         f"  top_center_m: {_flow(list(draft.table_center_m))}",
         "  yaw_deg: 0.0",
         f"  size_m: {_flow(list(draft.table_size_m))}",
         f"  spots_x_m: {_flow(list(draft.spots_x_m))}",
         f"  spots_y_m: {_flow(list(draft.spots_y_m))}",
-        f"  approach_standoff_m: {round(0.06 * draft.reach_m / 0.9, 3)}",
+        f"  approach_standoff_m: {half_standoff}",
         "",
-        "margins: {com_m: 0.02, collision_m: 0.005, joint_limit_rad: 0.02}",
-        "sampling: {soft_iterations: 50, hard_iterations: 15, "
-        f"spot_tolerance_m: {round(0.06 * draft.reach_m / 0.9, 3)}, chunk_size: 32}}",
+        f"margins: {{com_m: 0.02, collision_m: 0.005, joint_limit_rad: {draft.joint_limit_margin_rad}}}",
+        f"sampling: {{soft_iterations: 50, hard_iterations: 15, spot_tolerance_m: {half_standoff}, chunk_size: 32}}",
         "",
     ]
     return "\n".join(lines)
 
 
-def write_draft(robot: str, output: str, srdf: str | None = None, samples: int = 400, seed: int = 0) -> Draft:
-    """Draft a config for an example-robot-data robot and write it (atomically) to ``output``.
+def _shapes_text(draft: Draft) -> list[str]:
+    lines = ["    shapes:                          # CHECK: links without collision geometry, or with wrong geometry"]
+    for link in dict.fromkeys(shape.link for shape in draft.shapes):
+        why = (
+            f"its collision geometry: {draft.misplaced[link]}"
+            if link in draft.misplaced
+            else f"no collision geometry: {draft.covered.get(link, '')}"
+        )
+        lines.append(f"      {link}:                    # {why}")
+        for shape in draft.shapes:
+            if shape.link != link:
+                continue
+            if isinstance(shape, Capsule):
+                entry = {"from_m": list(shape.from_m), "to_m": list(shape.to_m), "radius_m": shape.radius_m}
+                lines.append(f"        - capsule: {_flow(entry)}")
+            elif isinstance(shape, VisualHull):
+                lines.append("        - visual_hull: {}")
+            elif isinstance(shape, Box):
+                entry = {"center_m": list(shape.center_m), "size_m": list(shape.size_m), "rpy_deg": list(shape.rpy_deg)}
+                lines.append(f"        - box: {_flow(entry)}")
+    return lines
+
+
+def _stance_text(draft: Draft) -> list[str]:
+    left, right = draft.soles
+    lines = ["", "stance:"]
+    if draft.reference_posture:
+        lines.append(f"  reference_posture: {draft.reference_posture}      # the SRDF's first group state")
+    if draft.root_rpy_deg is not None:
+        lines.append(f"  root_rpy_deg: {_flow(list(draft.root_rpy_deg))}   # the model's {draft.up_axis} axis up")
+    if draft.reference_joints:
+        lines.append(
+            "  reference_joints:                  # CHECK: set by the draft (legs bent, joints off their limits)"
+        )
+        lines += [f"    {name}: {value}" for name, value in draft.reference_joints.items()]
+    guessed = "" if left.from_geometry and right.from_geometry else "   # CHECK: no foot geometry: a guess"
+    lines += [
+        f"  sole_frames: {_flow([left.frame, right.frame])}   # the first one anchors the floating base",
+        f"  foot_x_m: {_flow(list(draft.foot_x_m))}   # sole rectangle in the sole frame{guessed}",
+        f"  foot_y_m: {_flow(list(draft.foot_y_m))}",
+        f"  floor_contact_frames: {_flow(list(draft.floor_contact))}   # links that may touch the floor",
+    ]
+    return lines
+
+
+def _chains_text(draft: Draft) -> list[str]:
+    half = 0.1 * (draft.spots_y_m[-1] - draft.spots_y_m[0])
+    ranges = {
+        "left": [round(-half, 3), round(draft.spots_y_m[-1], 3)],
+        "right": [round(draft.spots_y_m[0], 3), round(half, 3)],
+    }
+    lines = ["", "chains:"]
+    for chain in draft.chains:
+        contact = chain.contact
+        lines += [
+            f"  {chain.name}:                            # arm: {', '.join(chain.joints)}",
+            f"    sole_frame: {chain.sole}",
+            f"    gripper_frame: {chain.gripper.name}   # on {chain.hand}, the arm's last link",
+        ]
+        if contact.flush:
+            lines += [
+                f"    fingertip_frames: {_flow([f.name for f in contact.frames])}   # CHECK: {contact.how}",
+                "    fingertip_length_m: 0.0",
+            ]
+        else:
+            lines += [
+                "    fingertip_frames: []",
+                "    contact_kind: point",
+                f"    point_frame: {contact.frames[0].name}   # CHECK: {contact.how}",
+                f"    point_radius_m: {contact.radius_m}",
+                f"    point_cone_deg: {POINT_CONE_DEG}   # CHECK: how far the hand may tilt from the table's normal",
+            ]
+            if contact.touching:
+                lines.append(
+                    f"    touching_links: {_flow(list(contact.touching))}   # CHECK: the locked fingers beside the tip "
+                    "may touch the table too"
+                )
+        lines += [f"    contact_frame: {chain.name}_contact", f"    spot_y_range_m: {_flow(ranges[chain.name])}"]
+    return lines
+
+
+def write_draft(
+    robot: str,
+    output: str,
+    srdf: str | None = None,
+    samples: int = 400,
+    seed: int = 0,
+    package_dirs: tuple[str, ...] = (),
+    command: str = "",
+) -> Draft:
+    """Draft a config for a robot (example-robot-data name or URDF file) and write it (atomically) to ``output``.
 
     The draft is re-read as a config before it is written; whether it already loads as a
-    scene (names, balance, reach) is added to its notes.
+    scene (names, balance, reach, collisions at the reference) is added to its notes.
 
     Raises:
-        ConfigError: Unknown robot, or a structure that is not two legs and two arms.
+        ConfigError: Unknown robot, a description that does not load, or a structure that
+            is not two legs and two arms.
         OutputError: ``output`` cannot be written, or another posegen is writing it.
 
     """
     check_apart([output], [srdf])  # never over the SRDF it reads
     with claim_output(output):  # checked and locked before any work
-        draft = draft_robot(robot, srdf, samples, seed)
-        text = render_draft(draft, seed)
+        draft = draft_robot(robot, srdf, samples, seed, package_dirs)
+        text = render_draft(draft, seed, command)
         config = parse_config(yaml.safe_load(text), output)
         try:
-            check_for_planning(Scene(config))
-            verdict = "the draft loads as a scene (names, soles, balance, reach checked)"
+            scene = Scene(config)
+            check_for_planning(scene, CollisionChecker(scene))
+            verdict = "the draft loads as a scene (names, soles, balance, reach, collisions at the reference checked)"
         except ConfigError as exc:
             verdict = f"the draft does not load yet: {exc}"
         write_atomic(output, text)

@@ -68,7 +68,7 @@ class Scene:
         self.route = config.route
         self.calibration = config.calibration
         self.files = resolve_robot_files(config)
-        nominal_text = read_text_file(self.files.urdf, ConfigError)
+        nominal_text = self.files.urdf_text()
         try:
             nominal = pin.buildModelFromXML(nominal_text, pin.JointModelFreeFlyer())
         except (RuntimeError, ValueError) as exc:
@@ -81,6 +81,7 @@ class Scene:
                 ("gripper_frame", [chain.gripper_frame]),
                 ("fingertip_frames", chain.fingertip_frames),
                 ("point_frame", [chain.point_frame] if chain.point_frame else []),
+                ("touching_links", chain.touching_links),
             ):
                 for frame in frames:
                     _named_frame(declared, frame, f"chains.{chain.name}.{field}")
@@ -127,11 +128,12 @@ class Scene:
             if chain.point_frame
         }
 
-        read_text_file(self.files.srdf, ConfigError)  # a clear error for a binary or unreadable SRDF
-        try:
-            pin.loadReferenceConfigurations(self.model, str(self.files.srdf), False)
-        except (RuntimeError, ValueError) as exc:
-            raise ConfigError(f"cannot read SRDF {self.files.srdf}: {str(exc).strip().splitlines()[0]}") from exc
+        if self.files.srdf is not None:
+            read_text_file(self.files.srdf, ConfigError)  # a clear error for a binary or unreadable SRDF
+            try:
+                pin.loadReferenceConfigurations(self.model, str(self.files.srdf), False)
+            except (RuntimeError, ValueError) as exc:
+                raise ConfigError(f"cannot read SRDF {self.files.srdf}: {str(exc).strip().splitlines()[0]}") from exc
         reference = self._reference_configuration()
         self.reference = reference[self._q_index].copy()
 
@@ -187,14 +189,25 @@ class Scene:
         return np.asarray(limit)
 
     def _reference_configuration(self) -> FloatArray:
-        """The reference posture: an SRDF state (or every joint at 0) with the config's overrides."""
+        """The reference posture: an SRDF state (or every joint at 0) with the config's overrides.
+
+        The root's orientation: the state's, or ``stance.root_rpy_deg`` (a model whose up axis is not z).
+        """
         postures = {str(e.key()): np.array(e.data()) for e in self.model.referenceConfigurations}
         name = self.stance.reference_posture
+        if name and not postures:
+            raise ConfigError(
+                f"stance.reference_posture: '{name}' names an SRDF state but the robot has no SRDF; "
+                "give the posture as stance.reference_joints (and stance.root_rpy_deg), or name an SRDF"
+            )
         if name and name not in postures:
             raise ConfigError(unknown_name("reference posture", name, postures) + " (stance.reference_posture)")
         q = postures[name].copy() if name else pin.neutral(self.model)
         for joint, value in self.stance.reference_joints.items():
             q[self._q_index[self._joint(joint, "stance.reference_joints")]] = value
+        if self.stance.root_rpy_deg is not None:
+            rotation = pin.rpy.rpyToMatrix(*np.deg2rad(self.stance.root_rpy_deg))
+            q[3:7] = pin.Quaternion(rotation).coeffs()
         return np.asarray(q)
 
     def _placement_in(self, parent: str, frame: str, q: FloatArray) -> pin.SE3:

@@ -35,6 +35,7 @@ def check_for_planning(scene: Scene, checker: CollisionChecker | None = None) ->
 
     """
     check_stance(scene)
+    check_reference_limits(scene)
     check_reach(scene)
     if checker is not None:
         check_reference_collisions(scene, checker)
@@ -74,6 +75,24 @@ def check_stance(scene: Scene) -> None:
         raise ConfigError(
             f"stance.reference_posture: {name} is not balanced: its CoM is {1e3 * margin:.1f} mm inside the "
             f"support polygon, the margin needs {1e3 * scene.margins.com_m:.1f} mm (set stance.reference_joints)"
+        )
+
+
+def check_reference_limits(scene: Scene) -> None:
+    """The reference posture keeps every free joint the configured margin inside its limits.
+
+    Raises:
+        ConfigError: Naming ``stance.reference_joints`` and the joint closest to a limit.
+
+    """
+    gap = np.minimum(scene.reference - scene.lower, scene.upper - scene.reference)  # (nj,) rad
+    gap[scene.locked] = np.inf
+    worst = int(np.argmin(gap))
+    if gap[worst] < scene.margins.joint_limit_rad:
+        raise ConfigError(
+            f"stance.reference_joints: at {_reference_name(scene)} joint '{scene.joint_names[worst]}' is "
+            f"{gap[worst]:.3f} rad from a limit [{scene.lower[worst]:.3f}, {scene.upper[worst]:.3f}], the margin "
+            f"needs {scene.margins.joint_limit_rad} rad (margins.joint_limit_rad): move it inside"
         )
 
 

@@ -9,11 +9,14 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 import numpy as np
 
 from posegen.robot.geometry import FloatArray
+
+if TYPE_CHECKING:
+    from posegen.robot.coverage import GeometryCoverage
 
 K = TypeVar("K", bound=enum.Enum)
 
@@ -39,6 +42,7 @@ class Verification:
 
     checked: int
     worst: tuple[Worst, ...]  # one per invariant
+    geometry: GeometryCoverage | None = None  # what the collisions were checked with
 
     @property
     def ok(self) -> bool:

@@ -25,7 +25,17 @@ from posegen.io import (
 from posegen.model import Design, build_design
 from posegen.parallel import Backend
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import Pool, Scene, SegmentType, Verification, load_plan, read_route, route_arrays, scene_for
+from posegen.robot import (
+    Pool,
+    Scene,
+    SegmentType,
+    Verification,
+    geometry_coverage,
+    load_plan,
+    read_route,
+    route_arrays,
+    scene_for,
+)
 from posegen.route.check import MIN_DT_S, verify_route
 from posegen.route.export import route_header, route_outputs, write_route
 from posegen.route.repair import Substitutes, o1_figures
@@ -234,7 +244,8 @@ def check_route_file(
     recorded = data.get("provenance") or {}
     scene = scene_for(recorded, config_path)
     scene.check_made_for(recorded, path)
-    return verify_route(scene, data, min_dt, workers, progress)
+    result = verify_route(scene, data, min_dt, workers, progress)
+    return dataclasses.replace(result, geometry=geometry_coverage(scene))
 
 
 @dataclass(frozen=True)

@@ -69,12 +69,13 @@ def residual_figure(contacts: Sequence[ContactResidual]) -> str:
 
 
 def distribution_figure(contacts: Sequence[ContactResidual]) -> str:
-    """Histograms of |residual| after calibration, training against held-out."""
+    """Histograms of |residual| after calibration, training against held-out (NaN: not measured, not drawn)."""
     plt = _pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(11, 3))
     for k, ax in enumerate(axes):
         for contact_set in (ContactSet.TRAINING, ContactSet.HELD_OUT):
             values = [abs(c.after[k]) * DISPLAY[k] for c in contacts if c.set == contact_set]
+            values = [v for v in values if np.isfinite(v)]  # not measured (NaN): not drawn
             if values:
                 ax.hist(values, bins=20, alpha=0.6, color=SET_COLOURS[contact_set], label=contact_set.value)
         ax.set_xlabel("|" + COMPONENTS[k].replace(" (", "| (", 1))

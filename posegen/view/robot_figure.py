@@ -6,9 +6,11 @@ placement. Posing the robot therefore sends one rotation per joint that moved (a
 position only for the root and prismatic joints), not a pose per mesh: a recorded
 route stays small.
 
-Meshes: the URDF's visual meshes when they fit a triangle budget, else its collision
-meshes (for TALOS: 158,856 visual triangles, 26,202 collision ones, which still look
-like the robot).
+Meshes: the URDF's visual meshes when they fit a triangle budget, else the collision
+geometry posegen checks (the URDF's meshes and the config's shapes; for TALOS: 158,856
+visual triangles, 26,202 collision ones, which still look like the robot), else the
+convex hulls of that geometry, else those of the visual meshes: a robot whose visual
+meshes are heavy and whose URDF has no collision geometry is drawn all the same.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import pinocchio as pin
 import trimesh
 import viser
 
-from posegen.robot import FloatArray, Scene
+from posegen.robot import FloatArray, Scene, robot_geometry
 
 LOG = logging.getLogger(__name__)
 
@@ -37,6 +39,8 @@ class MeshSource(str, enum.Enum):
 
     VISUAL = "visual"
     COLLISION = "collision"
+    COLLISION_HULLS = "collision hulls"
+    VISUAL_HULLS = "visual hulls"
 
 
 @dataclass(frozen=True)
@@ -86,6 +90,15 @@ def _triangles(geometry: object) -> tuple[FloatArray, np.ndarray] | None:
     return np.asarray(shape.vertices, dtype=float), np.asarray(shape.faces, dtype=np.uint32)
 
 
+def _triangle_count(geometry: object) -> int:
+    """Triangles a geometry is drawn with (a primitive counts as a few hundred)."""
+    if isinstance(geometry, coal.BVHModelBase):
+        return int(geometry.num_tris)
+    if isinstance(geometry, coal.Convex):
+        return int(geometry.num_polygons)
+    return 200
+
+
 def _meshes_of(geometry_model: pin.GeometryModel) -> tuple[Mesh, ...]:
     meshes = []
     for obj in geometry_model.geometryObjects:
@@ -97,15 +110,40 @@ def _meshes_of(geometry_model: pin.GeometryModel) -> tuple[Mesh, ...]:
     return tuple(meshes)
 
 
+def _geometry(scene: Scene, source: MeshSource) -> pin.GeometryModel:
+    package_dirs = scene.files.package_dirs
+    if source in (MeshSource.COLLISION, MeshSource.COLLISION_HULLS):
+        convex = source == MeshSource.COLLISION_HULLS
+        return robot_geometry(scene.model, scene.urdf_xml, package_dirs, scene.config.collision, convex)
+    geometry_model = pin.buildGeomFromUrdfString(
+        scene.model, scene.urdf_xml, pin.GeometryType.VISUAL, package_dirs=list(package_dirs)
+    )
+    if source == MeshSource.VISUAL_HULLS:
+        for obj in geometry_model.geometryObjects:
+            if isinstance(obj.geometry, coal.BVHModelBase):
+                obj.geometry.buildConvexHull(True, "Qt")
+                obj.geometry = obj.geometry.convex
+    return geometry_model
+
+
 def robot_meshes(scene: Scene, budget: int = TRIANGLE_BUDGET) -> RobotMeshes:
-    """The meshes to draw a scene's robot with: visual ones within ``budget`` triangles, else collision ones."""
-    package_dirs = list(scene.files.package_dirs)
-    for source in (MeshSource.VISUAL, MeshSource.COLLISION):
-        kind = pin.GeometryType.VISUAL if source == MeshSource.VISUAL else pin.GeometryType.COLLISION
-        geometry_model = pin.buildGeomFromUrdfString(scene.model, scene.urdf_xml, kind, package_dirs=package_dirs)
-        triangles = sum(getattr(g.geometry, "num_tris", 0) for g in geometry_model.geometryObjects)
-        if triangles <= budget:
+    """The meshes to draw a scene's robot with: the first of :class:`MeshSource` that has some within ``budget``.
+
+    When none fits, the one with the fewest triangles (never an empty figure when any
+    geometry exists).
+    """
+    found: list[tuple[int, MeshSource, pin.GeometryModel]] = []
+    for source in MeshSource:
+        geometry_model = _geometry(scene, source)
+        triangles = sum(_triangle_count(g.geometry) for g in geometry_model.geometryObjects)
+        if geometry_model.ngeoms and triangles <= budget:
+            found = [(triangles, source, geometry_model)]
             break
+        if geometry_model.ngeoms:
+            found.append((triangles, source, geometry_model))
+    if not found:
+        return RobotMeshes(MeshSource.VISUAL, ())
+    _, source, geometry_model = min(found, key=lambda item: item[0])
     chosen = RobotMeshes(source, _meshes_of(geometry_model))
     LOG.info("robot drawn with its %s meshes (%d triangles)", chosen.source.value, chosen.triangles)
     return chosen

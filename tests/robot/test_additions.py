@@ -119,8 +119,10 @@ def test_velocity_limits_override_and_missing_ones_are_named():
 def test_example_robot_data_names_and_srdf():
     config = load_config(ROMEO)
     no_srdf = dataclasses.replace(config, robot=dataclasses.replace(config.robot, srdf=None))
-    with pytest.raises(ConfigError, match=r"^robot\.source\.srdf: .*'romeo' has no SRDF.*romeo\.srdf"):
-        Scene(no_srdf)
+    with pytest.raises(ConfigError, match=r"^stance\.reference_posture: 'half_sitting' .* no SRDF; .*reference_joints"):
+        Scene(no_srdf)  # the loader has none: nothing to read the state from
+    standing = dataclasses.replace(no_srdf, stance=dataclasses.replace(config.stance, reference_posture=""))
+    assert Scene(standing).files.srdf is None  # no SRDF needed otherwise
     unknown = dataclasses.replace(config, robot=dataclasses.replace(config.robot, example_robot_data="talosfull"))
     with pytest.raises(ConfigError, match=r"unknown example-robot-data robot 'talosfull'; .*; did you mean talos_full"):
         Scene(unknown)

@@ -33,3 +33,15 @@ def test_posing_again_at_the_same_configuration_sends_nothing(scene, example_poo
     changed = np.flatnonzero(np.abs(example_pool.joints()[0] - example_pool.joints()[1]) > 1e-3)
     assert moves.count(2.0) >= len(changed)  # every joint that moved, at least
     assert moves.count(2.0) <= scene.model.njoints  # and one message per joint, not per mesh
+
+
+def test_a_robot_without_collision_geometry_is_drawn_within_the_budget():
+    from posegen.robot import Scene, load_config
+    from tests.conftest import ROOT
+
+    human = Scene(load_config(ROOT / "configs" / "human_table.yaml"))  # visual meshes only, hulls declared
+    drawn = robot_meshes(human, budget=10**7)
+    assert drawn.source == MeshSource.VISUAL and drawn.meshes
+    light = robot_meshes(human, budget=2000)
+    assert light.meshes and light.triangles < drawn.triangles
+    assert light.source in (MeshSource.COLLISION, MeshSource.COLLISION_HULLS, MeshSource.VISUAL_HULLS)

@@ -1,0 +1,337 @@
+"""What ``posegen robot init`` reads from a robot's geometry, and what it adds where there is none.
+
+* vertices a joint carries (collision geometry, else visual), in any frame;
+* links that move and have no collision geometry: the convex hull of their visual
+  meshes (a :class:`~posegen.robot.additions.VisualHull`), else capsules along the
+  kinematics (from the joint to each child joint);
+* a hand's contact: three frames on a flat face of its geometry that points down
+  (a flush contact), else a point at its tip (a point contact), else, without any
+  geometry, a point beyond the wrist at a stated guess.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from posegen.robot.additions import Capsule, FrameConfig, Shape, VisualHull
+from posegen.robot.geometry import FloatArray
+
+FLAT_TOL_M = 0.002  # vertices this close to a face's plane lie on it
+FLAT_FILL = 0.5  # a face is flat when its touching vertices span this share of its box face in both directions
+HAND_GUESS = 0.35  # without geometry, the tip is this share of the forearm beyond the wrist
+TIP_RADIUS_M = 0.01  # guessed rounding of a point contact's tip
+COM_OUTSIDE_M = 0.02  # a link's CoM (or geometry below the floor) this far out: geometry contradicting the kinematics
+MIN_SEGMENT_M = 0.01  # a link shorter than this and without mass needs no geometry
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The robot's collision and visual geometry (meshes as triangles, not hulls)."""
+
+    collision: pin.GeometryModel
+    visual: pin.GeometryModel
+
+
+@dataclass(frozen=True)
+class HandContact:
+    """The contact proposed for one hand."""
+
+    frames: tuple[FrameConfig, ...]  # three for a flush contact, one for a point contact
+    flush: bool
+    touching: tuple[str, ...]  # other links of the hand (locked fingers) that may touch the table too
+    radius_m: float  # a point's tip rounding (0 for flush)
+    how: str  # what was found, for the draft's CHECK line
+
+
+def load_geometry(model: pin.Model, urdf_xml: str, package_dirs: tuple[str, ...]) -> Geometry:
+    """Both geometry models of a URDF."""
+    dirs = list(package_dirs)
+    return Geometry(
+        collision=pin.buildGeomFromUrdfString(model, urdf_xml, pin.COLLISION, package_dirs=dirs),
+        visual=pin.buildGeomFromUrdfString(model, urdf_xml, pin.VISUAL, package_dirs=dirs),
+    )
+
+
+def vertices(model: pin.Model, data: pin.Data, geom: pin.GeometryModel, joints: set[int], frame: pin.SE3) -> FloatArray:
+    """Vertices of the geometry these joints carry, in ``frame`` (data's kinematics). Shape (k, 3).
+
+    Primitives count by a few points (:func:`_points`).
+    """
+    out = []
+    for obj in geom.geometryObjects:
+        if obj.parentJoint not in joints:
+            continue
+        points = _points(obj.geometry)
+        if len(points) == 0:
+            continue
+        placement = frame.actInv(data.oMi[obj.parentJoint] * obj.placement)
+        out.append(points @ placement.rotation.T + placement.translation)
+    return np.vstack(out) if out else np.zeros((0, 3))
+
+
+def carried(model: pin.Model, data: pin.Data, geometry: Geometry, joints: set[int], frame: pin.SE3) -> FloatArray:
+    """The joints' collision vertices in ``frame``, else their visual ones. Shape (k, 3)."""
+    points = vertices(model, data, geometry.collision, joints, frame)
+    return points if len(points) else vertices(model, data, geometry.visual, joints, frame)
+
+
+def _points(shape: object) -> FloatArray:
+    """Points standing for a shape: a mesh's vertices, a box's corners, a round shape's extremes."""
+    if hasattr(shape, "num_vertices") and hasattr(shape, "vertices"):
+        return np.asarray(shape.vertices(), dtype=float).reshape(-1, 3)
+    if hasattr(shape, "points") and hasattr(shape, "num_points"):
+        return np.asarray(shape.points(), dtype=float).reshape(-1, 3)
+    if isinstance(shape, coal.Box):
+        half = np.asarray(shape.halfSide, dtype=float)
+        return np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
+    radius = float(getattr(shape, "radius", 0.0))
+    half_length = float(getattr(shape, "halfLength", 0.0))
+    ends = [np.array([0.0, 0.0, -half_length]), np.array([0.0, 0.0, half_length])]
+    return np.array([end + radius * d for end in ends for d in np.vstack([np.eye(3), -np.eye(3)])])
+
+
+def has_extent(model: pin.Model, joint: int) -> bool:
+    """Whether a joint's link reaches MIN_SEGMENT_M from its joint (a child joint, or its CoM, with mass)."""
+    children = [model.jointPlacements[c].translation for c in range(2, model.njoints) if model.parents[c] == joint]
+    far = [c for c in children if np.linalg.norm(c) >= MIN_SEGMENT_M]
+    inertia = model.inertias[joint]
+    return bool(far) or (inertia.mass > 0 and float(np.linalg.norm(inertia.lever)) >= MIN_SEGMENT_M)
+
+
+def link_of_joint(model: pin.Model, joint: int) -> str:
+    """The link a joint moves (its first body frame)."""
+    for frame in model.frames:
+        if frame.parentJoint == joint and frame.type == pin.FrameType.BODY:
+            return str(frame.name)
+    return str(model.names[joint])
+
+
+def missing_geometry(
+    model: pin.Model, geometry: Geometry, joints: list[int]
+) -> tuple[dict[str, str], tuple[Shape, ...]]:
+    """Shapes for the moving links without collision geometry.
+
+    Args:
+        model: The robot model.
+        geometry: Its geometry.
+        joints: The joints whose links to cover (those that move, and the root).
+
+    Returns:
+        What each covered link gets ("visual hull" or "capsules") and the shapes.
+
+    """
+    with_collision = {int(o.parentJoint) for o in geometry.collision.geometryObjects}
+    with_visual = {int(o.parentJoint) for o in geometry.visual.geometryObjects}
+    how: dict[str, str] = {}
+    shapes: list[Shape] = []
+    for joint in joints:
+        if joint in with_collision:
+            continue
+        link = link_of_joint(model, joint)
+        if joint in with_visual:
+            how[link] = "the convex hull of its visual meshes"
+            shapes.append(VisualHull(link))
+            continue
+        capsules = skeleton(model, link)
+        if capsules:
+            how[link] = "capsules along the joints"
+            shapes += capsules
+    return how, tuple(shapes)
+
+
+def skeleton(model: pin.Model, link: str) -> list[Capsule]:
+    """Capsules from a link's joint to each child joint (or through its CoM, for an end link).
+
+    None for a link of no extent (its children and CoM within MIN_SEGMENT_M of its joint:
+    a link between coincident joints, which a sphere would only make collide with its
+    neighbours).
+    """
+    frame = model.frames[model.getFrameId(link)]
+    joint = frame.parentJoint
+    to_link = frame.placement.inverse()  # joint frame -> link frame
+    ends = [model.jointPlacements[c].translation for c in range(2, model.njoints) if model.parents[c] == joint]
+    inertia = model.inertias[joint]
+    ends = [e for e in ends if np.linalg.norm(e) >= MIN_SEGMENT_M]
+    if not ends and inertia.mass > 0 and np.linalg.norm(inertia.lever) >= MIN_SEGMENT_M:
+        ends = [2.0 * inertia.lever]
+    origin = to_link.translation
+    out = []
+    for end in ends:
+        tip = to_link.act(np.asarray(end))
+        length = float(np.linalg.norm(tip - origin))
+        radius = round(float(np.clip(0.2 * length, 0.02, 0.06)), 3)
+        out.append(Capsule(link, round3(origin), round3(tip), radius))
+    return out
+
+
+def hand_contact(
+    model: pin.Model,
+    data: pin.Data,
+    geometry: Geometry,
+    chain: str,
+    hand: str,
+    forearm: FloatArray,
+    fingers: set[int],
+) -> HandContact:
+    """The contact proposed for a hand, at the posture of ``data``.
+
+    Args:
+        model: The robot model.
+        data: Its kinematics at the reference posture (fingers at their locked values).
+        geometry: Its geometry.
+        chain: The chain's name ("left", "right"), for the frames' names.
+        hand: The hand's link.
+        forearm: (3,) world vector from the elbow-side joint to the wrist (m).
+        fingers: The locked joints below the hand (their geometry is part of the hand).
+
+    """
+    frame_id = model.getFrameId(hand)
+    placement = data.oMf[frame_id]
+    joint = model.frames[frame_id].parentJoint
+    points = carried(model, data, geometry, {joint, *fingers}, placement)  # (k, 3) in the hand frame
+    along = placement.rotation.T @ forearm / max(float(np.linalg.norm(forearm)), 1e-9)  # in the hand frame
+    if len(points) == 0:
+        tip = along * HAND_GUESS * float(np.linalg.norm(forearm))
+        frame = FrameConfig(f"{chain}_tip", hand, round3(tip), _rpy_deg(along))
+        return HandContact(
+            (frame,),
+            False,
+            (),
+            TIP_RADIUS_M,
+            f"no geometry: a point {HAND_GUESS:.0%} of the forearm's length beyond the wrist, tip radius "
+            f"{1e3 * TIP_RADIUS_M:.0f} mm",
+        )
+    face = _flat_face(points, placement.rotation.T @ np.array([0.0, 0.0, -1.0]))
+    if face is not None:
+        frames = tuple(FrameConfig(f"{chain}_touch_{k + 1}", hand, round3(p)) for k, p in enumerate(face))
+        return HandContact(frames, True, (), 0.0, "a flat face of the hand's geometry pointing down")
+    owner, tip = _tip(model, data, geometry, {joint, *fingers}, placement, along)
+    link_pose = data.oMf[model.getFrameId(owner)]
+    local_tip = link_pose.actInv(placement.act(tip - along * TIP_RADIUS_M))
+    local_along = link_pose.rotation.T @ placement.rotation @ along
+    frame = FrameConfig(f"{chain}_tip", owner, round3(local_tip), _rpy_deg(local_along))
+    fingers_links = {
+        str(model.frames[o.parentFrame].name)
+        for o in (*geometry.collision.geometryObjects, *geometry.visual.geometryObjects)
+        if o.parentJoint in fingers
+    }
+    return HandContact(
+        (frame,),
+        False,
+        tuple(sorted(fingers_links - {owner})),
+        TIP_RADIUS_M,
+        f"no flat face: a point at the hand's tip (its farthest vertex along the forearm, on {owner}), "
+        f"tip radius {1e3 * TIP_RADIUS_M:.0f} mm",
+    )
+
+
+def _tip(
+    model: pin.Model, data: pin.Data, geometry: Geometry, joints: set[int], frame: pin.SE3, along: FloatArray
+) -> tuple[str, FloatArray]:
+    """The link carrying the vertex farthest along ``along``, and that vertex (in ``frame``)."""
+    best: tuple[float, str, FloatArray] | None = None
+    for source in (geometry.collision, geometry.visual):
+        for obj in source.geometryObjects:
+            if obj.parentJoint not in joints:
+                continue
+            points = vertices(model, data, _single(source, obj), {int(obj.parentJoint)}, frame)
+            if len(points) == 0:
+                continue
+            k = int(np.argmax(points @ along))
+            if best is None or points[k] @ along > best[0]:
+                best = (float(points[k] @ along), str(model.frames[obj.parentFrame].name), points[k])
+        if best is not None:
+            break
+    assert best is not None, "called with geometry"
+    return best[1], best[2]
+
+
+def _single(source: pin.GeometryModel, obj: pin.GeometryObject) -> pin.GeometryModel:
+    one = pin.GeometryModel()
+    one.addGeometryObject(obj)
+    return one
+
+
+def _rpy_deg(along: FloatArray) -> tuple[float, float, float]:
+    """A point frame's orientation in the hand frame: z back up the forearm (away from the table)."""
+    rotation = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), -along).toRotationMatrix()
+    return round3(np.rad2deg(pin.rpy.matrixToRpy(rotation)))
+
+
+def _flat_face(points: FloatArray, down: FloatArray) -> list[FloatArray] | None:
+    """Three points on the face of the vertices' box that points ``down``, if that face is flat.
+
+    Flat: the vertices within FLAT_TOL_M of the face's plane span at least FLAT_FILL of
+    the face in both of its directions.
+    """
+    low, high = points.min(axis=0), points.max(axis=0)
+    axis = int(np.argmax(np.abs(down)))
+    level = high[axis] if down[axis] > 0 else low[axis]
+    on = points[np.abs(points[:, axis] - level) < FLAT_TOL_M]
+    others = [a for a in range(3) if a != axis]
+    span = high[others] - low[others]
+    if len(on) < 3 or np.any(span <= 0):
+        return None
+    covered = on[:, others].max(axis=0) - on[:, others].min(axis=0)
+    if np.any(covered < FLAT_FILL * span):
+        return None
+    centre = (on.min(axis=0) + on.max(axis=0)) / 2
+    spread = 0.3 * covered
+    out = []
+    for u, v in ((-1.0, -1.0), (-1.0, 1.0), (1.0, 0.0)):
+        p = centre.copy()
+        p[axis] = level
+        p[others[0]] += u * spread[0]
+        p[others[1]] += v * spread[1]
+        out.append(p)
+    return out
+
+
+def round3(v: FloatArray) -> tuple[float, float, float]:
+    """A 3-vector rounded to 0.1 mm (or 1e-4 of its unit), without -0.0."""
+    return (round(float(v[0]), 4) + 0.0, round(float(v[1]), 4) + 0.0, round(float(v[2]), 4) + 0.0)
+
+
+def below_floor(model: pin.Model, data: pin.Data, geometry: Geometry, feet: set[int], floor: float) -> dict[str, str]:
+    """Links off the feet whose collision geometry reaches below the floor at the reference."""
+    out = {}
+    level = pin.SE3(np.eye(3), np.array([0.0, 0.0, floor]))
+    for joint in range(1, model.njoints):
+        if joint in feet:
+            continue
+        points = vertices(model, data, geometry.collision, {joint}, level)
+        if len(points) and points[:, 2].min() < -COM_OUTSIDE_M:
+            link = _geometry_link(model, geometry, joint)
+            out[link] = f"reaches {-1e3 * points[:, 2].min():.0f} mm below the floor standing"
+    return out
+
+
+def _geometry_link(model: pin.Model, geometry: Geometry, joint: int) -> str:
+    """The link that carries a joint's collision geometry (its first one)."""
+    for obj in geometry.collision.geometryObjects:
+        if obj.parentJoint == joint:
+            return str(model.frames[obj.parentFrame].name)
+    return link_of_joint(model, joint)
+
+
+def misplaced_geometry(model: pin.Model, geometry: Geometry) -> dict[str, str]:
+    """Links whose centre of mass lies outside their collision geometry's box, and by how far."""
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    out = {}
+    for joint in range(1, model.njoints):
+        inertia = model.inertias[joint]
+        if inertia.mass <= 0:
+            continue
+        points = vertices(model, data, geometry.collision, {joint}, data.oMi[joint])
+        if len(points) == 0:
+            continue
+        gap = np.maximum(0.0, np.maximum(points.min(axis=0) - inertia.lever, inertia.lever - points.max(axis=0)))
+        distance = float(np.linalg.norm(gap))
+        if distance > COM_OUTSIDE_M:
+            out[_geometry_link(model, geometry, joint)] = f"CoM {1e3 * distance:.0f} mm outside it"
+    return out

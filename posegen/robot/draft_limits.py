@@ -1,0 +1,47 @@
+"""Joint limits as ``posegen robot init`` reads them: implausible speeds, postures at or past a limit."""
+
+from __future__ import annotations
+
+import pinocchio as pin
+
+from posegen.robot.geometry import FloatArray
+
+IMPLAUSIBLE_SPEED_RAD_S = 20.0
+PLACEHOLDER_SPEED_RAD_S = 1.0
+JOINT_LIMIT_MARGIN_RAD = 0.02  # the drafted margins.joint_limit_rad
+
+
+def velocity_placeholders(model: pin.Model, kept: set[int]) -> tuple[dict[str, float], dict[str, float]]:
+    """Placeholder speeds (rad/s) for the kept joints whose URDF speed is 0 or implausible, and the URDF's."""
+    speeds: dict[str, float] = {}
+    urdf_speed: dict[str, float] = {}
+    for j in sorted(kept - {1}):
+        if model.joints[j].nq != 1:
+            continue
+        v = float(model.velocityLimit[model.joints[j].idx_v])
+        if not 0 < v <= IMPLAUSIBLE_SPEED_RAD_S:
+            speeds[str(model.names[j])] = PLACEHOLDER_SPEED_RAD_S
+            urdf_speed[str(model.names[j])] = v
+    return speeds, urdf_speed
+
+
+def limits(model: pin.Model, joint: int) -> tuple[float, float]:
+    """A 1-dof joint's limits (rad)."""
+    i = model.joints[joint].idx_q
+    return float(model.lowerPositionLimit[i]), float(model.upperPositionLimit[i])
+
+
+def near_limit(model: pin.Model, q: FloatArray, joint: int) -> bool:
+    """Whether a joint of ``q`` (nq,) is within the drafted margin of a limit."""
+    low, high = limits(model, joint)
+    value = float(q[model.joints[joint].idx_q])
+    return min(value - low, high - value) < JOINT_LIMIT_MARGIN_RAD
+
+
+def outside_limits(model: pin.Model, q: FloatArray) -> list[str]:
+    """The 1-dof joints of a configuration outside their limits."""
+    return [
+        str(model.names[j])
+        for j in range(2, model.njoints)
+        if model.joints[j].nq == 1 and not limits(model, j)[0] <= q[model.joints[j].idx_q] <= limits(model, j)[1]
+    ]

@@ -1,0 +1,120 @@
+"""The robot ``posegen robot init`` studies: an example-robot-data name or a URDF file.
+
+Whatever is wrong with it is said in one line naming the file and the element: a file
+that is missing or not XML, a URDF pinocchio cannot load, a mesh that cannot be found
+(relative paths are read from the URDF's folder, ``package://`` ones from the package
+dirs and from the folders above the URDF named like the package).
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import pinocchio as pin
+
+from posegen.errors import ConfigError
+from posegen.robot.config import PACKAGE_URI, RobotSource
+from posegen.robot.description import RobotFiles, package_uri, resolve_path, resolve_source
+
+MJCF_ROOT = "mujoco"
+
+
+@dataclass(frozen=True)
+class DraftSource:
+    """The description a draft is made from."""
+
+    source: RobotSource  # as the config will name it
+    files: RobotFiles
+    text: str  # the URDF, relative mesh paths made absolute
+    model: pin.Model  # with a free-flyer root
+
+    @property
+    def label(self) -> str:
+        """The robot's name in messages: its example-robot-data name or its URDF file."""
+        return self.source.example_robot_data or str(self.files.urdf)
+
+
+def load_draft_source(name: str, srdf: str | None = None, package_dirs: tuple[str, ...] = ()) -> DraftSource:
+    """Load the robot named by ``name``: an example-robot-data robot, or a URDF file (a path or ``package://``).
+
+    Raises:
+        ConfigError: Unknown name, a file that is missing or is not a URDF pinocchio
+            loads, an MJCF file, or a mesh that cannot be found (file and link named).
+
+    """
+    path = resolve_path(name, package_dirs) if name.startswith(PACKAGE_URI) else Path(name)
+    if path.suffix.lower() in (".urdf", ".xml", ".mjcf") or path.is_file():
+        if not path.is_file():
+            raise ConfigError(f"{name}: file not found")
+        absolute = path.resolve()
+        source = RobotSource(
+            urdf=package_uri(absolute) or str(absolute),  # a description installed from PyPI: portable
+            srdf=None if srdf is None else str(Path(srdf).resolve()) if not srdf.startswith(PACKAGE_URI) else srdf,
+            package_dirs=tuple(str(Path(d).resolve()) for d in package_dirs),
+        )
+        root = _xml_root(absolute)
+        if root.tag == MJCF_ROOT:
+            raise ConfigError(
+                f"{name}: an MJCF model; posegen's stages read a URDF: convert it (e.g. mjcf_urdf_simple_converter)"
+            )
+        if root.tag != "robot":
+            raise ConfigError(f"{name}: not a URDF (its root element is <{root.tag}>, not <robot>)")
+    else:
+        source = RobotSource(example_robot_data=name, srdf=srdf, package_dirs=package_dirs)
+    files = resolve_source(source)
+    text = files.urdf_text()
+    check_meshes(files.urdf, text, files.package_dirs)
+    try:
+        model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    except (RuntimeError, ValueError) as exc:
+        raise ConfigError(f"{files.urdf}: pinocchio cannot load it: {_first_line(exc)}") from exc
+    return DraftSource(source, files, text, model)
+
+
+def _xml_root(path: Path) -> ET.Element:
+    try:
+        return ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        raise ConfigError(f"{path}: not valid XML ({exc})") from exc
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read ({exc.strerror})") from exc
+
+
+def check_meshes(urdf: Path, text: str, package_dirs: tuple[str, ...]) -> None:
+    """Check that every mesh of the URDF's links can be found.
+
+    Raises:
+        ConfigError: The first mesh not found, with its link and the places looked in.
+
+    """
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise ConfigError(f"{urdf}: not valid XML ({exc})") from exc
+    for link in root.findall("link"):
+        for kind in ("collision", "visual"):
+            for mesh in link.findall(f"{kind}/geometry/mesh"):
+                filename = str(mesh.get("filename", ""))
+                if not _mesh_found(filename, package_dirs):
+                    where = f"package dirs {', '.join(package_dirs) or '(none)'}" if PACKAGE_URI in filename else ""
+                    raise ConfigError(
+                        f"{urdf}: link '{link.get('name')}' {kind} mesh '{filename}' not found"
+                        + (f" (looked in {where}; add --package-dir)" if where else "")
+                    )
+
+
+def _mesh_found(filename: str, package_dirs: tuple[str, ...]) -> bool:
+    if filename.startswith(PACKAGE_URI):
+        relative = filename[len(PACKAGE_URI) :].lstrip("/")  # package:///NAME/... is seen too
+        return any(os.path.isfile(os.path.join(d, relative)) for d in package_dirs)
+    if filename.startswith("file://"):
+        filename = filename[len("file://") :]
+    return os.path.isfile(filename)
+
+
+def _first_line(exc: Exception) -> str:
+    lines = str(exc).strip().splitlines()
+    return lines[0] if lines else type(exc).__name__

@@ -1,0 +1,308 @@
+"""How a robot stands, found from its description alone (``posegen robot init``).
+
+* up: of the six root axes, the one along which exactly two branches of the root reach
+  the lowest level (the legs) with the centre of mass highest above it; the root is
+  turned so that it points up (``stance.root_rpy_deg`` for a y-up model);
+* forward: the root's x axis (REP 103, and the biomechanics convention of y-up models),
+  left: up x forward;
+* soles: a link of the foot (fixed to it) with z up at the lowest point under the ankle
+  when there is one, else a frame declared there; the footprint: the lowest vertices of the foot's
+  geometry (collision, else visual), else a rectangle in proportion to the leg, below the
+  ankle by a share of the leg's length;
+* the reference posture, when no SRDF gives one: soles flat where they stand, pelvis
+  lowered so that the knees bend, CoM over the middle of the feet.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.errors import ConfigError
+from posegen.robot.additions import Box, FrameConfig
+from posegen.robot.draft_geometry import Geometry, carried, link_of_joint, round3
+from posegen.robot.geometry import FloatArray
+
+FLOOR_TOL_M = 0.02  # a branch whose lowest frame is this close to the lowest one reaches the floor
+SOLE_VERTEX_TOL_M = 0.005  # foot vertices this close to the lowest one make the footprint
+SOLE_FRAME_TOL_M = 0.005  # an existing link this close to the sole point is the sole frame
+FOOT_LENGTH = 0.28  # a foot without geometry: this share of the leg's length
+FOOT_WIDTH = 0.12
+ANKLE_HEIGHT = 0.12  # a foot without geometry: its sole this share of the leg's length below the ankle
+KNEE_START_RAD = 0.4
+CROUCH = 0.03  # the pelvis is lowered by this share of the leg's length at the reference
+IK_TOL = 1e-9
+FOOT_BOX_M = 0.02  # thickness of the box given to a foot without geometry
+LEG_MASS_RATIO = 0.5  # two legs weigh alike within this ratio
+LIMIT_MARGIN_RAD = 0.05  # the bent legs keep this far inside their joints' limits
+
+
+@dataclass(frozen=True)
+class Sole:
+    """One foot's sole as found."""
+
+    frame: str  # the sole frame's name
+    declared: FrameConfig | None  # the frame to declare in the config (None: the robot's own link)
+    foot_link: str
+    foot_joint: int
+    x_m: tuple[float, float]  # footprint in the sole frame
+    y_m: tuple[float, float]
+    from_geometry: bool  # False: guessed from the leg's length (a CHECK line)
+
+
+@dataclass(frozen=True)
+class Stance:
+    """How the robot stands."""
+
+    root: pin.SE3  # the root's pose at the reference (its orientation puts the up axis up)
+    up_axis: str  # the root axis pointing up, e.g. "+z"
+    legs: tuple[int, int]  # first joint of each leg, left then right
+    soles: tuple[Sole, Sole]  # left, right
+    reference: FloatArray  # (nq,) the reference configuration
+    bent: bool  # True: the legs were bent by the draft (no SRDF state)
+    notes: tuple[str, ...]
+
+
+Subtree = Callable[[int], list[int]]
+
+
+def find_up(model: pin.Model, q: FloatArray, branches: list[int], subtree: Subtree, label: str) -> tuple[pin.SE3, str]:
+    """The root's orientation that puts the model's up axis up, and that axis.
+
+    Raises:
+        ConfigError: No axis along which exactly two branches reach the floor (one leg, no legs).
+
+    """
+    data = model.createData()
+    best: tuple[float, pin.SE3, str] | None = None
+    counts = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            u = np.zeros(3)
+            u[axis] = sign
+            rotation = pin.Quaternion.FromTwoVectors(u, np.array([0.0, 0.0, 1.0])).toRotationMatrix()
+            if sign < 0 and axis == 2:
+                rotation = pin.rpy.rpyToMatrix(np.pi, 0.0, 0.0)
+            root = pin.SE3(rotation, np.zeros(3))
+            qq = q.copy()
+            qq[:7] = pin.SE3ToXYZQUAT(root)
+            pin.framesForwardKinematics(model, data, qq)
+            lowest = {b: min(_heights(model, data, set(subtree(b)))) for b in branches}
+            floor = min(lowest.values())
+            reaching = [b for b in branches if lowest[b] < floor + FLOOR_TOL_M]
+            counts.append(len(reaching))
+            if len(reaching) != 2 or not _alike(model, subtree, reaching):
+                continue
+            com = float(pin.centerOfMass(model, data, qq)[2]) - floor
+            name = f"{'+' if sign > 0 else '-'}{'xyz'[axis]}"
+            if best is None or com > best[0]:
+                best = (com, root, name)
+    if best is None:
+        names = ", ".join(f"'{model.names[b]}'" for b in branches)
+        raise ConfigError(
+            f"{label}: no two legs: along no axis do exactly two branches of the root ({names}) alike in mass "
+            f"reach the floor; posegen needs a humanoid with two legs"
+        )
+    return best[1], best[2]
+
+
+def _alike(model: pin.Model, subtree: Subtree, branches: list[int]) -> bool:
+    """Whether two branches weigh alike (within LEG_MASS_RATIO): a pair of legs, not a leg and a torso."""
+    masses = [sum(model.inertias[j].mass for j in subtree(b)) for b in branches]
+    return min(masses) >= LEG_MASS_RATIO * max(masses)
+
+
+def _heights(model: pin.Model, data: pin.Data, joints: set[int]) -> list[float]:
+    frames = [f for f in range(len(model.frames)) if model.frames[f].parentJoint in joints]
+    return [float(data.oMf[f].translation[2]) for f in frames] + [float(data.oMi[j].translation[2]) for j in joints]
+
+
+def foot_joint(model: pin.Model, leg: int, children: dict[int, list[int]], subtree: Subtree) -> int:
+    """The last joint of a leg: down its heaviest branch."""
+    joint = leg
+    while children[joint]:
+        joint = max(children[joint], key=lambda c: sum(model.inertias[j].mass for j in subtree(c)))
+    return joint
+
+
+def find_sole(
+    model: pin.Model, data: pin.Data, geometry: Geometry, side: str, foot: int, leg_length: float, heading: pin.SE3
+) -> Sole:
+    """A foot's sole frame (the robot's, or one to declare) and its footprint, at the posture of ``data``."""
+    ankle = data.oMi[foot].translation
+    flat = pin.SE3(heading.rotation, np.array([ankle[0], ankle[1], 0.0]))
+    points = carried(model, data, geometry, {foot}, flat)  # (k, 3) in a level frame under the ankle
+    link = link_of_joint(model, foot)
+    if len(points) == 0:
+        length, width = FOOT_LENGTH * leg_length, FOOT_WIDTH * leg_length
+        x = (round(-0.3 * length, 3), round(0.7 * length, 3))
+        y = (round(-width / 2, 3), round(width / 2, 3))
+        sole_world = pin.SE3(heading.rotation, ankle - np.array([0.0, 0.0, ANKLE_HEIGHT * leg_length]))
+        from_geometry = False
+    else:
+        low = points[points[:, 2] < points[:, 2].min() + SOLE_VERTEX_TOL_M]
+        sole_world = pin.SE3(heading.rotation, np.array([ankle[0], ankle[1], float(points[:, 2].min())]))
+        x = (round(float(low[:, 0].min()), 3), round(float(low[:, 0].max()), 3))
+        y = (round(float(low[:, 1].min()), 3), round(float(low[:, 1].max()), 3))
+        from_geometry = True
+    for f, frame in enumerate(model.frames):
+        if frame.parentJoint != foot or frame.type != pin.FrameType.BODY:
+            continue
+        if model.frames[frame.parentFrame].type != pin.FrameType.FIXED_JOINT:
+            continue  # a joint's own link: calibration moves its joint, not a sole placement
+        pose = data.oMf[f]
+        if np.linalg.norm(pose.translation - sole_world.translation) < SOLE_FRAME_TOL_M and pose.rotation[2, 2] > 0.999:
+            shift = pose.actInv(sole_world)  # the footprint, read in the robot's own sole frame
+            x = (round(x[0] + float(shift.translation[0]), 3), round(x[1] + float(shift.translation[0]), 3))
+            y = (round(y[0] + float(shift.translation[1]), 3), round(y[1] + float(shift.translation[1]), 3))
+            return Sole(str(frame.name), None, link, foot, x, y, from_geometry)
+    local = data.oMf[model.getFrameId(link)].actInv(sole_world)
+    rpy = np.rad2deg(pin.rpy.matrixToRpy(local.rotation))
+    declared = FrameConfig(f"{side}_sole", link, round3(local.translation), round3(rpy))
+    return Sole(declared.name, declared, link, foot, x, y, from_geometry)
+
+
+def knee_of(model: pin.Model, data: pin.Data, leg: list[int], forward: FloatArray) -> int:
+    """The knee: of the leg joints farthest from both its ends, the one whose axis is most lateral."""
+    hip, ankle = data.oMi[leg[0]].translation, data.oMi[leg[-1]].translation
+    lateral = np.cross([0.0, 0.0, 1.0], forward)
+
+    def middle(j: int) -> float:
+        p = data.oMi[j].translation
+        return min(float(np.linalg.norm(p - hip)), float(np.linalg.norm(p - ankle)))
+
+    far = max(middle(j) for j in leg)
+    near_middle = [j for j in leg if middle(j) > far - 0.01]
+    return max(near_middle, key=lambda j: abs(float(data.oMi[j].rotation @ _axis(model.joints[j]) @ lateral)))
+
+
+def bend_legs(
+    model: pin.Model, q: FloatArray, legs: list[list[int]], soles: list[pin.SE3], forward: FloatArray, leg_length: float
+) -> FloatArray | None:
+    """The reference with the pelvis lowered (knees bent), soles flat where they stood, CoM between the feet.
+
+    Args:
+        model: The robot model.
+        q: (nq,) the straight posture, root placed.
+        legs: Each leg's joints, hip to foot.
+        soles: Each sole's world pose in ``q``, parented to the leg's last joint.
+        forward: (3,) world forward direction.
+        leg_length: m.
+
+    Returns:
+        (nq,) the bent posture, or None when the legs cannot reach (limits).
+
+    """
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    local = [data.oMi[leg[-1]].actInv(s) for leg, s in zip(legs, soles, strict=True)]  # sole in foot joint frame
+    out = q.copy()
+    starts = []
+    for leg in legs:
+        knee = knee_of(model, data, leg, forward)
+        starts.append((knee, _knee_start(model, data, knee, leg[-1], forward)))
+    shift = np.array([0.0, 0.0, CROUCH * leg_length])  # soles rise relative to the root = root lowered
+    for _ in range(4):  # CoM correction: move the soles under the CoM
+        targets = [pin.SE3(s.rotation, s.translation + shift) for s in soles]
+        for leg, target, offset, start in zip(legs, targets, local, starts, strict=True):
+            if not _bend(model, out, q, leg, target * offset.inverse(), start):
+                return None
+        pin.framesForwardKinematics(model, data, out)
+        com = pin.centerOfMass(model, data, out)
+        middle = np.mean([t.translation for t in targets], axis=0)
+        error = com[:2] - middle[:2]
+        if np.linalg.norm(error) < 1e-3:
+            break
+        shift[:2] += error
+    return out
+
+
+def _bend(
+    model: pin.Model, out: FloatArray, straight: FloatArray, leg: list[int], target: pin.SE3, start: tuple[int, float]
+) -> bool:
+    """Reach ``target`` with a leg from the knee bent forward, else (limits) backward. ``out`` is changed in place."""
+    knee, angle = start
+    for sign in (1.0, -1.0):
+        trial = out.copy()
+        if abs(out[model.joints[knee].idx_q] - straight[model.joints[knee].idx_q]) < 1e-12 or sign < 0:
+            trial[[model.joints[j].idx_q for j in leg]] = straight[[model.joints[j].idx_q for j in leg]]
+            trial[model.joints[knee].idx_q] = sign * angle
+        if _reach(model, trial, leg, target):
+            out[:] = trial
+            return True
+    return False
+
+
+def _knee_start(model: pin.Model, data: pin.Data, knee: int, foot: int, forward: FloatArray) -> float:
+    """A starting knee angle that moves the foot backwards, within the joint's limits."""
+    axis = data.oMi[knee].rotation @ _axis(model.joints[knee])
+    lever = data.oMi[foot].translation - data.oMi[knee].translation
+    backwards = -float(np.cross(axis, lever) @ forward)  # d(foot)/d(angle) . (-forward)
+    i = model.joints[knee].idx_q
+    lower, upper = float(model.lowerPositionLimit[i]), float(model.upperPositionLimit[i])
+    angle = KNEE_START_RAD if backwards >= 0 else -KNEE_START_RAD
+    return float(np.clip(angle, lower, upper))
+
+
+def _axis(joint: pin.JointModel) -> FloatArray:
+    name = joint.shortname()
+    if name.startswith("JointModelR") and name[-1] in "XYZ" and "Unaligned" not in name:
+        out = np.zeros(3)
+        out["XYZ".index(name[-1])] = 1.0
+        return out
+    return np.asarray(joint.extract().axis, dtype=float)
+
+
+def _reach(model: pin.Model, q: FloatArray, leg: list[int], target: pin.SE3) -> bool:
+    """Move a leg's joints (in place) so that its last joint reaches ``target``, within their limits.
+
+    Bounded least squares (scipy's trust region reflective) on the pose error.
+    """
+    from scipy.optimize import least_squares
+
+    data = model.createData()
+    rows = [model.joints[j].idx_q for j in leg]
+    lower = model.lowerPositionLimit[rows] + LIMIT_MARGIN_RAD
+    upper = model.upperPositionLimit[rows] - LIMIT_MARGIN_RAD
+    if np.any(lower >= upper):
+        return False
+    trial = q.copy()
+
+    def error(x: FloatArray) -> FloatArray:
+        trial[rows] = x
+        pin.forwardKinematics(model, data, trial)
+        return np.asarray(pin.log6(data.oMi[leg[-1]].actInv(target)).vector)
+
+    start = np.clip(q[rows], lower, upper)
+    fit = least_squares(error, start, bounds=(lower, upper), method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    if float(fit.fun @ fit.fun) > IK_TOL:
+        return False
+    q[rows] = fit.x
+    return True
+
+
+def sole_pose(model: pin.Model, data: pin.Data, sole: Sole) -> pin.SE3:
+    """A sole frame's world pose in ``data`` (the robot's frame, or the one to declare)."""
+    if sole.declared is None:
+        return data.oMf[model.getFrameId(sole.frame)].copy()
+    frame = sole.declared
+    local = pin.SE3(pin.rpy.rpyToMatrix(*np.deg2rad(frame.rpy_deg)), np.array(frame.xyz_m))
+    return data.oMf[model.getFrameId(frame.parent)] * local
+
+
+def floor_height(model: pin.Model, data: pin.Data, soles: list[Sole]) -> float:
+    """The lowest sole's height (m) in ``data``: the floor."""
+    return min(float(sole_pose(model, data, s).translation[2]) for s in soles)
+
+
+def foot_box(model: pin.Model, data: pin.Data, sole: Sole) -> Box:
+    """A box over a sole's footprint, FOOT_BOX_M thick, in the foot link's frame."""
+    pose = sole_pose(model, data, sole)
+    centre = np.array([sum(sole.x_m) / 2, sum(sole.y_m) / 2, FOOT_BOX_M / 2])
+    local = data.oMf[model.getFrameId(sole.foot_link)].actInv(pose)
+    size = (round(sole.x_m[1] - sole.x_m[0], 3), round(sole.y_m[1] - sole.y_m[0], 3), FOOT_BOX_M)
+    rpy = round3(np.rad2deg(pin.rpy.matrixToRpy(local.rotation)))
+    return Box(sole.foot_link, round3(local.act(centre)), size, rpy)

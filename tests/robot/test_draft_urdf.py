@@ -1,0 +1,181 @@
+"""``posegen robot init`` on a URDF file: any up axis, relative meshes, no SRDF, missing geometry, bad input."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from posegen.cli.main import main
+from posegen.errors import ConfigError
+from posegen.robot import Scene, load_config, write_draft
+from posegen.robot.additions import Capsule, CollisionConfig, VisualHull
+from posegen.robot.coverage import geometry_coverage
+from posegen.robot.draft import draft_robot
+from posegen.robot.validation import check_for_planning
+from tests.robot.humanoid_urdf import FOOT, humanoid_urdf
+
+
+@pytest.fixture(scope="module")
+def drafts(tmp_path_factory):
+    """The same synthetic robot drafted z-up and y-up (written and loaded)."""
+    out = {}
+    for up in ("z", "y"):
+        folder = tmp_path_factory.mktemp(f"robot_{up}")
+        config = folder / "config.yaml"
+        draft = write_draft(str(humanoid_urdf(folder / "description", up)), str(config), samples=20)
+        out[up] = (draft, Scene(load_config(config)))
+    return out
+
+
+def test_the_draft_does_not_depend_on_the_model_up_axis(drafts):
+    (z, z_scene), (y, y_scene) = drafts["z"], drafts["y"]
+    assert (z.up_axis, z.root_rpy_deg) == ("+z", None)
+    assert y.up_axis == "+y" and y.root_rpy_deg == (90.0, 0.0, 0.0)
+    assert y.reference_joints == pytest.approx(z.reference_joints, abs=1e-4)
+    assert (y.foot_x_m, y.foot_y_m, y.table_center_m) == (z.foot_x_m, z.foot_y_m, z.table_center_m)
+    for scene in (z_scene, y_scene):  # each stands in its own scene the same way
+        q = scene.configuration(scene.reference)
+        data = scene.model.createData()
+        pin.framesForwardKinematics(scene.model, data, q)
+        for sole in scene.stance.sole_frames:
+            assert data.oMf[scene.frame_id(sole)].rotation[:, 2] == pytest.approx([0, 0, 1], abs=1e-6)
+            assert data.oMf[scene.frame_id(sole)].translation[2] == pytest.approx(0.0, abs=1e-6)
+        assert scene.com_margin(q, data) >= scene.margins.com_m
+
+
+def test_the_drafted_stance_is_found_from_the_geometry(drafts):
+    draft, scene = drafts["z"]
+    assert draft.notes[-1].startswith("the draft loads as a scene")
+    check_for_planning(scene)
+    half = FOOT[0] / 2  # the foot box is centred 0.03 m in front of the ankle
+    assert draft.foot_x_m == pytest.approx((0.03 - half, 0.03 + half), abs=1e-3)
+    assert draft.foot_y_m == pytest.approx((-FOOT[1] / 2, FOOT[1] / 2), abs=1e-3)
+    assert draft.reference_joints["l_knee"] > 0.2 and draft.reference_joints["r_knee"] > 0.2  # bent
+    assert [c.joints[-1] for c in draft.chains] == ["l_wrist", "r_wrist"] and set(draft.locked) == {"neck"}
+    assert all(c.contact.flush for c in draft.chains)  # the palm boxes are flat
+    assert {s.declared.parent for s in draft.soles if s.declared} == {"l_foot", "r_foot"}
+
+
+def test_every_moving_link_gets_collision_geometry_and_the_check_says_so(drafts):
+    draft, scene = drafts["z"]
+    coverage = geometry_coverage(scene)
+    assert coverage.bare_links == () and coverage.meshes == 4 and coverage.primitives > 0
+    assert {s.link for s in draft.shapes if isinstance(s, Capsule)} == set(draft.covered)
+    assert "l_thigh" in draft.covered and "l_hip_roll_link" not in draft.covered  # no extent: nothing to cover
+    pairs = CollisionConfig(disabled_pairs=scene.config.collision.disabled_pairs)
+    bare = Scene(dataclasses.replace(scene.config, collision=pairs))  # the URDF's geometry alone
+    assert "l_thigh" in geometry_coverage(bare).bare_links and "l_foot" not in geometry_coverage(bare).bare_links
+
+
+def test_a_visual_hull_replaces_missing_collision_geometry():
+    draft = draft_robot("human", samples=5)
+    hulls = {s.link for s in draft.shapes if isinstance(s, VisualHull)}
+    assert {"left_upperleg", "left_lowerleg", "left_hand", "middle_thorax"} <= hulls
+    assert draft.up_axis == "+y" and draft.root_rpy_deg == (90.0, 0.0, 0.0)
+    assert not any(c.contact.flush for c in draft.chains)  # a rounded hand mesh: a point at its tip
+
+
+def test_a_robot_without_any_geometry_gets_guessed_feet_and_capsules():
+    draft = draft_robot("simple_humanoid", samples=5)
+    assert all(not s.from_geometry for s in draft.soles)
+    assert any("outside the URDF's limits" in c for c in draft.checks)  # its SRDF state breaks its own limits
+    assert any(c.startswith("l_ankle has no geometry") for c in draft.checks)
+    assert draft.chains[0].contact.frames[0].parent == "l_wrist"
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("not_xml", r"robot\.urdf: not valid XML"),
+        ("mesh", r"robot\.urdf: link 'l_foot' (visual|collision) mesh '.*foot\.stl' not found"),
+        ("one_leg", r"robot\.urdf: no two legs: .*'l_hip_yaw'.*waist"),
+        ("mjcf", r"robot\.xml: an MJCF model"),
+        ("missing", r"nothing\.urdf: file not found"),
+        ("not_urdf", r"robot\.urdf: not a URDF \(its root element is <sdf>"),
+    ],
+)
+def test_bad_input_is_one_line_naming_the_file_and_element(case, message, tmp_path, capsys):
+    path = humanoid_urdf(tmp_path, legs=1 if case == "one_leg" else 2)
+    if case == "not_xml":
+        path.write_text(path.read_text()[:-20])
+    elif case == "mesh":
+        (tmp_path / "meshes" / "foot.stl").unlink()
+    elif case == "mjcf":
+        path = tmp_path / "robot.xml"
+        path.write_text("<mujoco><worldbody/></mujoco>")
+    elif case == "missing":
+        path = tmp_path / "nothing.urdf"
+    elif case == "not_urdf":
+        path.write_text("<sdf/>")
+    output = tmp_path / "config.yaml"
+    assert main(["robot", "init", str(path), "-o", str(output), "--samples", "2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("posegen: error: ")
+    assert re.search(message, err), err
+    assert not output.exists()  # never a half draft
+
+
+def test_a_config_may_name_a_urdf_without_srdf_and_a_root_orientation(drafts):
+    _, scene = drafts["y"]
+    config = scene.config
+    assert config.robot.srdf is None and scene.files.srdf is None
+    assert config.to_dict()["stance"]["root_rpy_deg"] == [90.0, 0.0, 0.0]
+    turned = Scene(dataclasses.replace(config, stance=dataclasses.replace(config.stance, root_rpy_deg=None)))
+    with pytest.raises(ConfigError, match=r"soles are not on one floor|not under the robot|not balanced"):
+        check_for_planning(turned)  # the y-up model lying on its back: the orientation is what makes it stand
+    assert np.all(np.isfinite(turned.reference))
+
+
+def test_relative_mesh_paths_are_read_from_the_urdf_folder(drafts, tmp_path):
+    from posegen.robot.description import absolute_mesh_paths
+
+    text = '<robot><link name="a"><visual><geometry><mesh filename="../m/x.stl"/></geometry></visual></link></robot>'
+    fixed = absolute_mesh_paths(text, tmp_path / "urdf")
+    assert f'filename="{(tmp_path / "m" / "x.stl").resolve()}"' in fixed
+    kept = text.replace("../m/x.stl", "package://p/x.stl")
+    assert absolute_mesh_paths(kept, tmp_path) == kept
+    _, scene = drafts["z"]  # its URDF names its meshes relative to its folder
+    assert scene.files.urdf_text().count(str(scene.files.urdf.parent / "meshes")) == 8  # 2 feet, 2 hands, x2
+
+
+def test_a_visual_hull_contains_the_visual_mesh(drafts):
+    from posegen.robot.collision_geometry import robot_geometry
+
+    _, scene = drafts["z"]
+    hull = CollisionConfig(shapes=(VisualHull("l_hand"),))
+    geom = robot_geometry(scene.model, scene.urdf_xml, scene.files.package_dirs, hull, convex=False)
+    visual = pin.buildGeomFromUrdfString(scene.model, scene.urdf_xml, pin.VISUAL)
+    mesh = next(o for o in visual.geometryObjects if str(scene.model.frames[o.parentFrame].name) == "l_hand")
+    made = [o for o in geom.geometryObjects if o.name.startswith("l_hand_shape")]
+    assert len(made) == 1 and made[0].placement == mesh.placement
+    points = np.asarray(made[0].geometry.points())
+    vertices = np.asarray(mesh.geometry.vertices())
+    assert points.min(axis=0) == pytest.approx(vertices.min(axis=0)) and points.max(axis=0) == pytest.approx(
+        vertices.max(axis=0)
+    )
+    with pytest.raises(ConfigError, match=r"robot\.collision\.shapes\.l_thigh: visual_hull, but the link has no"):
+        robot_geometry(scene.model, scene.urdf_xml, (), CollisionConfig(shapes=(VisualHull("l_thigh"),)), convex=False)
+
+
+def test_check_says_what_it_checks_with_and_warns_of_bare_links(drafts, tmp_path, capsys):
+    draft, scene = drafts["z"]
+    primitives = sum(isinstance(s, Capsule) for s in draft.shapes)
+    pool = tmp_path / "pool.yaml"
+    config = scene.config.source_path
+    assert main(["pool", "--n", "2", "--seed", "1", "--workers", "1", "--config", config, "-q", "-o", str(pool)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(pool), "-q"]) == 0
+    out = capsys.readouterr().out
+    assert f"(4 meshes, {primitives} primitives; pinocchio" in out and "WARN" not in out
+    text = Path(config).read_text()
+    bare = tmp_path / "bare.yaml"  # the same robot without the drafted shapes: the thighs have nothing
+    bare.write_text(text[: text.index("    shapes:")] + text[text.index("\nstance:") :])
+    assert main(["check", str(pool), "--config", str(bare), "-q"]) in (0, 1)
+    out = capsys.readouterr().out
+    assert "(4 meshes; pinocchio" in out and f"WARN {len(draft.covered)} moving links have no collision geometry" in out
+    assert " l_thigh " in out + " "
