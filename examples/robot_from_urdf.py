@@ -32,7 +32,8 @@ def main(output: Path, robot: str) -> None:
     print(f"URDF: {scene.files.urdf}")
     print(f"SRDF: {scene.files.srdf}")
     left, right = draft.chains
-    print(f"draft: soles {', '.join(draft.soles)}; hands {left.hand}, {right.hand}; table at {draft.table_center_m} m")
+    soles = ', '.join(sole.frame for sole in draft.soles)
+    print(f"draft: soles {soles}; hands {left.hand}, {right.hand}; table at {draft.table_center_m} m")
 
     # What a person tunes next: compare with the shipped, hand-tuned config of the same robot.
     shipped = load_config(shipped_path(DEFAULT_CONFIG))
