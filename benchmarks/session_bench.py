@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from posegen.calibrate import Calibration, Perturbation, Settings, calibrate, held_out_x
-from posegen.calibrate.simulation import perturbed_robot, settle_true
+from posegen.calibrate.simulation import contact_offsets, perturbed_robot, settle_true
 from posegen.io import write_yaml
 from posegen.model import Contacts, build_design, planned_kinds, read_measurements
 from posegen.parallel import open_backend
@@ -36,18 +36,24 @@ TABLE = "table_1"  # the table session of every rehearsal
 def robot_contacts(
     scene: Scene, joints: np.ndarray, chains: Sequence[str], spots: Sequence[str], robot: Robot
 ) -> Contacts:
-    """Contacts of the rehearsal's robot (every chain of the config, one table) at planned postures, as simulate."""
+    """Contacts of the rehearsal's robot (every chain of the config, one table) at planned postures, as simulate.
+
+    Each posture on its local plane (the rehearsal's contact noise, drawn as ``simulate`` draws it: the same
+    posture gets the same offset in the session's recordings and in the fixed orders).
+    """
     perturbation = Perturbation(
         length_m=robot.error_mm * 1e-3,
         angle_rad=float(np.deg2rad(robot.error_deg)),
         encoder_noise_rad=float(np.deg2rad(robot.noise_deg)),
         compliance_rad_per_nm=robot.compliance_rad_per_knm * 1e-3,
+        contact_noise_m=robot.contact_noise_mm * 1e-3,
+        contact_noise_rad=float(np.deg2rad(robot.contact_noise_deg)),
     )
     every = tuple(c.name for c in scene.config.chains)
     kinds = {c: (scene.chain(c).contact_kind,) for c in every}
     model, x = perturbed_robot(scene, every, [TABLE], perturbation, robot.seed, kinds)
     planned = Contacts(joints, tuple(chains), (TABLE,) * len(chains), tuple(spots), planned_kinds(scene, chains))
-    settled, converged = settle_true(model, x, planned)
+    settled, converged = settle_true(model, x, planned, offsets=contact_offsets(planned, perturbation, robot.seed))
     settled = settled.subset(np.flatnonzero(converged))
     rng = np.random.default_rng([robot.seed, 1])
     return settled.at(settled.joints + rng.normal(0.0, perturbation.encoder_noise_rad, settled.joints.shape))
