@@ -3,7 +3,8 @@
 The first batch is the select stage's exact-k design of (1 + margin) x the fewest
 postures that identify every base parameter of the pool's chains (more when that
 design does not identify them all); the next ones are ``select --given`` on the
-weakest chain, after the postures of the previous batch that the robot did not record.
+weakest chain, after the postures of the previous batch that the robot did not record,
+among the postures the session has not planned yet (none is measured twice).
 Every file goes through the stages' own functions (the same files their commands write).
 """
 
@@ -43,6 +44,7 @@ class Plan:
     weakest: str | None = None  # the chain to improve
     missing: tuple[int, ...] = ()  # pool rows the robot did not record: planned again, first
     follow: bool = True  # add ``select --given`` postures (False: only the missing ones, too few to calibrate)
+    planned: tuple[int, ...] = ()  # pool rows of every batch so far: never chosen again (the missing come first)
 
 
 def first_batch_size(pool: Pool, margin: float) -> tuple[int, int]:
@@ -74,23 +76,38 @@ def select_first(pool_path: str, pool: Pool, output: Path, settings: SessionSett
 
 
 def select_next(pool_path: str, pool: Pool, folder: Path, plan: Plan, settings: SessionSettings) -> None:
-    """The next batch's selection: the missing postures first, then ``select --given`` on the weakest chain."""
+    """The next batch's selection: the missing postures first, then ``select --given`` on the weakest chain.
+
+    The follow-up chooses among the pool postures no batch of the session holds yet (up to
+    ``batch_postures``, fewer when fewer are left).
+
+    Raises:
+        InfeasibleError: Nothing left to plan: no missing posture, and every pool posture planned already.
+
+    """
     followed: list[dict[str, Any]] = []
     provenance = {**pool.provenance, "pool": pool_path, "pool_sha256": sha256_of(Path(pool_path))}
     figures: dict[str, Any] = {"missing_postures": list(plan.missing)}
-    if plan.follow:
+    excluded = sorted(set(plan.planned) | set(plan.missing))
+    k = min(settings.batch_postures, len(pool.postures) - len(excluded))
+    if k <= 0 and not plan.missing:
+        raise InfeasibleError(
+            f"{pool_path}: every posture of the pool is in the session already and the target is not met: "
+            "generate a larger pool (posegen pool) and start a new session"
+        )
+    if plan.follow and k > 0:
         data = follow_up_pool_file(
             pool_path,
             str(folder / FOLLOW_UP_FILE),
             list(plan.given),
             plan.calibration,
-            settings.batch_postures,
+            k,
             weakest=plan.weakest,
+            exclude=excluded,
         )
         followed, provenance = data["postures"], data["provenance"]
         figures["follow_up"] = data["figures"]
     again = [{"pool_id": row, "rank": 0, "weight": 0.0, **pool.entry(row)} for row in plan.missing]
-    followed = [e for e in followed if int(e["pool_id"]) not in set(plan.missing)]  # each posture once
     write_yaml(
         folder / SELECTION_FILE,
         {

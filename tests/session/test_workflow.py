@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 from posegen.cli import main
-from posegen.errors import InputError
+from posegen.errors import InfeasibleError, InputError
 from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
 from posegen.parallel import open_backend
 from posegen.robot import load_pool
@@ -31,6 +31,7 @@ from posegen.session import (
     start_session,
     write_index,
 )
+from posegen.session.batch import Plan, select_next
 from tests.cli.test_cli import assert_one_line_error
 from tests.conftest import EXAMPLE_POOL
 
@@ -95,6 +96,29 @@ def test_the_rehearsal_plays_batches_for_the_weakest_chain(rehearsed):
     follow_up = yaml.safe_load((folder / "batch_002" / "followup.yaml").read_text())["figures"]
     assert follow_up["weakest_chain"] == CHAIN and follow_up["given_contacts"] == first.recording.contacts
     assert not index.done  # 1 mm is out of reach of the URDF alone on a robot whose hips give way
+
+
+def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
+    folder, _ = rehearsed
+    index = read_index(folder)
+    rows = [r for b in index.batches for r in b.pool_rows]
+    assert len(rows) == len(set(rows))  # every batch new postures
+    follow_up = yaml.safe_load((folder / "batch_003" / "followup.yaml").read_text())["figures"]
+    assert follow_up["excluded_postures"] == len(index.batches[0].pool_rows) + len(index.batches[1].pool_rows)
+    pool = load_pool(index.pool)
+    plan = Plan(
+        given=tuple(str(folder / b.folder / "measurements.yaml") for b in index.batches[:2]),
+        calibration=str(folder / "batch_002" / "calibration" / "calibration.yaml"),
+        weakest=CHAIN,
+        planned=tuple(range(2, len(pool.postures))),
+    )
+    select_next(index.pool, pool, tmp_path, plan, SETTINGS)  # two postures left: the batch takes both
+    selection = yaml.safe_load((tmp_path / "selection.yaml").read_text())
+    assert sorted(p["pool_id"] for p in selection["postures"]) == [0, 1]
+    with pytest.raises(InfeasibleError, match="every posture of the pool is in the session already"):
+        select_next(
+            index.pool, pool, tmp_path, dataclasses.replace(plan, planned=tuple(range(len(pool.postures)))), SETTINGS
+        )
 
 
 def test_the_stopping_figure_is_the_one_calibrate_reports(rehearsed):
@@ -212,7 +236,8 @@ def test_a_batch_played_in_part_plans_its_missing_postures_again(started, rehear
     rows = [p["pool_id"] for p in selection["postures"]]
     assert rows[: len(recording.missing)] == list(recording.missing)  # planned again, first
     follow_up = [p["pool_id"] for p in yaml.safe_load((copy / "batch_002" / "followup.yaml").read_text())["postures"]]
-    assert rows[len(recording.missing) :] == [r for r in follow_up if r not in recording.missing]
+    assert rows[len(recording.missing) :] == follow_up and len(follow_up) == SETTINGS.batch_postures  # all new
+    assert not set(follow_up) & set(read_index(started).batches[0].pool_rows)
     assert sorted(added.next_batch.pool_rows) == sorted(rows)  # routed (in the route's own order)
     assert np.isfinite(list(added.batch.assessment.predicted_z_mm.values())).all()
 
