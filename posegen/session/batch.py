@@ -1,10 +1,13 @@
-"""A batch: its postures chosen, routed from the start posture, checked, and exported as a rosbag2 to play.
+"""A batch: its postures chosen, routed from where the robot stands, checked, and exported as a rosbag2 to play.
 
 The first batch is the select stage's exact-k design of (1 + margin) x the fewest
 postures that identify every base parameter of the pool's chains (more when that
 design does not identify them all); the next ones are ``select --given`` on the
 weakest chain, after the postures of the previous batch that the robot did not record,
 among the postures the session has not planned yet (none is measured twice).
+The first batch starts at the start posture; each next one where the robot stands, the
+end of the previous batch's route (the start posture again when routes return to it,
+the config's ``route.return_to_start``; above its last contact otherwise).
 Every file goes through the stages' own functions (the same files their commands write).
 """
 
@@ -17,12 +20,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from posegen.errors import InfeasibleError
 from posegen.io import read_yaml, write_yaml
 from posegen.model import MEASUREMENT_FORMAT, build_design
 from posegen.parallel import Backend
-from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool, SegmentType, read_route, scene_for
-from posegen.route import check_route_file, export_route_bag, route_plan_file
+from posegen.robot import (
+    POOL_VERSION,
+    SELECTION_FORMAT,
+    Pool,
+    SegmentType,
+    read_route,
+    route_arrays,
+    scene_for,
+)
+from posegen.route import check_route_file, export_route_bag, route_plan_file, start_posture
 from posegen.select import SelectionSettings, follow_up_pool_file, iroc, select_pool_file
 from posegen.session.index import Batch, SessionSettings, batch_folder, sha256_of
 
@@ -122,8 +135,27 @@ def select_next(pool_path: str, pool: Pool, folder: Path, plan: Plan, settings: 
     )
 
 
+STANDING_TOLERANCE_RAD = 1e-6  # a route's end this close to the start posture is the start posture
+
+
+def standing_posture(route: Path) -> list[float] | None:
+    """Where the robot stands once it has played a route: its last point (rad, in the robot's joint order).
+
+    None when that is the start posture (the reference posture the route stage starts from by default).
+    """
+    data = read_route(str(route))
+    scene = scene_for(data.get("provenance") or {}, None)
+    names = list(data["trajectory"]["joint_names"])
+    last = route_arrays(data, str(route))[1][-1]
+    end = np.array([last[names.index(n)] for n in scene.joint_names])
+    reference = start_posture(scene)
+    if reference is not None and np.abs(end - reference).max() < STANDING_TOLERANCE_RAD:
+        return None
+    return [float(v) for v in end]
+
+
 def route_batch(session: Path, number: int, pool_path: str, settings: SessionSettings, backend: Backend) -> Batch:
-    """Route the batch's selection from the start posture, check it on the meshes, export its rosbag2.
+    """Route the batch's selection from where the robot stands, check it on the meshes, export its rosbag2.
 
     Raises:
         InfeasibleError: The route fails its check (nothing is exported).
@@ -131,8 +163,15 @@ def route_batch(session: Path, number: int, pool_path: str, settings: SessionSet
     """
     folder = session / batch_folder(number)
     route = folder / ROUTE_FILE
+    standing = standing_posture(session / batch_folder(number - 1) / ROUTE_FILE) if number > 1 else None
     routed = route_plan_file(
-        str(folder / SELECTION_FILE), str(route), settings.seed, None, workers=backend, pool_path=pool_path
+        str(folder / SELECTION_FILE),
+        str(route),
+        settings.seed,
+        None,
+        workers=backend,
+        pool_path=pool_path,
+        from_posture=standing,
     )
     verdict = check_route_file(str(route), None, workers=backend)
     if not verdict.ok:

@@ -17,7 +17,8 @@ from posegen.cli import main
 from posegen.errors import InfeasibleError, InputError
 from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
 from posegen.parallel import open_backend
-from posegen.robot import load_pool
+from posegen.robot import load_pool, read_route, route_arrays
+from posegen.route import route_plan_file
 from posegen.session import (
     INDEX_FILE,
     REHEARSAL_BAG,
@@ -31,7 +32,7 @@ from posegen.session import (
     start_session,
     write_index,
 )
-from posegen.session.batch import Plan, select_next
+from posegen.session.batch import ROUTE_FILE, Plan, route_batch, select_next, standing_posture
 from tests.cli.test_cli import assert_one_line_error
 from tests.conftest import EXAMPLE_POOL
 
@@ -119,6 +120,26 @@ def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
         select_next(
             index.pool, pool, tmp_path, dataclasses.replace(plan, planned=tuple(range(len(pool.postures)))), SETTINGS
         )
+
+
+def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, tmp_path):
+    assert standing_posture(started / "batch_001" / ROUTE_FILE) is None  # back at the start posture
+    data = read_route(str(started / "batch_001" / ROUTE_FILE))
+    positions = route_arrays(data, "route")[1]
+    approach = next(s for s in reversed(data["segments"]) if s["type"] == "approach")
+    standoff = positions[int(approach["first_point"])]  # above the last contact
+    pool = load_pool(read_index(started).pool).to_dict()
+    two = tmp_path / "two.yaml"
+    write_yaml(two, {**pool, "postures": pool["postures"][:2]})
+    for number in (1, 2):
+        (tmp_path / "session" / f"batch_00{number}").mkdir(parents=True)
+    shutil.copy(two, tmp_path / "session" / "batch_002" / "selection.yaml")
+    before = tmp_path / "session" / "batch_001" / ROUTE_FILE  # a batch that left the robot above a contact
+    route_plan_file(str(two), str(before), 0, None, workers=backend, from_posture=standoff)
+    assert np.array_equal(standing_posture(before), standoff)
+    batch = route_batch(tmp_path / "session", 2, str(two), SETTINGS, backend)
+    after = route_arrays(read_route(str(tmp_path / "session" / "batch_002" / ROUTE_FILE)), "route")[1]
+    assert np.array_equal(after[0], standoff) and sorted(batch.pool_rows) == [0, 1]
 
 
 def test_the_stopping_figure_is_the_one_calibrate_reports(rehearsed):
