@@ -19,8 +19,9 @@ Contact noise (the table's unevenness, the fingertips, the force control: what a
 calibration reports on top of the encoders') is physical too: each contact settles flush
 on its own local plane, the true table offset in height and tilted in roll and pitch by
 seeded normal draws (:func:`contact_offsets`), so the recorded joints carry it. The draw
-is a function of the seed and the posture (a posture touches the same spot, the same
-local plane, whichever plan or route holds it).
+is a function of the seed and the posture (the same posture, to 1e-6 rad, touches the
+same local plane whichever plan holds it; a route's hold, a few mrad from the planned
+posture after its go-to-contact, is another posture and gets another draw).
 """
 
 from __future__ import annotations
