@@ -327,6 +327,7 @@ def main() -> None:
         "--measure-n", type=int, default=None, help="make a pool of this size and project to --large-n (stage scale)"
     )
     parser.add_argument("--session-seeds", type=int, default=3, help="robot seeds of the session stage")
+    parser.add_argument("--session-workers", type=int, default=2, help="worker processes of the session stage")
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
     workdir = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="posegen-bench-"))
@@ -350,7 +351,8 @@ def main() -> None:
     if "session" in args.only:
         from session_bench import bench_session  # benchmarks/session_bench.py, beside this script
 
-        bench_session(pool_path, workdir, machine(), seeds=tuple(range(1, args.session_seeds + 1)))
+        seeds = tuple(range(1, args.session_seeds + 1))
+        bench_session(pool_path, workdir, machine(), seeds=seeds, workers=args.session_workers)
     if "view" in args.only:
         bench_view(pool_path, workdir)
     if "scale" in args.only:

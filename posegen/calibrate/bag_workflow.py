@@ -27,7 +27,7 @@ from posegen.calibrate.contact_windows import (
     wrist_force,
 )
 from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
-from posegen.calibrate.workflow import check_compliance, perturbation_of, truth_record
+from posegen.calibrate.workflow import check_compliance, contact_noise_record, perturbation_of, truth_record
 from posegen.errors import ArgumentError, InputError, unknown_name
 from posegen.io import (
     JointStates,
@@ -117,6 +117,8 @@ def simulate_route_bag(
     joint_topic: str,
     compliance_rad_per_knm: float = 0.0,
     every_chain: bool = False,
+    contact_noise_mm: float = 0.0,
+    contact_noise_deg: float = 0.0,
 ) -> SimulatedSession:
     """Record a perturbed robot executing a route, as a rosbag2 with the truth in its folder.
 
@@ -134,6 +136,8 @@ def simulate_route_bag(
         compliance_rad_per_knm: True compliance of the config's first compliance group.
         every_chain: The robot drawn with every chain of the config (the same robot for
             every route of a seed); False: with the route's chains, as ``posegen simulate``.
+        contact_noise_mm: Sigma of each contact's local table height (mm).
+        contact_noise_deg: Sigma of each contact's local table roll and pitch (deg).
 
     Raises:
         PosegenError: Not a route, a route without contacts or for another robot, or a
@@ -141,7 +145,9 @@ def simulate_route_bag(
 
     """
     check_seed(seed, "--seed")
-    perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
+    perturbation = perturbation_of(
+        error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
+    )
     check_size(rate_hz, "--rate", positive=True)
     bag_path = Path(bag)
     truth = bag_path / TRUTH_FILE
@@ -166,6 +172,7 @@ def simulate_route_bag(
             "encoder_noise_deg": noise_deg,
             "compliance_rad_per_knm": compliance_rad_per_knm,
             "every_chain": every_chain,
+            **contact_noise_record(contact_noise_mm, contact_noise_deg),
             "sensors": dataclasses.asdict(settings),
         }
         wrenches = {

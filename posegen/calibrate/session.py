@@ -5,7 +5,8 @@ perturbation model, same chains and session). It follows the route's trajectory,
 sampled at the recording rate (cubic Hermite through the route's positions and
 velocities). At each contact the force controller carries the arm from the planned
 contact posture to the settled one, where the true contact is flush with the true table
-(the settle step, under gravity if the robot is compliant): the correction grows over
+(with contact noise: with its local plane, :func:`posegen.calibrate.simulation.contact_offsets`;
+the settle step, under gravity if the robot is compliant): the correction grows over
 the go-to-contact segment, is held, and fades over the release. The legs follow the
 route, as the stance controller holds them (``posegen simulate`` of postures closes the
 second leg on the true robot instead). The wrist of that arm reads the normal force, growing and fading
@@ -21,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from posegen.calibrate.simulation import Perturbation, perturbed_robot, settle_true
+from posegen.calibrate.simulation import Perturbation, contact_offsets, perturbed_robot, settle_true
 from posegen.errors import InfeasibleError
 from posegen.model import CalibrationModel, Contacts, planned_kinds
 from posegen.robot import FloatArray, Scene, SegmentType, route_arrays
@@ -193,7 +194,8 @@ def simulate_session(
         model, theta = perturbed_robot(scene, every, [session], perturbation, seed, kinds)
     else:
         model, theta = perturbed_robot(scene, chains, [session], perturbation, seed, planned.kinds_by_chain())
-    settled, converged = settle_true(model, theta, planned, stand=False)  # the legs follow the route
+    offsets = contact_offsets(planned, perturbation, seed)  # each contact's local plane (contact noise)
+    settled, converged = settle_true(model, theta, planned, stand=False, offsets=offsets)  # legs follow the route
     if not np.all(converged):
         label = planned.labels[int(np.flatnonzero(~converged)[0])]
         raise InfeasibleError(f"simulated contact {label!r} does not settle on the true plane")

@@ -14,10 +14,19 @@ planned posture the real experiment's physics is reproduced:
 both under the true robot's deflection by gravity (Gauss-Newton, minimum-norm steps,
 the gravity torques recomputed until the angles stop moving). The encoders then read
 those angles plus noise.
+
+Contact noise (the table's unevenness, the fingertips, the force control: what a real
+calibration reports on top of the encoders') is physical too: each contact settles flush
+on its own local plane, the true table offset in height and tilted in roll and pitch by
+seeded normal draws (:func:`contact_offsets`), so the recorded joints carry it. The draw
+is a function of the seed and the posture (the same posture, to 1e-6 rad, touches the
+same local plane whichever plan holds it; a route's hold, a few mrad from the planned
+posture after its go-to-contact, is another posture and gets another draw).
 """
 
 from __future__ import annotations
 
+import hashlib
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -26,7 +35,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from posegen.errors import InfeasibleError, InputError
-from posegen.model import LIMIT_TOLERANCE_RAD, CalibrationModel, Contacts, Group, Kind, Parameter, Unit
+from posegen.model import (
+    LIMIT_TOLERANCE_RAD,
+    CalibrationModel,
+    Contacts,
+    Group,
+    Kind,
+    Parameter,
+    Unit,
+    row_mask,
+)
 from posegen.robot import ContactKind, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
@@ -46,6 +64,8 @@ class Perturbation:
     encoder_noise_rad: float = 0.0  # sigma of the encoder readings' noise
     compliance_rad_per_nm: float = 0.0  # true compliance of the compliance groups below
     compliance_groups: tuple[str, ...] = ()  # of the config's calibration.compliance; empty: its first group
+    contact_noise_m: float = 0.0  # sigma of each contact's local table height (its own plane's offset)
+    contact_noise_rad: float = 0.0  # sigma of each contact's local table roll and pitch
 
 
 def true_parameters(model: CalibrationModel, perturbation: Perturbation, seed: int) -> FloatArray:
@@ -79,13 +99,38 @@ def true_parameters(model: CalibrationModel, perturbation: Perturbation, seed: i
     return x
 
 
+def contact_offsets(planned: Contacts, perturbation: Perturbation, seed: int) -> FloatArray:
+    """Each contact's local plane: height (m), roll, pitch (rad) off the true table's. Shape (n, 3).
+
+    Normal draws of the perturbation's contact noise, from the seed and the posture (its
+    chain and joint angles to 1e-6 rad): the same posture gets the same local plane. A
+    point contact's roll and pitch are not measured and stay 0. Zeros without contact noise.
+    """
+    offsets = np.zeros((len(planned), 3))
+    sigma = np.array([perturbation.contact_noise_m, perturbation.contact_noise_rad, perturbation.contact_noise_rad])
+    if not np.any(sigma):
+        return offsets
+    for i, (chain, joints) in enumerate(zip(planned.chains, planned.joints, strict=True)):
+        rounded = np.round(np.asarray(joints, dtype=np.float64) * 1e6).astype(np.int64)
+        digest = hashlib.sha256(chain.encode() + b"\0" + rounded.astype("<i8").tobytes()).digest()
+        rng = np.random.default_rng([seed, 3, int.from_bytes(digest[:8], "little")])  # [seed, 1], [seed, 2]: noise
+        offsets[i] = rng.normal(0.0, 1.0, 3) * sigma
+    return np.where(row_mask(planned.kinds), offsets, 0.0)
+
+
 def settle_true(
-    model: CalibrationModel, x: FloatArray, planned: Contacts, stand: bool = True
+    model: CalibrationModel,
+    x: FloatArray,
+    planned: Contacts,
+    stand: bool = True,
+    offsets: FloatArray | None = None,
 ) -> tuple[Contacts, NDArray[np.bool_]]:
     """Joint angles at which each planned posture stands and touches under parameters ``x``.
 
     With ``stand`` false the legs keep their planned angles and only the contacts settle
-    (a route's rehearsal, whose legs follow the planned trajectory).
+    (a route's rehearsal, whose legs follow the planned trajectory). ``offsets`` (n, 3):
+    each contact settles flush on its local plane, this far (height m, roll, pitch rad)
+    from the true table (:func:`contact_offsets`); None: on the true table.
 
     Returns:
         The settled postures and which of them converged (n,): a posture whose second
@@ -98,6 +143,7 @@ def settle_true(
     second_leg = scene.leg_joints(scene.second_sole) if floor is not None else []
     own = {name: sorted(set(chain.joint_indices) - legs) + second_leg for name, chain in model.contact.chains.items()}
     joints = planned.joints.copy()
+    local = np.zeros((len(planned), 3)) if offsets is None else np.asarray(offsets, dtype=float)  # (n, 3)
     sessions = np.array(planned.sessions)
     target = np.zeros((len(planned), 6))  # floor: x, y, yaw of the session
     for session in set(planned.sessions):
@@ -109,12 +155,13 @@ def settle_true(
         observations = model.observations(posture.at(values[rows]))
         if not jacobian:
             out = model.evaluate(x, observations, floor=floor is not None)
-            blocks = [out.contact] + ([out.floor] if floor is not None else [])  # floor: less its session's
+            floor_blocks = [out.floor] if floor is not None else []  # floor: less its session's
+            blocks = [out.contact - local[rows], *floor_blocks]
             return np.concatenate(blocks, axis=1), np.zeros(0)
         bent = posture.at(model.deflected(x, observations))
         theta = model.theta(x)
         res, _, d_joints = model.contact.derivatives(theta, bent)
-        blocks, jacs = [res], [d_joints]
+        blocks, jacs = [res - local[rows]], [d_joints]
         if floor is not None:
             pose, _, f_joints = floor.derivatives(theta, bent.joints)
             blocks.append(pose - target[rows])
@@ -206,7 +253,8 @@ def simulate(
         seed: Seed of the errors and of the encoder noise.
 
     Returns:
-        The recorded contacts (settled joints plus encoder noise; postures the
+        The recorded contacts (settled joints, on their local planes with contact noise,
+        plus encoder noise; postures the
         perturbed robot cannot reach are left out and logged), the model and the true
         parameter vector (nx,).
 
@@ -215,7 +263,7 @@ def simulate(
 
     """
     model, x = perturbed_robot(scene, planned.chains, planned.sessions, perturbation, seed, planned.kinds_by_chain())
-    settled, converged = settle_true(model, x, planned)
+    settled, converged = settle_true(model, x, planned, offsets=contact_offsets(planned, perturbation, seed))
     # a joint the true robot would have to take past its limits (a knee stretched backwards) cannot be recorded
     beyond = (settled.joints < scene.lower - LIMIT_TOLERANCE_RAD) | (settled.joints > scene.upper + LIMIT_TOLERANCE_RAD)
     converged = converged & ~beyond.any(axis=1)

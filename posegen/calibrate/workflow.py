@@ -70,6 +70,8 @@ def simulate_plan_file(
     noise_deg: float,
     session: str,
     compliance_rad_per_knm: float = 0.0,
+    contact_noise_mm: float = 0.0,
+    contact_noise_deg: float = 0.0,
 ) -> Simulated:
     """Contacts of a perturbed robot at the postures of a pool or selection file.
 
@@ -83,6 +85,8 @@ def simulate_plan_file(
         noise_deg: Sigma of the encoder noise (deg).
         session: Table session of every contact.
         compliance_rad_per_knm: True compliance of the config's first compliance group.
+        contact_noise_mm: Sigma of each contact's local table height (mm).
+        contact_noise_deg: Sigma of each contact's local table roll and pitch (deg).
 
     The arguments, the plan (its robot model included) and the outputs' place are
     checked before any work; the output is locked while it is made.
@@ -93,7 +97,9 @@ def simulate_plan_file(
 
     """
     check_seed(seed, "--seed")
-    perturbation = perturbation_of(error_mm, error_deg, noise_deg, compliance_rad_per_knm)
+    perturbation = perturbation_of(
+        error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
+    )
     if not session:
         raise ArgumentError("--session: give a session name")
     measurements = Path(output)
@@ -119,6 +125,7 @@ def simulate_plan_file(
             "error_deg": error_deg,
             "encoder_noise_deg": noise_deg,
             "compliance_rad_per_knm": compliance_rad_per_knm,
+            **contact_noise_record(contact_noise_mm, contact_noise_deg),
         }
         write_truth(truth, model, x, prov)
         write_measurements(measurements, scene, recorded, prov)
@@ -126,9 +133,14 @@ def simulate_plan_file(
 
 
 def perturbation_of(
-    error_mm: float, error_deg: float, noise_deg: float, compliance_rad_per_knm: float = 0.0
+    error_mm: float,
+    error_deg: float,
+    noise_deg: float,
+    compliance_rad_per_knm: float = 0.0,
+    contact_noise_mm: float = 0.0,
+    contact_noise_deg: float = 0.0,
 ) -> Perturbation:
-    """The perturbation in the command line's units: mm and deg of placement errors, deg of noise, rad/kN m.
+    """The perturbation in the command line's units: mm and deg of errors and noise, rad/kN m.
 
     Raises:
         ArgumentError: A size that is negative or not a finite number.
@@ -139,6 +151,8 @@ def perturbation_of(
         (error_deg, "--error-deg"),
         (noise_deg, "--noise-deg"),
         (compliance_rad_per_knm, "--compliance"),
+        (contact_noise_mm, "--contact-noise-mm"),
+        (contact_noise_deg, "--contact-noise-deg"),
     ):
         check_size(value, flag)
     return Perturbation(
@@ -146,7 +160,16 @@ def perturbation_of(
         angle_rad=float(np.deg2rad(error_deg)),
         encoder_noise_rad=float(np.deg2rad(noise_deg)),
         compliance_rad_per_nm=compliance_rad_per_knm * 1e-3,
+        contact_noise_m=contact_noise_mm * 1e-3,
+        contact_noise_rad=float(np.deg2rad(contact_noise_deg)),
     )
+
+
+def contact_noise_record(contact_noise_mm: float, contact_noise_deg: float) -> dict[str, float]:
+    """The contact noise as a simulation's provenance records it: nothing without any (older files' bytes)."""
+    if not contact_noise_mm and not contact_noise_deg:
+        return {}
+    return {"contact_noise_mm": contact_noise_mm, "contact_noise_deg": contact_noise_deg}
 
 
 def check_compliance(scene: Scene, compliance_rad_per_knm: float) -> None:

@@ -48,6 +48,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     rehearse.add_argument("session", help="session folder (posegen session start)")
     rehearse.add_argument("--seed", type=seed, required=True, help="seed of the simulated robot and its noise")
     rehearse.add_argument("--compliance", type=size, default=0.0, help="true hip compliance, rad/kN m (default 0)")
+    rehearse.add_argument(
+        "--contact-noise-mm",
+        type=size,
+        default=None,
+        help="sigma of each contact's local table height, mm (default 3: the real recordings')",
+    )
+    rehearse.add_argument(
+        "--contact-noise-deg",
+        type=size,
+        default=None,
+        help="sigma of each contact's local table roll and pitch, deg (default 0.3: the real recordings')",
+    )
     rehearse.add_argument("--max-batches", type=positive, default=20, help="batches to add at most (default 20)")
     for sub in (start, add, status, rehearse):
         sub.add_argument("-q", "--quiet", action="store_true", help="no progress output")
@@ -86,7 +98,12 @@ def run(args: argparse.Namespace) -> int:
 
             _added(args.session, add_bag(args.session, args.bag, backend, args.new_table))
             return 0
-        robot = Robot(seed=args.seed, compliance_rad_per_knm=args.compliance)
+        noise = {"contact_noise_mm": args.contact_noise_mm, "contact_noise_deg": args.contact_noise_deg}
+        robot = Robot(
+            seed=args.seed,
+            compliance_rad_per_knm=args.compliance,
+            **{k: v for k, v in noise.items() if v is not None},  # None: the real recordings' figures
+        )
         added = rehearse_session(args.session, robot, backend, args.max_batches, lambda a: _added(args.session, a))
     if not added:
         print(f"session: {args.session} is done already: nothing to rehearse")

@@ -27,6 +27,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=0.0,
         help="true compliance, rad/kN m, of the config's first calibration.compliance group (default 0: rigid)",
     )
+    parser.add_argument(
+        "--contact-noise-mm",
+        type=size,
+        default=0.0,
+        help="sigma of each contact's local table height, mm (default 0; the real recordings: ~3)",
+    )
+    parser.add_argument(
+        "--contact-noise-deg",
+        type=size,
+        default=0.0,
+        help="sigma of each contact's local table roll and pitch, deg (default 0; the real recordings: ~0.3)",
+    )
     parser.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
     bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR/truth.yaml")
@@ -50,6 +62,8 @@ def run(args: argparse.Namespace) -> int:
         "noise_deg": args.noise_deg,
         "session": args.session,
         "compliance_rad_per_knm": args.compliance,
+        "contact_noise_mm": args.contact_noise_mm,
+        "contact_noise_deg": args.contact_noise_deg,
     }
     if args.bag:
         recorded = simulate_route_bag(args.postures, args.bag, rate_hz=args.rate, joint_topic=args.joint_topic, **robot)

@@ -22,6 +22,7 @@ on any worker in any order (a :class:`posegen.parallel.Job`).
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,16 +60,15 @@ class Transfer:
 class Planner:
     """A worker's state: the robot loaded once, and the start posture.
 
-    Raises:
-        InfeasibleError: The start posture is not balanced and collision-free (from :func:`start_posture`).
-
+    ``start`` (nj,) rad: where the robot stands when the route begins (and where it
+    returns); None: the reference posture (:func:`start_posture`).
     """
 
-    def __init__(self, scene: Scene, seed: int) -> None:
+    def __init__(self, scene: Scene, seed: int, start: Sequence[float] | None = None) -> None:
         self.scene = scene
         self.seed = seed
         self.space = StanceSpace(scene, CollisionChecker(scene, convex=True))
-        self.start = start_posture(scene)
+        self.start = start_posture(scene) if start is None else np.array(start, dtype=float)
 
     @functools.cached_property
     def projector(self) -> Projector:
@@ -76,9 +76,9 @@ class Planner:
         return Projector(self.scene)
 
     @classmethod
-    def from_config(cls, config: Config, seed: int) -> Planner:
+    def from_config(cls, config: Config, seed: int, start: Sequence[float] | None = None) -> Planner:
         """Build the planner in a worker (the job's setup)."""
-        return cls(Scene(config), seed)
+        return cls(Scene(config), seed, start)
 
 
 def start_posture(scene: Scene) -> FloatArray | None:

@@ -1,6 +1,7 @@
 """One robot-ready trajectory through the selected contact postures.
 
-1. **Order**: an open TSP path from the start posture on rest-to-rest times
+1. **Order**: an open TSP path from the start posture (the reference posture, or where
+   the robot stands, given) on rest-to-rest times
    (:mod:`posegen.route.ordering`).
 2. **Stops**, one per posture, and **transfers**, one per consecutive pair
    (:mod:`posegen.route.planner`), planned as independent jobs on a backend (local
@@ -33,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from posegen.errors import InfeasibleError
+from posegen.errors import InfeasibleError, InputError
 from posegen.parallel import Backend, Job, ProcessBackend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Posture, Scene, SegmentType, check_for_planning
@@ -91,6 +92,7 @@ def plan_route(
     workers: int | Backend = 1,
     substitutes: Substitutes | None = None,
     progress: ProgressCallback = ignore_progress,
+    from_posture: Sequence[float] | None = None,
 ) -> Route:
     """Plan and time the visit of every posture.
 
@@ -103,21 +105,29 @@ def plan_route(
         substitutes: The pool of a selection, to replace a posture that cannot be routed;
             None: such a posture is skipped.
         progress: Told after each planning job.
+        from_posture: Where the robot stands when the route begins, (nj,) rad in the scene's
+            joint order (e.g. the end of the route it played before); the route starts
+            there (and returns there). None: the reference posture.
 
     Raises:
+        InputError: A start posture of another size than the robot's joints.
         InfeasibleError: The start posture is invalid, or no posture can be reached.
 
     """
-    local = Planner(scene, seed)
+    given = None if from_posture is None else tuple(float(v) for v in from_posture)
+    if given is not None and len(given) != len(scene.joint_names):
+        raise InputError(f"the start posture has {len(given)} joint angles; the robot has {len(scene.joint_names)}")
+    local = Planner(scene, seed, given)
     check_for_planning(scene, local.space.checker)
     start = local.start
     if start is None or not local.space.is_valid(start, None):
-        raise InfeasibleError("the start posture (reference posture) is not balanced and collision-free")
+        what = "reference posture" if given is None else "the posture given"
+        raise InfeasibleError(f"the start posture ({what}) is not balanced and collision-free")
     velocity = SAFETY * scene.velocity_limit * scene.route.velocity_scale_free
     acceleration = SAFETY * np.full(len(scene.joint_names), scene.route.acceleration_limit_rad_s2)
     joints = np.array([p.joints for p in postures], dtype=float).reshape(len(postures), -1)
     order = order_postures(start, joints, velocity, acceleration, seed)
-    job = planning_job(scene, seed)
+    job = planning_job(scene, seed, given)
     if isinstance(workers, Backend):
         run = _Routing(scene, postures, substitutes, start, _all_in_flight(workers, job), progress)
         run.plan(order.sequence)
@@ -141,11 +151,14 @@ def _plan_one(planner: Planner, request: tuple[str, Any]) -> Stop | Transfer | s
     return plan_stop(planner, item) if kind == "stop" else plan_transfer(planner, item)
 
 
-def planning_job(scene: Scene, seed: int) -> Job[Planner, tuple[str, Any], Stop | Transfer | str]:
-    """The route's work: stops and transfers, each planned by a worker's planner."""
+def planning_job(
+    scene: Scene, seed: int, start: tuple[float, ...] | None = None
+) -> Job[Planner, tuple[str, Any], Stop | Transfer | str]:
+    """The route's work: stops and transfers, each planned by a worker's planner (from ``start``; None: reference)."""
+    parts: tuple[Any, ...] = (scene.config.to_dict(), scene.files.sha256(), seed)
     return Job(
-        name=job_name("route", scene.config.to_dict(), scene.files.sha256(), seed),
-        setup=functools.partial(Planner.from_config, scene.config, seed),
+        name=job_name("route", *parts, *([] if start is None else [list(start)])),
+        setup=functools.partial(Planner.from_config, scene.config, seed, start),
         run=_plan_one,
     )
 

@@ -7,6 +7,7 @@ import hashlib
 import logging
 import statistics
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -67,6 +68,7 @@ def route_plan_file(
     workers: int | Backend = 1,
     pool_path: str | None = None,
     csv: bool = False,
+    from_posture: Sequence[float] | None = None,
 ) -> Routed:
     """Plan, time and export a trajectory through the postures of a selection (or pool) file.
 
@@ -80,6 +82,9 @@ def route_plan_file(
         pool_path: The pool a selection came from (to substitute a posture that cannot
             be reached); None: the one the selection records, if it is still there.
         csv: Also write a CSV of the points beside the route.
+        from_posture: Where the robot stands (nj,) rad, in the scene's joint order: the route
+            starts there and returns there (recorded in the summary as
+            ``start_posture_rad``). None: the reference posture.
 
     The seed, the plan, its robot model and the outputs' place are checked before any
     planning; the output is locked while it is made.
@@ -107,13 +112,15 @@ def route_plan_file(
     with claim_output(path, beside=outputs[1:]):
         progress(Progress(0, 2 * len(plan.postures) + 1, "job"))
         start = time.perf_counter()
-        route = plan_route(scene, plan.postures, seed, workers, substitutes, progress)
+        route = plan_route(scene, plan.postures, seed, workers, substitutes, progress, from_posture)
         elapsed = time.perf_counter() - start
         n = len(entries)
         nodes = {i: entries[i] for i in range(n)}
         nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
         summary = _summary(scene, route, len(plan.postures))
         summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
+        if from_posture is not None:
+            summary["start_posture_rad"] = [float(v) for v in from_posture]
         if repeated:
             summary["repeated"] = repeated  # postures of the input given twice: routed once
         if substitutes is not None and route.substitutions:

@@ -63,6 +63,7 @@ def follow_up(
     noise: Sequence[float],
     k: int,
     weakest: str | None = None,
+    exclude: Sequence[int] = (),
 ) -> FollowUp:
     """Choose ``k`` pool postures for the weakest chain.
 
@@ -77,9 +78,12 @@ def follow_up(
         k: Postures to choose.
         weakest: The chain to improve (from cross-validation); None: the chain with the
             largest predicted height variance under this model.
+        exclude: Pool rows never to choose (postures already measured or planned);
+            the weakest chain's error is still predicted over all its pool postures.
 
     Raises:
-        InputError: No pool posture of the weakest chain, or k out of range.
+        InputError: No pool posture of the weakest chain, k out of range, or fewer
+            postures left than k.
 
     """
     all_chains = sorted(set(chains) | set(given.chains))
@@ -133,6 +137,11 @@ def follow_up(
         raise InputError(f"the pool has no posture of chain '{chain}'; its chains: {', '.join(chain_rows)}")
     if not 1 <= k <= len(pool):
         raise InputError(f"--k {k}: choose between 1 and {len(pool)} postures")
+    excluded = sorted({int(r) for r in exclude})
+    if excluded and not 0 <= excluded[0] <= excluded[-1] < len(pool):
+        raise InputError(f"excluded pool rows must lie in 0..{len(pool) - 1}")
+    if k > len(pool) - len(excluded):
+        raise InputError(f"--k {k}: only {len(pool) - len(excluded)} pool postures are left to choose from")
     scaled = targets[chain_rows[chain]] / units[None, :, None]  # (m, 3, f)
     target = np.einsum("nmf,nmg->fg", scaled, scaled) / len(scaled)  # mean over the chain's postures
     chosen: list[int] = []
@@ -144,6 +153,7 @@ def follow_up(
         damping = np.linalg.inv(np.eye(inner.shape[1])[None] + inner)  # (I + A_i S A_i^T)^-1
         gain = np.einsum("nmk,nkm->n", damping, gain_matrix)
         gain[chosen] = -np.inf
+        gain[excluded] = -np.inf
         best = int(np.argmax(gain))
         chosen.append(best)
         gains.append(float(gain[best]))

@@ -131,6 +131,7 @@ def follow_up_pool_file(
     k: int = 10,
     config_path: str | None = None,
     weakest: str | None = None,
+    exclude: Sequence[int] = (),
 ) -> dict[str, Any]:
     """Choose the next ``k`` postures of a pool for the weakest chain of a calibration; write a selection file.
 
@@ -145,9 +146,11 @@ def follow_up_pool_file(
         config_path: Scene config; None: the one saved in the pool.
         weakest: The chain to improve; None: the calibration's weakest (or, without
             one, the chain the model predicts worst).
+        exclude: Pool rows never to choose (a session's postures already measured).
 
     Raises:
-        PosegenError: Bad pool, measurements or calibration file; k out of range.
+        PosegenError: Bad pool, measurements or calibration file; k out of range (or
+            more than the postures left).
 
     """
     check_count(k, "--k")
@@ -186,7 +189,16 @@ def follow_up_pool_file(
             )
     with claim_output(path):
         result = follow_up(
-            scene, pool.joints(), [p.chain for p in pool.postures], contacts, candidate, scale, noise, k, weakest
+            scene,
+            pool.joints(),
+            [p.chain for p in pool.postures],
+            contacts,
+            candidate,
+            scale,
+            noise,
+            k,
+            weakest,
+            exclude,
         )
         provenance = dict(pool.provenance)
         provenance["pool"] = pool_path
@@ -209,6 +221,7 @@ def follow_up_pool_file(
                 "selected": len(result.rows),
                 "pool_postures": len(pool.postures),
                 "given_contacts": len(contacts),
+                **({"excluded_postures": len(set(exclude))} if exclude else {}),
                 "model": {"candidate": candidate.name, "prior_scale": scale},
                 "weakest_chain": result.chain,
                 "weakest_from": source,

@@ -1,9 +1,13 @@
-"""A batch: its postures chosen, routed from the start posture, checked, and exported as a rosbag2 to play.
+"""A batch: its postures chosen, routed from where the robot stands, checked, and exported as a rosbag2 to play.
 
 The first batch is the select stage's exact-k design of (1 + margin) x the fewest
 postures that identify every base parameter of the pool's chains (more when that
 design does not identify them all); the next ones are ``select --given`` on the
-weakest chain, after the postures of the previous batch that the robot did not record.
+weakest chain, after the postures of the previous batch that the robot did not record,
+among the postures the session has not planned yet (none is measured twice).
+The first batch starts at the start posture; each next one where the robot stands, the
+end of the previous batch's route (the start posture again when routes return to it,
+the config's ``route.return_to_start``; above its last contact otherwise).
 Every file goes through the stages' own functions (the same files their commands write).
 """
 
@@ -16,12 +20,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from posegen.errors import InfeasibleError
 from posegen.io import read_yaml, write_yaml
 from posegen.model import MEASUREMENT_FORMAT, build_design
 from posegen.parallel import Backend
-from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool, SegmentType, read_route, scene_for
-from posegen.route import check_route_file, export_route_bag, route_plan_file
+from posegen.robot import (
+    POOL_VERSION,
+    SELECTION_FORMAT,
+    Pool,
+    SegmentType,
+    read_route,
+    route_arrays,
+    scene_for,
+)
+from posegen.route import check_route_file, export_route_bag, route_plan_file, start_posture
 from posegen.select import SelectionSettings, follow_up_pool_file, iroc, select_pool_file
 from posegen.session.index import Batch, SessionSettings, batch_folder, sha256_of
 
@@ -43,6 +57,7 @@ class Plan:
     weakest: str | None = None  # the chain to improve
     missing: tuple[int, ...] = ()  # pool rows the robot did not record: planned again, first
     follow: bool = True  # add ``select --given`` postures (False: only the missing ones, too few to calibrate)
+    planned: tuple[int, ...] = ()  # pool rows of every batch so far: never chosen again (the missing come first)
 
 
 def first_batch_size(pool: Pool, margin: float) -> tuple[int, int]:
@@ -74,23 +89,38 @@ def select_first(pool_path: str, pool: Pool, output: Path, settings: SessionSett
 
 
 def select_next(pool_path: str, pool: Pool, folder: Path, plan: Plan, settings: SessionSettings) -> None:
-    """The next batch's selection: the missing postures first, then ``select --given`` on the weakest chain."""
+    """The next batch's selection: the missing postures first, then ``select --given`` on the weakest chain.
+
+    The follow-up chooses among the pool postures no batch of the session holds yet (up to
+    ``batch_postures``, fewer when fewer are left).
+
+    Raises:
+        InfeasibleError: Nothing left to plan: no missing posture, and every pool posture planned already.
+
+    """
     followed: list[dict[str, Any]] = []
     provenance = {**pool.provenance, "pool": pool_path, "pool_sha256": sha256_of(Path(pool_path))}
     figures: dict[str, Any] = {"missing_postures": list(plan.missing)}
-    if plan.follow:
+    excluded = sorted(set(plan.planned) | set(plan.missing))
+    k = min(settings.batch_postures, len(pool.postures) - len(excluded))
+    if k <= 0 and not plan.missing:
+        raise InfeasibleError(
+            f"{pool_path}: every posture of the pool is in the session already and the target is not met: "
+            "generate a larger pool (posegen pool) and start a new session"
+        )
+    if plan.follow and k > 0:
         data = follow_up_pool_file(
             pool_path,
             str(folder / FOLLOW_UP_FILE),
             list(plan.given),
             plan.calibration,
-            settings.batch_postures,
+            k,
             weakest=plan.weakest,
+            exclude=excluded,
         )
         followed, provenance = data["postures"], data["provenance"]
         figures["follow_up"] = data["figures"]
     again = [{"pool_id": row, "rank": 0, "weight": 0.0, **pool.entry(row)} for row in plan.missing]
-    followed = [e for e in followed if int(e["pool_id"]) not in set(plan.missing)]  # each posture once
     write_yaml(
         folder / SELECTION_FILE,
         {
@@ -105,8 +135,27 @@ def select_next(pool_path: str, pool: Pool, folder: Path, plan: Plan, settings: 
     )
 
 
+STANDING_TOLERANCE_RAD = 1e-6  # a route's end this close to the start posture is the start posture
+
+
+def standing_posture(route: Path) -> list[float] | None:
+    """Where the robot stands once it has played a route: its last point (rad, in the robot's joint order).
+
+    None when that is the start posture (the reference posture the route stage starts from by default).
+    """
+    data = read_route(str(route))
+    scene = scene_for(data.get("provenance") or {}, None)
+    names = list(data["trajectory"]["joint_names"])
+    last = route_arrays(data, str(route))[1][-1]
+    end = np.array([last[names.index(n)] for n in scene.joint_names])
+    reference = start_posture(scene)
+    if reference is not None and np.abs(end - reference).max() < STANDING_TOLERANCE_RAD:
+        return None
+    return [float(v) for v in end]
+
+
 def route_batch(session: Path, number: int, pool_path: str, settings: SessionSettings, backend: Backend) -> Batch:
-    """Route the batch's selection from the start posture, check it on the meshes, export its rosbag2.
+    """Route the batch's selection from where the robot stands, check it on the meshes, export its rosbag2.
 
     Raises:
         InfeasibleError: The route fails its check (nothing is exported).
@@ -114,8 +163,15 @@ def route_batch(session: Path, number: int, pool_path: str, settings: SessionSet
     """
     folder = session / batch_folder(number)
     route = folder / ROUTE_FILE
+    standing = standing_posture(session / batch_folder(number - 1) / ROUTE_FILE) if number > 1 else None
     routed = route_plan_file(
-        str(folder / SELECTION_FILE), str(route), settings.seed, None, workers=backend, pool_path=pool_path
+        str(folder / SELECTION_FILE),
+        str(route),
+        settings.seed,
+        None,
+        workers=backend,
+        pool_path=pool_path,
+        from_posture=standing,
     )
     verdict = check_route_file(str(route), None, workers=backend)
     if not verdict.ok:

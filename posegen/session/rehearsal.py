@@ -22,17 +22,25 @@ from posegen.session.workflow import CONFIG_FILE, Added, add_bag, open_session
 
 REHEARSAL_BAG = "rehearsal_bag"
 RATE_HZ = 500.0  # of the simulated joint states and wrenches (simulate --bag's default)
+CONTACT_NOISE_MM = 3.0  # the real recordings' contact noise as calibrate reports it (3.1 mm / 0.30 / 0.35 deg)
+CONTACT_NOISE_DEG = 0.3
 
 
 @dataclass(frozen=True)
 class Robot:
-    """The simulated robot a rehearsal plays on (as ``posegen simulate``'s options)."""
+    """The simulated robot a rehearsal plays on (as ``posegen simulate``'s options).
+
+    Its contact noise is by default as large as the real recordings' (the table, the
+    fingertips and the force control, not only the encoders).
+    """
 
     seed: int = 0
     compliance_rad_per_knm: float = 0.0
     error_mm: float = 2.0
     error_deg: float = 0.5
     noise_deg: float = 0.005
+    contact_noise_mm: float = CONTACT_NOISE_MM
+    contact_noise_deg: float = CONTACT_NOISE_DEG
 
 
 def rehearse_session(
@@ -77,6 +85,8 @@ def rehearse_session(
                 joint_topic=index.settings.joint_topic,
                 compliance_rad_per_knm=robot.compliance_rad_per_knm,
                 every_chain=True,  # the same robot for every batch, whichever chains it touches with
+                contact_noise_mm=robot.contact_noise_mm,
+                contact_noise_deg=robot.contact_noise_deg,
             )
         result = add_bag(session, str(bag), backend)
         added.append(result)

@@ -276,6 +276,7 @@ def _plan_next(folder: Path, index: SessionIndex, batch: Batch, backend: Backend
         weakest=weakest,
         missing=missing,
         follow=calibrated or not missing,
+        planned=tuple(row for b in index.batches for row in b.pool_rows),
     )
     pool = load_pool(index.pool)
     sub = folder / batch_folder(number)

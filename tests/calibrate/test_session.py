@@ -5,6 +5,7 @@ import pytest
 
 from posegen.calibrate import Perturbation, simulate
 from posegen.calibrate.session import ContactPhase, Motion, SessionSettings, hermite, simulate_session
+from posegen.calibrate.simulation import contact_offsets
 from posegen.model import Contacts
 
 
@@ -67,3 +68,22 @@ def test_the_true_robot_is_the_one_simulate_makes(scene, two_contacts):
     assert all(np.array_equal(session.forces[c], again.forces[c]) for c in session.forces)
     noise = session.positions[session.times_s < 0.9] - a
     assert 0.5e-4 < noise.std() < 2e-4
+
+
+def test_with_contact_noise_each_hold_is_flush_on_its_local_plane(scene, two_contacts):
+    motion, (a, b) = two_contacts
+    perturbation = Perturbation(contact_noise_m=3e-3, contact_noise_rad=float(np.deg2rad(0.3)))
+    settings = SessionSettings(rate_hz=100.0, force_noise_n=0.0, force_offset_n=0.0)
+    session = simulate_session(scene, motion, "sim", perturbation, settings, seed=4)
+    clean = simulate_session(scene, motion, "sim", Perturbation(), settings, seed=4)
+    assert np.array_equal(session.theta, clean.theta)  # the same robot and table
+    planned = Contacts(np.array([a, b]), ("left", "right"), ("sim", "sim"), ("", ""))
+    offsets = contact_offsets(planned, perturbation, seed=4)  # as simulate draws them at these postures
+    times = session.times_s - session.route_start_s
+    model = session.model
+    for k, chain in enumerate(("left", "right")):
+        hold = np.flatnonzero((times >= motion.contacts[k].hold_s) & (times <= motion.contacts[k].lift_s))[0]
+        contact = Contacts(session.positions[hold : hold + 1], (chain,), ("sim",), ("",))
+        flush = model.evaluate(session.theta, model.observations(contact)).contact[0]
+        assert np.abs(flush - offsets[k]).max() < 1e-9 and np.abs(offsets[k]).min() > 1e-6
+        assert np.abs(session.positions[hold] - clean.positions[hold]).max() > 1e-5  # the joints carry it

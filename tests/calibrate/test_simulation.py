@@ -5,8 +5,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from posegen.calibrate import Perturbation, simulate
-from posegen.model import Contacts, Kind
+from posegen.calibrate import Perturbation, Settings, calibrate, simulate
+from posegen.calibrate.simulation import contact_offsets
+from posegen.model import Contacts, Kind, planned_kinds
 
 
 def planned(pool, rows, session="sim"):
@@ -67,3 +68,45 @@ def test_a_compliant_robot_gives_way_under_gravity(scene, example_pool):
     rigid = x.copy()
     rigid[model.columns([Kind.COMPLIANCE])] = 0.0
     assert np.abs(model.evaluate(rigid, observations).contact[:, 0]).max() > 1e-3  # mm of sag at the gripper
+
+
+CONTACT_NOISE = Perturbation(contact_noise_m=3e-3, contact_noise_rad=float(np.deg2rad(0.3)))
+
+
+def test_contact_noise_settles_each_contact_on_its_own_local_plane(scene, example_pool):
+    rows = list(range(40))
+    plan = planned(example_pool, rows)
+    recorded, model, x = simulate(scene, plan, CONTACT_NOISE, seed=5)
+    assert len(recorded) == len(plan)
+    offsets = contact_offsets(plan, CONTACT_NOISE, seed=5)
+    # the recorded joints carry the noise: flush with the local planes, off the true table by the offsets
+    assert np.abs(model.evaluate(x, model.observations(recorded)).contact - offsets).max() < 1e-9
+    assert np.std(offsets[:, 0]) == pytest.approx(3e-3, rel=0.3)
+    assert np.std(offsets[:, 1:]) == pytest.approx(np.deg2rad(0.3), rel=0.3)
+    again = contact_offsets(planned(example_pool, rows[::-1]), CONTACT_NOISE, seed=5)
+    assert np.array_equal(again, offsets[::-1])  # a posture's local plane, whatever plan holds it
+    assert not np.allclose(contact_offsets(plan, CONTACT_NOISE, seed=6), offsets)
+    # without contact noise, the robot, the table and the encoders are those of before, to the bit
+    clean, _, x_clean = simulate(scene, plan, Perturbation(), seed=5)
+    assert np.array_equal(x_clean, x) and not np.any(contact_offsets(plan, Perturbation(), seed=5))
+    assert np.abs(model.evaluate(x, model.observations(clean)).contact).max() < 1e-9
+
+
+def test_point_contacts_get_only_a_height_offset(point_scene, example_pool):
+    plan = planned(example_pool, list(range(6)))
+    plan = Contacts(plan.joints, plan.chains, plan.sessions, plan.labels, planned_kinds(point_scene, plan.chains))
+    offsets = contact_offsets(plan, CONTACT_NOISE, seed=1)
+    assert np.all(offsets[:, 0] != 0.0) and not np.any(offsets[:, 1:])
+
+
+def test_the_calibration_recovers_the_contact_noise(scene, example_pool):
+    """The noise a calibration reports on a simulated run is the contact noise simulated, not the encoders'."""
+    rows = [i for i, p in enumerate(example_pool.postures) if p.chain == "left"][:70]
+    spots = tuple(example_pool.postures[i].spot for i in rows)  # the table regions of the grouped CV
+    plan = Contacts(example_pool.joints()[rows], ("left",) * len(rows), ("sim",) * len(rows), spots)
+    perturbation = dataclasses.replace(CONTACT_NOISE, encoder_noise_rad=float(np.deg2rad(0.005)))
+    recorded, _, _ = simulate(scene, plan, perturbation, seed=7)
+    calibration = calibrate(scene, recorded, ["sim"], Settings(candidates=("full",), fold_seeds=1))
+    height, roll, pitch = calibration.after.noise.contact
+    assert height == pytest.approx(3e-3, rel=0.3)
+    assert roll == pytest.approx(np.deg2rad(0.3), rel=0.3) and pitch == pytest.approx(np.deg2rad(0.3), rel=0.3)

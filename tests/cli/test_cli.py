@@ -1,5 +1,6 @@
 """The command line: clean one-line errors, exit codes, no partial output files."""
 
+import numpy as np
 import yaml
 
 from posegen.cli import main
@@ -116,6 +117,25 @@ def test_simulate_then_calibrate(tmp_path, capsys):
     assert "training" in stdout and (out / "calibrated.urdf").exists()
     assert (out / "report.html").exists() and "report.html" in stdout
     assert "predicted held-out error, left" in stdout and "model offsets" in stdout
+
+
+def test_simulate_contact_noise_is_recorded_and_checked(tmp_path, capsys):
+    from tests.conftest import EXAMPLE_POOL
+
+    plain, noisy = tmp_path / "plain.yaml", tmp_path / "noisy.yaml"
+    assert run(["simulate", str(EXAMPLE_POOL), "--seed", "2", "-o", str(plain)], capsys)[0] == 0
+    argv = ["simulate", str(EXAMPLE_POOL), "--seed", "2", "--contact-noise-mm", "3", "--contact-noise-deg", "0.3"]
+    assert run([*argv, "-o", str(noisy)], capsys)[0] == 0
+    simulation = yaml.safe_load(noisy.read_text())["provenance"]["simulation"]
+    assert simulation["contact_noise_mm"] == 3.0 and simulation["contact_noise_deg"] == 0.3
+    assert "contact_noise_mm" not in yaml.safe_load(plain.read_text())["provenance"]["simulation"]
+    truth = {p.name: yaml.safe_load(p.with_name(p.stem + ".truth.yaml").read_text()) for p in (plain, noisy)}
+    assert truth["plain.yaml"]["parameters"] == truth["noisy.yaml"]["parameters"]  # the same robot and table
+    joints = [np.array([c["joints"] for c in yaml.safe_load(p.read_text())["contacts"]]) for p in (plain, noisy)]
+    assert 1e-4 < np.abs(joints[0] - joints[1]).max() < 0.1  # the joints carry the local planes
+    out = tmp_path / "bad.yaml"
+    err = assert_fails_cleanly(["simulate", str(EXAMPLE_POOL), "--contact-noise-mm", "-1", "-o", str(out)], out, capsys)
+    assert "--contact-noise-mm" in err
 
 
 def test_calibrate_real_csv(tmp_path, capsys, real_data):

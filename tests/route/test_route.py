@@ -6,6 +6,7 @@ import itertools
 import numpy as np
 import pytest
 
+from posegen.errors import InfeasibleError, InputError
 from posegen.io import sidecars_of
 from posegen.model import build_design
 from posegen.robot import SegmentType, read_route, route_arrays
@@ -224,3 +225,24 @@ def test_stored_points_are_the_planned_ones_to_float32(routed):
     assert np.array_equal(times, route.times)
     assert np.max(np.abs(positions - route.positions)) <= 2.5e-7
     assert np.max(np.abs(velocities - route.velocities)) <= 2e-6  # float32 and the 2^-20 rad/s grid
+
+
+def test_a_route_starts_and_ends_where_the_robot_stands(scene, example_pool, routed, tmp_path):
+    """The next batch of a session starts where the last one left the robot (here: above a contact)."""
+    route, _ = routed
+    approach = next(s for s in reversed(route.segments) if s.type == SegmentType.APPROACH)
+    standing = route.positions[approach.first]  # the standoff above the last contact: no start posture
+    assert np.abs(standing - start_posture(scene)).max() > 0.05
+    postures = [example_pool.postures[i] for i in ROWS[:2]]
+    later = plan_route(scene, postures, seed=0, from_posture=standing)
+    assert np.array_equal(later.positions[0], standing) and later.returns
+    assert np.array_equal(later.positions[-1], standing)  # and back there
+    assert sorted(later.visited) == [0, 1]
+    result = verify_route(scene, read_route(write(later, example_pool, ROWS[:2], tmp_path / "later.yaml")))
+    assert result.ok, [w for w in result.worst if w.violations]
+    with pytest.raises(InputError, match="joint angles"):
+        plan_route(scene, postures, seed=0, from_posture=standing[:-1])
+    fallen = standing.copy()
+    fallen[scene.joint_index("leg_left_4_joint")] += 0.6  # a knee bent: the sole leaves the floor
+    with pytest.raises(InfeasibleError, match="the posture given"):
+        plan_route(scene, postures, seed=0, from_posture=fallen)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import yaml
 
+from posegen.errors import InputError
 from posegen.model import Contacts
 from posegen.robot import CandidateConfig
 from posegen.select import follow_up, read_calibration_model
@@ -88,3 +89,22 @@ def test_point_postures_follow_up_flush_contacts(scene, point_scene, pool_and_gi
     before, after = point.height_std_mm["right"]
     assert after < 0.9 * before
     assert flush.height_std_mm["right"][1] < after  # 8 flush contacts (3 rows each) tell more than 8 points
+
+
+def test_excluded_postures_are_never_chosen(scene, example_pool):
+    """A session's follow-up on its whole pool: the postures it holds already are left out of the candidates."""
+    chains = [p.chain for p in example_pool.postures]
+    right = [i for i, c in enumerate(chains) if c == "right"]
+    measured = [i for i, c in enumerate(chains) if c == "left"][:30] + right[:8]
+    given = Contacts(example_pool.joints()[measured], tuple(chains[i] for i in measured), ("day",) * 38, ("",) * 38)
+    noise = (1e-3, np.deg2rad(0.1), np.deg2rad(0.1))
+    args = (scene, example_pool.joints(), chains, given, CANDIDATE, 10.0, noise)
+    free = follow_up(*args, 10, weakest="right")
+    excluded = [*measured, *free.rows[:3]]  # the measured ones, and the three best new ones (planned, say)
+    kept = follow_up(*args, 10, weakest="right", exclude=excluded)
+    assert len(set(kept.rows)) == 10 and not set(kept.rows) & set(excluded)  # free.rows[:3] were the best
+    assert kept.height_std_mm["right"][1] < 0.9 * kept.height_std_mm["right"][0]  # the others still help
+    left = len(chains) - len(excluded)
+    assert sorted(follow_up(*args, left, exclude=excluded).rows) == sorted(set(range(len(chains))) - set(excluded))
+    with pytest.raises(InputError, match="left to choose from"):
+        follow_up(*args, left + 1, exclude=excluded)

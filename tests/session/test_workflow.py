@@ -14,10 +14,11 @@ import pytest
 import yaml
 
 from posegen.cli import main
-from posegen.errors import InputError
+from posegen.errors import InfeasibleError, InputError
 from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
 from posegen.parallel import open_backend
-from posegen.robot import load_pool
+from posegen.robot import load_pool, read_route, route_arrays
+from posegen.route import route_plan_file
 from posegen.session import (
     INDEX_FILE,
     REHEARSAL_BAG,
@@ -31,6 +32,7 @@ from posegen.session import (
     start_session,
     write_index,
 )
+from posegen.session.batch import ROUTE_FILE, Plan, route_batch, select_next, standing_posture
 from tests.cli.test_cli import assert_one_line_error
 from tests.conftest import EXAMPLE_POOL
 
@@ -95,6 +97,49 @@ def test_the_rehearsal_plays_batches_for_the_weakest_chain(rehearsed):
     follow_up = yaml.safe_load((folder / "batch_002" / "followup.yaml").read_text())["figures"]
     assert follow_up["weakest_chain"] == CHAIN and follow_up["given_contacts"] == first.recording.contacts
     assert not index.done  # 1 mm is out of reach of the URDF alone on a robot whose hips give way
+
+
+def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
+    folder, _ = rehearsed
+    index = read_index(folder)
+    rows = [r for b in index.batches for r in b.pool_rows]
+    assert len(rows) == len(set(rows))  # every batch new postures
+    follow_up = yaml.safe_load((folder / "batch_003" / "followup.yaml").read_text())["figures"]
+    assert follow_up["excluded_postures"] == len(index.batches[0].pool_rows) + len(index.batches[1].pool_rows)
+    pool = load_pool(index.pool)
+    plan = Plan(
+        given=tuple(str(folder / b.folder / "measurements.yaml") for b in index.batches[:2]),
+        calibration=str(folder / "batch_002" / "calibration" / "calibration.yaml"),
+        weakest=CHAIN,
+        planned=tuple(range(2, len(pool.postures))),
+    )
+    select_next(index.pool, pool, tmp_path, plan, SETTINGS)  # two postures left: the batch takes both
+    selection = yaml.safe_load((tmp_path / "selection.yaml").read_text())
+    assert sorted(p["pool_id"] for p in selection["postures"]) == [0, 1]
+    with pytest.raises(InfeasibleError, match="every posture of the pool is in the session already"):
+        select_next(
+            index.pool, pool, tmp_path, dataclasses.replace(plan, planned=tuple(range(len(pool.postures)))), SETTINGS
+        )
+
+
+def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, tmp_path):
+    assert standing_posture(started / "batch_001" / ROUTE_FILE) is None  # back at the start posture
+    data = read_route(str(started / "batch_001" / ROUTE_FILE))
+    positions = route_arrays(data, "route")[1]
+    approach = next(s for s in reversed(data["segments"]) if s["type"] == "approach")
+    standoff = positions[int(approach["first_point"])]  # above the last contact
+    pool = load_pool(read_index(started).pool).to_dict()
+    two = tmp_path / "two.yaml"
+    write_yaml(two, {**pool, "postures": pool["postures"][:2]})
+    for number in (1, 2):
+        (tmp_path / "session" / f"batch_00{number}").mkdir(parents=True)
+    shutil.copy(two, tmp_path / "session" / "batch_002" / "selection.yaml")
+    before = tmp_path / "session" / "batch_001" / ROUTE_FILE  # a batch that left the robot above a contact
+    route_plan_file(str(two), str(before), 0, None, workers=backend, from_posture=standoff)
+    assert np.array_equal(standing_posture(before), standoff)
+    batch = route_batch(tmp_path / "session", 2, str(two), SETTINGS, backend)
+    after = route_arrays(read_route(str(tmp_path / "session" / "batch_002" / ROUTE_FILE)), "route")[1]
+    assert np.array_equal(after[0], standoff) and sorted(batch.pool_rows) == [0, 1]
 
 
 def test_the_stopping_figure_is_the_one_calibrate_reports(rehearsed):
@@ -212,7 +257,8 @@ def test_a_batch_played_in_part_plans_its_missing_postures_again(started, rehear
     rows = [p["pool_id"] for p in selection["postures"]]
     assert rows[: len(recording.missing)] == list(recording.missing)  # planned again, first
     follow_up = [p["pool_id"] for p in yaml.safe_load((copy / "batch_002" / "followup.yaml").read_text())["postures"]]
-    assert rows[len(recording.missing) :] == [r for r in follow_up if r not in recording.missing]
+    assert rows[len(recording.missing) :] == follow_up and len(follow_up) == SETTINGS.batch_postures  # all new
+    assert not set(follow_up) & set(read_index(started).batches[0].pool_rows)
     assert sorted(added.next_batch.pool_rows) == sorted(rows)  # routed (in the route's own order)
     assert np.isfinite(list(added.batch.assessment.predicted_z_mm.values())).all()
 
