@@ -205,7 +205,7 @@ class RecordedBag:
         except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:  # JSON too
             raise InputError(f"{self.path}: not a rosbag2 bag (metadata.yaml: {reason(exc)})") from exc
         if self.storage not in STORAGES:
-            raise InputError(f"{self.path}: unknown storage plugin '{self.storage}'; valid: {', '.join(STORAGES)}")
+            raise InputError(f"{self.path}: unknown storage plugin {self.storage!r}; valid: {', '.join(STORAGES)}")
         missing = [f.name for f in self.files if not f.is_file()]
         if missing or not self.files:
             raise InputError(f"{self.path}: storage file missing: {', '.join(missing) or 'none listed'}")

@@ -429,5 +429,14 @@ def test_recorded_bag_reader_on_damaged_files(files):
         assert wrench.forces.shape == wrench.torques.shape == (len(wrench.times_s), 3)
 
 
+def test_a_storage_name_with_a_line_break_is_refused_in_one_line():
+    """Found by ``make fuzz``: a damaged metadata.yaml whose storage plugin is a line break."""
+    files = dict(RECORDED_BAG)
+    text = files["metadata.yaml"].decode()
+    files["metadata.yaml"] = text.replace("storage_identifier: mcap", 'storage_identifier: "\\n"').encode()
+    with folder_of(files) as folder:
+        assert read_or_refuse(RecordedBag, folder) is None  # refused, in one line (read_or_refuse checks it)
+
+
 # --- readers of the other open issues: add them here as they land --------------------------------
 # One test each, a mutated or damaged valid file through the public reader, as above.
