@@ -99,27 +99,12 @@ def _deliverables(report: dict[str, Any]) -> str:
             continue
         files = ", ".join(entry.get("files") or ["the URDF as it is (not written)"])
         model = f"{entry.get('candidate', 'nominal URDF')}, prior x{entry.get('prior_scale', '-')}"
+        head = (files, entry.get("load_with", "for comparison"), model)
         for chain, error in (entry.get("predicted_error") or {}).items():
-            rows.append(
-                (
-                    files,
-                    entry.get("load_with", "for comparison"),
-                    model,
-                    f"{chain}: CV predicted",
-                    _components(error.get("mean_abs") or {}),
-                )
-            )
+            rows.append((*head, f"{chain}: CV predicted", _components(error.get("mean_abs") or {})))
         held = (entry.get("held_out_training_plane") or {}).get("all")
         if held:
-            rows.append(
-                (
-                    files,
-                    entry.get("load_with", ""),
-                    model,
-                    f"held-out ({held.get('contacts')} contacts)",
-                    _components(held.get("mean_abs") or {}),
-                )
-            )
+            rows.append((*head, f"held-out ({held.get('contacts')} contacts)", _components(held.get("mean_abs") or {})))
     note = f'<p class="muted">{_e(section.get("rule", ""))}; mean absolute errors, plane from training</p>'
     return table(("files", "load with", "model", "error", "height / roll / pitch"), rows, names=3) + note
 
