@@ -94,7 +94,6 @@ def write_deliverable(calibration: Calibration, deliverable: Deliverable, out_di
         if deliverable.nominal:
             theta = calibration.model.contact.nominal()  # the URDF as it is: the config's frames as they are
         config = calibrated_config(calibration.model.contact, theta, folder / URDF_FILE)
-        config["robot"]["source"]["urdf"] = URDF_FILE  # beside it: the folder is written in staging, and can move
         write_atomic(folder / CONFIG_FILE, dump_yaml(config))
     return urdf
 

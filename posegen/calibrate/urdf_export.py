@@ -148,7 +148,9 @@ def calibrated_config(model: ContactModel, theta: FloatArray, urdf_path: Path) -
     Args:
         model: The measurement model the parameters belong to.
         theta: (p,) identified parameters.
-        urdf_path: Where the calibrated URDF (:func:`calibrated_urdf`) is written.
+        urdf_path: Where the calibrated URDF (:func:`calibrated_urdf`) is written; the
+            config is written beside it and names it relatively (the folder can move, or
+            be written in a staging folder and swapped in).
 
     Raises:
         ConfigError: A chain's layout cannot carry its placements (the frame is named).
@@ -158,7 +160,7 @@ def calibrated_config(model: ContactModel, theta: FloatArray, urdf_path: Path) -
     export = _export(scene.files.urdf.read_text(), model, theta)
     config = dataclasses.replace(scene.config, frames=export.frames).to_dict()
     config["robot"]["source"] = {
-        "urdf": str(urdf_path.resolve()),
+        "urdf": urdf_path.name,  # relative: resolved against the config's own folder, where it is written
         **({"srdf": str(scene.files.srdf)} if scene.files.srdf is not None else {}),  # a robot may have none
         "package_dirs": list(scene.files.package_dirs),
     }
