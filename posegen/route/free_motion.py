@@ -41,6 +41,7 @@ OMPL_SEED = 1  # OMPL's first seed in every process (0 means "from the clock" to
 SEARCH_STEP_RAD = 0.05  # OMPL's validity-checking resolution while searching
 SIMPLIFY_STEPS = 100  # vertex-reduction attempts when shortening OMPL's path
 LARGER_BUDGET = 4  # the last attempt's budget, in multiples of the configured one
+POLLS_PER_CHECK = 10  # OMPL may poll its stop condition without checking a state (waiting for a goal): bounded too
 STREAMS = 1 << 12  # random streams a call may choose from
 VIA_CANDIDATES = 2  # via paths returned (the first that work, in ladder order)
 RAISE_FRACTIONS = (0.5, 1.0)  # of the lifts, added to the midpoint of a free motion's ends
@@ -251,10 +252,18 @@ def _plan_ompl(
     s0, s1 = state_space.allocState(), state_space.allocState()
     for i, (u, v) in enumerate(zip(ends[0][0], ends[1][0], strict=True)):
         s0[i], s1[i] = float(u), float(v)
+    if not (valid(s0) and valid(s1)):  # OMPL would wait for a valid goal without checking anything: forever
+        LOG.info("an end is not valid in the stance coordinates: no OMPL search")
+        return None
     setup.setStartAndGoalStates(s0, s1)
     setup.setPlanner(og.RRTConnect(info))
-    # a budget of state checks, not of seconds: the same seed gives the same path on any machine
-    solved = setup.solve(ob.PlannerTerminationCondition(lambda: checks[0] >= budget))
+    polls = [0]
+
+    def spent() -> bool:  # a budget of state checks, not of seconds: the same seed, the same path on any machine
+        polls[0] += 1
+        return checks[0] >= budget or polls[0] >= POLLS_PER_CHECK * budget
+
+    solved = setup.solve(ob.PlannerTerminationCondition(spent))
     if not solved or not setup.haveExactSolutionPath():
         LOG.info("OMPL found no path in %d state checks", budget)
         return None

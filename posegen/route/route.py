@@ -281,7 +281,10 @@ class _Routing:
                 self.skipped.append((node, str(lost[node])))
                 LOG.info("posture %d skipped: %s", node, lost[node])
         if not self.sequence:
-            raise InfeasibleError(f"no posture could be reached ({len(self.skipped)} skipped)")
+            node, reason = self.skipped[0]
+            raise InfeasibleError(
+                f"no posture could be reached ({len(self.skipped)} skipped; posture {node}: {reason})"
+            )
 
     def insert(self, node: int) -> bool:
         """Try ``node`` at the cheapest other places in the order; True if placed."""

@@ -1,5 +1,7 @@
 """Free motions: every waypoint checked, OMPL's answer independent of what ran before it, the fastest via path kept."""
 
+import threading
+
 import numpy as np
 import pytest
 
@@ -43,6 +45,20 @@ def test_ompl_gives_the_same_path_whatever_ran_before_it_in_the_process(ends):
     assert len(first[0]) != len(other[0]) or any(
         not np.array_equal(x, y) for x, y in zip(first[0], other[0], strict=False)
     )
+
+
+def test_ompl_stops_when_its_goal_is_invalid(example_pool, ends):
+    """RRTConnect waits for a valid goal without checking a state: the search must still end (it did not)."""
+    space, (a, _) = ends
+    touching = np.array(example_pool.postures[9].joints)  # the hand on the table: not a free state
+    assert not space.is_valid(touching, None)
+    result: list[object] = []
+    search = threading.Thread(
+        target=lambda: result.append(_plan_ompl(space, a.approach[0], touching, 200, stream=0)), daemon=True
+    )
+    search.start()
+    search.join(timeout=60)
+    assert result == [None]
 
 
 def test_every_waypoint_is_valid_and_steps_are_small(scene, ends):
