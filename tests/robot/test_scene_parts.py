@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 from posegen.errors import ConfigError
-from posegen.robot import parse_config, polygon_margin
+from posegen.robot import Scene, parse_config, polygon_margin
 from posegen.robot.scene_parts import (
     actuated_joints,
     apply_additions,
@@ -167,3 +167,19 @@ def test_table_pose_and_spots_follow_the_table_config(config):
     for spot in spots:
         low_high = {c.name: c.spot_y_range_m for c in config.chains}
         assert set(spot.chains) == {n for n, (lo, hi) in low_high.items() if lo <= spot.xy_table_m[1] <= hi}
+
+
+def test_the_steps_compose_into_the_scene(scene, config):
+    built = Scene.from_config(config)
+    description = load_description(config)
+    check_names(description.model, config)
+    urdf_xml, model = apply_additions(description, config)
+    assert urdf_xml == built.urdf_xml == scene.urdf_xml
+    joints = actuated_joints(model, config)
+    assert joints.names == built.joint_names and np.array_equal(joints.velocity_limit, built.velocity_limit)
+    read_srdf_states(model, description.files)
+    reference = reference_configuration(model, config.stance, joints)
+    assert np.array_equal(reference[joints.q_index], built.reference)
+    soles, polygon = stand(model, config.stance, reference)
+    assert np.array_equal(polygon, built.support_polygon) and soles.keys() == built.sole_poses.keys()
+    assert table_spots(config.table, config.chains) == built.spots
