@@ -1,7 +1,7 @@
 """The whole pipeline's artefacts, at small sizes, are byte-identical to a committed manifest.
 
 A refactoring must not change a byte of what posegen writes: this runs every stage from the
-command line (pool, select, route, check, export, simulate, measure, calibrate, view) with the
+command line (robot init, pool, select, route, check, export, simulate, measure, calibrate, view) with the
 version field held fixed, and compares the SHA-256 of every file written against
 ``tests/data/artefact_manifest.json``. A deliberate change of a format regenerates the manifest:
 
@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from example_robot_data import robots_loader
 
 import posegen.io.artefact
 from posegen.cli.main import main
@@ -27,7 +28,19 @@ VERSION = "0.0.0+manifest"  # held fixed: the installed version must not change 
 CONFIG = str(ROOT / "configs" / "talos_table.yaml")
 ROBOT = ["--seed", "7", "--error-mm", "2", "--error-deg", "0.5", "--noise-deg", "0.005"]
 
+
+def example_urdf(subpath: str) -> str:
+    """A URDF file of example-robot-data (drafted from its path: no SRDF, no loader)."""
+    return os.path.normpath(Path(robots_loader.getModelPath(subpath)) / subpath)
+
+
+ROMEO = example_urdf("romeo_description/urdf/romeo_small.urdf")  # legs bent, capsules added, point contacts
+ICUB = example_urdf("icub_description/robots/icub_reduced.urdf")  # soles declared, flush contacts, speeds guessed
+
 PIPELINE = (  # (argv, expected exit code); paths relative to the run's folder
+    (["robot", "init", "talos", "--samples", "40", "-o", "talos_draft.yaml"], 0),  # its SRDF's state
+    (["robot", "init", ROMEO, "--samples", "30", "-o", "romeo_draft.yaml"], 0),
+    (["robot", "init", ICUB, "--samples", "30", "--seed", "2", "-o", "icub_draft.yaml"], 0),
     (["pool", "--config", CONFIG, "--n", "80", "--seed", "3", "--workers", "1", "-o", "pool.yaml"], 0),
     (["select", "pool.yaml", "--k", "40", "-o", "selected.yaml"], 0),
     (["route", "selected.yaml", "--seed", "0", "--workers", "1", "--csv", "-o", "route.yaml"], 0),

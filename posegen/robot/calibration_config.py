@@ -158,16 +158,7 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
     unknown = set(data) - set(valid)
     if unknown:
         raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: {', '.join(valid)}")
-    prior_data = data.get("prior", {})
-    if not isinstance(prior_data, dict):
-        raise ConfigError(f"{where}.prior: expected a mapping kind -> sigma")
-    prior_fields = [f.name for f in dataclasses.fields(PriorConfig)]
-    unknown = set(prior_data) - set(prior_fields)
-    if unknown:
-        raise ConfigError(f"{where}.prior: unknown keys {sorted(unknown)}; valid keys: {', '.join(prior_fields)}")
-    prior = PriorConfig(
-        **{k: _number(prior_data, k, getattr(defaults.prior, k), f"{where}.prior") for k in prior_fields}
-    )
+    prior = _prior(data.get("prior", {}), defaults.prior, f"{where}.prior")
     scales = data.get("prior_scales", list(defaults.prior_scales))
     if (
         not isinstance(scales, list)
@@ -180,20 +171,11 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         isinstance(v, list) and v and all(isinstance(j, str) for j in v) for v in groups.values()
     ):
         raise ConfigError(f"{where}.compliance: expected a mapping group -> list of joint names")
-    candidates_data = data.get("candidates")
-    if candidates_data is None:
-        candidates = defaults.candidates
-    elif isinstance(candidates_data, dict) and candidates_data:
-        candidates = tuple(
-            parse_candidate(str(n), c, f"{where}.candidates.{n}", groups) for n, c in candidates_data.items()
-        )
-    else:
-        raise ConfigError(f"{where}.candidates: expected a mapping name -> {{fit, floor, compliance}}")
     return CalibrationConfig(
         prior=prior,
         prior_scales=tuple(float(s) for s in sorted(scales)),
         compliance={str(g): tuple(v) for g, v in groups.items()},
-        candidates=candidates,
+        candidates=_candidates(data.get("candidates"), defaults.candidates, groups, f"{where}.candidates"),
         folds=_integer(data, "folds", defaults.folds, where, 2),
         fold_seeds=_integer(data, "fold_seeds", defaults.fold_seeds, where, 1),
         fold_iterations=_integer(data, "fold_iterations", defaults.fold_iterations, where, 1),
@@ -205,6 +187,28 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         plausible_mm=_number(data, "plausible_mm", defaults.plausible_mm, where),
         plausible_deg=_number(data, "plausible_deg", defaults.plausible_deg, where),
     )
+
+
+def _prior(data: Any, defaults: PriorConfig, where: str) -> PriorConfig:
+    """The ``prior`` mapping kind -> sigma; absent kinds keep ``defaults``."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where}: expected a mapping kind -> sigma")
+    fields = [f.name for f in dataclasses.fields(PriorConfig)]
+    unknown = set(data) - set(fields)
+    if unknown:
+        raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: {', '.join(fields)}")
+    return PriorConfig(**{k: _number(data, k, getattr(defaults, k), where) for k in fields})
+
+
+def _candidates(
+    data: Any, defaults: tuple[CandidateConfig, ...], groups: dict[str, list[str]], where: str
+) -> tuple[CandidateConfig, ...]:
+    """The ``candidates`` mapping name -> {fit, floor, compliance}; ``defaults`` when absent."""
+    if data is None:
+        return defaults
+    if not isinstance(data, dict) or not data:
+        raise ConfigError(f"{where}: expected a mapping name -> {{fit, floor, compliance}}")
+    return tuple(parse_candidate(str(n), c, f"{where}.{n}", groups) for n, c in data.items())
 
 
 def calibration_to_dict(config: CalibrationConfig) -> dict[str, Any]:

@@ -84,11 +84,7 @@ def survey_pairs(
         np.logical_or.at(out, index, hit)
         return out
 
-    reasons: dict[tuple[str, str], PairReason] = {}
-    joint_of = _geometry_joints(model, geom)
-    for a, b in link_pairs:
-        if _adjacent(model, joint_of[a], joint_of[b], set(joint_of.values())):
-            reasons[(a, b)] = PairReason.ADJACENT
+    reasons = _adjacent_pairs(model, geom, link_pairs)
     for k in np.flatnonzero(touching(reference, margin_m if rest_margin_m is None else rest_margin_m)):
         reasons.setdefault(link_pairs[k], PairReason.DEFAULT)
     rng = np.random.default_rng(seed)
@@ -110,6 +106,17 @@ def survey_pairs(
 
 def _key(a: str, b: str) -> tuple[str, str]:
     return (a, b) if a <= b else (b, a)
+
+
+def _adjacent_pairs(
+    model: pin.Model, geom: pin.GeometryModel, link_pairs: list[tuple[str, str]]
+) -> dict[tuple[str, str], PairReason]:
+    """The link pairs joined by a joint, or through links without collision geometry."""
+    joint_of = _geometry_joints(model, geom)
+    with_geometry = set(joint_of.values())
+    return {
+        (a, b): PairReason.ADJACENT for a, b in link_pairs if _adjacent(model, joint_of[a], joint_of[b], with_geometry)
+    }
 
 
 def _geometry_joints(model: pin.Model, geom: pin.GeometryModel) -> dict[str, int]:

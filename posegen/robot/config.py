@@ -203,16 +203,50 @@ def _plain(value: Any) -> Any:
 def parse_config(data: Any, source_path: str = "") -> Config:
     """Build a :class:`Config` from plain data (a parsed YAML document).
 
+    Each section is read by its own step (:func:`read_source`, :func:`read_stance`,
+    :func:`read_chains`, :func:`read_table`, :func:`read_margins`, :func:`read_sampling`, ...).
+
     Raises:
         ConfigError: A field is missing, of the wrong type or out of range.
 
     """
     top = Reader(data, "")
     robot = top.sub("robot")
-    src = robot.sub("source")
+    source = read_source(robot.sub("source"), source_path)
+    robot.keys_within(("source", "locked_joints", "frames", "velocity_limits_rad_s", "collision"))
+    locked = robot.raw("locked_joints", {})
+    if not isinstance(locked, dict) or not all(is_finite_number(v) for v in locked.values()):
+        raise ConfigError("robot.locked_joints: expected a mapping joint name -> angle (rad)")
+    stance = read_stance(top.sub("stance"))
+    chains = read_chains(top)
+    return Config(
+        robot=source,
+        locked_joints={str(k): float(v) for k, v in locked.items()},
+        stance=stance,
+        chains=chains,
+        table=read_table(top.sub("table"), chains),
+        margins=read_margins(top.sub("margins")),
+        sampling=read_sampling(top.sub("sampling")),
+        route=_section(top, "route", RouteConfig()),
+        recording=_section(top, "recording", RecordingConfig()),
+        calibration=parse_calibration(top.raw("calibration", None)),
+        source_path=source_path,
+        frames=read_frames(robot),
+        velocity_limits=read_velocity_limits(robot),
+        collision=read_collision(robot),
+    )
+
+
+def read_source(src: Reader, source_path: str = "") -> RobotSource:
+    """``robot.source``; relative paths are made absolute from the config file's folder (else the working one).
+
+    Raises:
+        ConfigError: Neither or both of example_robot_data and urdf, or a path with a NUL.
+
+    """
     base = Path(source_path).parent if source_path else Path.cwd()
 
-    def absolute(value: str | None) -> str | None:  # relative paths are relative to the config file
+    def absolute(value: str | None) -> str | None:
         if value is not None and "\0" in value:
             raise ConfigError(f"robot.source: {value!r} is not a valid path")
         if value is None or value.startswith(PACKAGE_URI):  # package:// is resolved with the package dirs
@@ -227,16 +261,20 @@ def parse_config(data: Any, source_path: str = "") -> Config:
     )
     if (source.example_robot_data is None) == (source.urdf is None):
         raise ConfigError("robot.source: give either example_robot_data or urdf")
-    robot.keys_within(("source", "locked_joints", "frames", "velocity_limits_rad_s", "collision"))
-    locked = robot.raw("locked_joints", {})
-    if not isinstance(locked, dict) or not all(is_finite_number(v) for v in locked.values()):
-        raise ConfigError("robot.locked_joints: expected a mapping joint name -> angle (rad)")
+    return source
 
-    st = top.sub("stance")
+
+def read_stance(st: Reader) -> StanceConfig:
+    """The ``stance`` section.
+
+    Raises:
+        ConfigError: Not exactly two sole frames, or a malformed field.
+
+    """
     soles = st.texts("sole_frames")
     if len(soles) != 2:
         raise ConfigError("stance.sole_frames: expected exactly two sole frames")
-    stance = StanceConfig(
+    return StanceConfig(
         reference_posture=str(st.raw("reference_posture", "") or ""),
         sole_frames=(soles[0], soles[1]),
         foot_x_m=st.interval("foot_x_m"),
@@ -246,12 +284,27 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         root_rpy_deg=_root_rpy(st),
     )
 
+
+def read_chains(top: Reader) -> tuple[ChainConfig, ...]:
+    """The ``chains`` section, in the file's order.
+
+    Raises:
+        ConfigError: No chains, or a malformed chain.
+
+    """
     chains_raw = top.raw("chains")
     if not isinstance(chains_raw, dict) or not chains_raw:
         raise ConfigError("chains: expected a mapping chain name -> chain settings")
-    chains = [read_chain(top.sub("chains").sub(str(name)), str(name)) for name in chains_raw]
+    return tuple(read_chain(top.sub("chains").sub(str(name)), str(name)) for name in chains_raw)
 
-    tb = top.sub("table")
+
+def read_table(tb: Reader, chains: tuple[ChainConfig, ...]) -> TableConfig:
+    """The ``table`` section: every spot on the table and served by a chain.
+
+    Raises:
+        ConfigError: A size not positive, a spot off the table or one no chain's ``spot_y_range_m`` covers.
+
+    """
     size = tb.numbers("size_m", 3)
     if min(size) <= 0:
         raise ConfigError("table.size_m: every dimension must be positive")
@@ -270,37 +323,25 @@ def parse_config(data: Any, source_path: str = "") -> Config:
     for spot_y in table.spots_y_m:
         if not any(c.spot_y_range_m[0] <= spot_y <= c.spot_y_range_m[1] for c in chains):
             raise ConfigError(f"table.spots_y_m: no chain's spot_y_range_m covers y = {spot_y} m")
+    return table
 
-    mg = top.sub("margins")
-    margins = MarginConfig(
+
+def read_margins(mg: Reader) -> MarginConfig:
+    """The ``margins`` section (every margin >= 0)."""
+    return MarginConfig(
         com_m=mg.number("com_m", minimum=0.0),
         collision_m=mg.number("collision_m", minimum=0.0),
         joint_limit_rad=mg.number("joint_limit_rad", minimum=0.0),
     )
-    sp = top.sub("sampling")
-    sampling = SamplingConfig(
+
+
+def read_sampling(sp: Reader) -> SamplingConfig:
+    """The ``sampling`` section."""
+    return SamplingConfig(
         soft_iterations=sp.integer("soft_iterations"),
         hard_iterations=sp.integer("hard_iterations"),
         spot_tolerance_m=sp.number("spot_tolerance_m", minimum=0.0),
         chunk_size=sp.integer("chunk_size", maximum=10_000),
-    )
-    route = _section(top, "route", RouteConfig())
-    recording = _section(top, "recording", RecordingConfig())
-    return Config(
-        robot=source,
-        locked_joints={str(k): float(v) for k, v in locked.items()},
-        stance=stance,
-        chains=tuple(chains),
-        table=table,
-        margins=margins,
-        sampling=sampling,
-        route=route,
-        recording=recording,
-        calibration=parse_calibration(top.raw("calibration", None)),
-        source_path=source_path,
-        frames=read_frames(robot),
-        velocity_limits=read_velocity_limits(robot),
-        collision=read_collision(robot),
     )
 
 

@@ -5,11 +5,11 @@ names, and records every guess with how to check it (:attr:`Draft.checks`):
 
 * up axis, forward, soles, footprint and the reference posture:
   :mod:`posegen.robot.draft_stance` (no SRDF needed: a standing posture with the knees
-  bent is found when none gives one);
+  bent is found when none gives one), in the steps of :mod:`posegen.robot.draft_body`;
 * arms: the two longest chains of the upper body, up to where they branch into light
   parts only (fingers: under 1 % of the robot's mass), which are locked, like every joint
-  off the legs and arms (head, neck). A gripper joint that ends a chain stays in it:
-  lock it by hand;
+  off the legs and arms (head, neck) (:mod:`posegen.robot.draft_body`). A gripper joint
+  that ends a chain stays in it: lock it by hand;
 * contact: :func:`posegen.robot.draft_geometry.hand_contact` (a flat face pointing down,
   else a point at the hand's tip);
 * collision geometry for the links that move without any, and capsules for links whose
@@ -26,50 +26,30 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from posegen.errors import ConfigError
 from posegen.robot.additions import CollisionConfig, FrameConfig, Shape
 from posegen.robot.collision_geometry import add_self_pairs, robot_geometry
 from posegen.robot.collision_matrix import PairSurvey, survey_pairs
 from posegen.robot.config import RobotSource
+from posegen.robot.draft_body import Body, study_body
 from posegen.robot.draft_geometry import (
     Geometry,
     HandContact,
     below_floor,
     hand_contact,
     link_of_joint,
-    load_geometry,
     misplaced_geometry,
     missing_geometry,
     skeleton,
     vertices,
 )
-from posegen.robot.draft_limits import (
-    JOINT_LIMIT_MARGIN_RAD,
-    limits,
-    near_limit,
-    outside_limits,
-    velocity_placeholders,
-)
+from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, velocity_placeholders
 from posegen.robot.draft_source import DraftSource, load_draft_source
-from posegen.robot.draft_stance import (
-    ANKLE_HEIGHT,
-    Sole,
-    bend_legs,
-    find_sole,
-    find_up,
-    floor_height,
-    foot_box,
-    foot_joint,
-    sole_pose,
-)
-from posegen.robot.draft_table import arm_length, place_table
-from posegen.robot.geometry import FloatArray, yaw_rotation
+from posegen.robot.draft_stance import Sole, floor_height, foot_box
+from posegen.robot.draft_table import Table, arm_length, place_table
+from posegen.robot.geometry import FloatArray
 
-LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
-FLOOR_TOL_M = 0.02  # a branch whose lowest frame is this close to the lowest one reaches the floor
 COLLISION_MARGIN_M = 0.005
 REST_MARGIN_M = 0.01  # pairs this close at the reference touch at rest (meshes that nearly overlap there)
-LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
 
 
 @dataclass(frozen=True)
@@ -127,135 +107,87 @@ def draft_robot(
 ) -> Draft:
     """Study a humanoid (an example-robot-data name or a URDF file) and draft its config.
 
+    The steps: :func:`~posegen.robot.draft_body.study_body` (stance, legs, arms, locks),
+    :func:`collision_additions`, :func:`find_hands`, velocity placeholders, :func:`table_for`
+    and the collision pairs to disable (:func:`~posegen.robot.collision_matrix.survey_pairs`).
+
     Raises:
         ConfigError: Unknown robot, a description that does not load, or a structure that
             is not two legs and two arms (the file and the element named).
 
     """
     src = load_draft_source(robot, srdf, package_dirs)
-    model = src.model
-    checks: list[str] = []
-    notes: list[str] = []
-    states: dict[str, FloatArray] = {}
-    if src.files.srdf is not None:
-        pin.loadReferenceConfigurations(model, str(src.files.srdf), False)
-        states = {str(e.key()): np.array(e.data()) for e in model.referenceConfigurations}
-    state = next(iter(states), "")
-    outside = outside_limits(model, states[state]) if state else []
-    if outside:
-        checks.append(
-            f"the SRDF's state '{state}' puts {', '.join(outside[:3])} outside the URDF's limits: "
-            "the draft finds its own reference posture"
-        )
-        state = ""
-    q = states[state].copy() if state else pin.neutral(model)
-    children = {j: [c for c in range(2, model.njoints) if model.parents[c] == j] for j in range(model.njoints)}
-
-    def subtree(j: int) -> list[int]:
-        out = [j]
-        for c in children[j]:
-            out += subtree(c)
-        return out
-
-    def mass(joints: list[int]) -> float:
-        return float(sum(model.inertias[j].mass for j in joints))
-
-    root, up = find_up(model, q, children[1], subtree, src.label)
-    q[:7] = pin.SE3ToXYZQUAT(root)
-    if up != "+z":
-        checks.append(f"the model's up axis is its root's {up} axis: the root is turned by stance.root_rpy_deg")
+    model, body = src.model, study_body(src)
     data = model.createData()
-    pin.framesForwardKinematics(model, data, q)
-    forward = _forward(root)
-    heading = pin.SE3(yaw_rotation(float(np.arctan2(forward[1], forward[0]))), np.zeros(3))
-    left = np.cross([0.0, 0.0, 1.0], forward)
-    floor = min(float(data.oMi[j].translation[2]) for j in range(1, model.njoints))
-    lowest = {b: min(float(data.oMi[j].translation[2]) for j in subtree(b)) for b in children[1]}
-    legs = sorted((b for b in children[1] if lowest[b] < floor + FLOOR_TOL_M), key=lambda b: -_side(data, b, left))
-    if len(legs) != 2:
-        raise ConfigError(f"{src.label}: expected two legs reaching the floor, found {len(legs)}")
-    geometry = load_geometry(model, src.text, src.files.package_dirs)
-    feet = [foot_joint(model, b, children, subtree) for b in legs]
-    leg_paths = [_path(model, b, f) for b, f in zip(legs, feet, strict=True)]
-    leg_length = float(np.linalg.norm(data.oMi[legs[0]].translation - data.oMi[feet[0]].translation))
-    soles = [
-        find_sole(model, data, geometry, side, f, leg_length, heading)
-        for side, f in zip(("left", "right"), feet, strict=True)
-    ]
-    for sole in soles:
-        if not sole.from_geometry:
-            checks.append(
-                f"{sole.foot_link} has no geometry: the sole '{sole.frame}' (robot.frames) is put "
-                f"{ANKLE_HEIGHT:.0%} of the leg's length below the ankle and the footprint (stance.foot_x_m, "
-                "foot_y_m) is a guess from the leg's length: measure the foot"
-            )
-        elif sole.declared is not None:
-            checks.append(f"sole '{sole.frame}' declared under the ankle, on the lowest vertices of {sole.foot_link}")
-    reference_joints: dict[str, float] = {}
-    limit_margin = JOINT_LIMIT_MARGIN_RAD
-    if not state:
-        sole_world = [sole_pose(model, data, s) for s in soles]
-        bent = bend_legs(model, q, leg_paths, sole_world, forward, leg_length)
-        if bent is None:
-            checks.append("the legs could not be bent within their limits: the reference stands with straight legs")
-            tight = [str(model.names[j]) for path in leg_paths for j in path if near_limit(model, q, j)]
-            if tight:
-                limit_margin = 0.0
-                checks.append(
-                    f"straight, {', '.join(tight)} sit at their limits (the URDF's limits forbid a bent stance): "
-                    "margins.joint_limit_rad is 0; check the URDF's limits"
-                )
-        else:
-            q = bent
-            reference_joints = {
-                str(model.names[j]): round(float(q[model.joints[j].idx_q]), 4) for path in leg_paths for j in path
-            }
-            checks.append(
-                "no SRDF posture: the reference (stance.reference_joints) bends the knees, soles flat, CoM over the "
-                "feet; check it with `posegen view` on a pool"
-            )
-        pin.framesForwardKinematics(model, data, q)
-    paths: list[list[int]] = []
-    total = mass(list(range(1, model.njoints)))
-    for branch in children[1]:
-        if branch not in legs:
-            _arm_paths(branch, [], children, subtree, mass, total, paths)
-    paths.sort(key=len, reverse=True)
-    if len(paths) < 2 or len(paths[1]) < 3:
-        found = ", ".join(f"'{model.names[p[-1]]}'" for p in paths) or "none"
-        upper = ", ".join(f"'{model.names[b]}'" for b in children[1] if b not in legs) or "none"
-        raise ConfigError(
-            f"{src.label}: no two arms: the upper body (from joint {upper}) has the chains ending at {found}"
-        )
-    arms = sorted(paths[:2], key=lambda p: -float(data.oMi[p[-1]].translation @ left))
-    kept = {j for path in leg_paths for j in path} | {j for p in arms for j in p}
-    locked = {
-        str(model.names[j]): float(np.clip(q[model.joints[j].idx_q], *limits(model, j)))
-        for j in range(2, model.njoints)
-        if model.joints[j].nq == 1 and j not in kept
-    }
-    for name, value in locked.items():
-        q[model.joints[model.getJointId(name)].idx_q] = value
-    legs_joints = {j for path in leg_paths for j in path}
-    for j in sorted(kept - legs_joints):  # free joints off the legs: clear of their limits
-        low, high = limits(model, j)
-        i = model.joints[j].idx_q
-        inside = float(np.clip(q[i], low + LIMIT_CLEARANCE_RAD, high - LIMIT_CLEARANCE_RAD))
-        if low + LIMIT_CLEARANCE_RAD <= high - LIMIT_CLEARANCE_RAD and inside != q[i]:
-            q[i] = inside
-            reference_joints[str(model.names[j])] = round(inside, 4)
-    pin.framesForwardKinematics(model, data, q)
-    bare_feet = [s for s in soles if not s.from_geometry]
-    covered, added = missing_geometry(
-        model, geometry, [j for j in range(1, model.njoints) if j not in {s.foot_joint for s in bare_feet}]
+    pin.framesForwardKinematics(model, data, body.reference)
+    added, checks = collision_additions(model, data, body)
+    geometry = _with_shapes(body.geometry, model, src, added.shapes)
+    chains, found = find_hands(model, data, geometry, body)
+    speeds, urdf_speed = velocity_placeholders(model, body.kept)
+    if speeds:
+        found += (f"{len(speeds)} joints have no plausible URDF velocity limit: placeholders of 1 rad/s",)
+    table, reach = table_for(model, data, geometry, body, chains[0])
+    found += (f"the table is a guess from the arm's reach ({reach:.2f} m): put it where yours is",)
+    soles = body.legs.soles
+    rpy = tuple(round(float(v), 3) + 0.0 for v in np.rad2deg(pin.rpy.matrixToRpy(body.bearing.root.rotation)))
+    return Draft(
+        robot=robot,
+        source=src.source,
+        reference_posture=body.state,
+        root_rpy_deg=None if body.bearing.up == "+z" else (rpy[0], rpy[1], rpy[2]),
+        reference_joints=body.reference_joints,
+        up_axis=body.bearing.up,
+        soles=(soles[0], soles[1]),
+        foot_x_m=(max(s.x_m[0] for s in soles), min(s.x_m[1] for s in soles)),
+        foot_y_m=(max(s.y_m[0] for s in soles), min(s.y_m[1] for s in soles)),
+        floor_contact=tuple(dict.fromkeys(s.foot_link for s in soles)),
+        chains=(chains[0], chains[1]),
+        locked=body.locked,
+        velocity_limits=speeds,
+        urdf_velocity=urdf_speed,
+        shapes=added.shapes,
+        covered=added.covered,
+        misplaced=added.misplaced,
+        table_center_m=table[0],
+        table_size_m=table[1],
+        spots_x_m=table[2],
+        spots_y_m=table[3],
+        reach_m=reach,
+        survey=_survey(model, src, added.shapes, body.reference, body.locked, samples, seed),
+        joint_limit_margin_rad=body.joint_limit_margin_rad,
+        checks=body.checks + checks + found,
     )
+
+
+@dataclass(frozen=True)
+class AddedGeometry:
+    """Collision shapes the draft adds, and why."""
+
+    shapes: tuple[Shape, ...]  # for links without collision geometry, then for misplaced geometry
+    covered: dict[str, str]  # link -> what it gets for lacking collision geometry
+    misplaced: dict[str, str]  # link -> why its collision geometry is replaced (CoM outside it, below the floor)
+
+
+def collision_additions(model: pin.Model, data: pin.Data, body: Body) -> tuple[AddedGeometry, tuple[str, ...]]:
+    """Shapes for the moving links without collision geometry, capsules for geometry contradicting the kinematics.
+
+    A foot without geometry gets a box over its guessed footprint; geometry is misplaced when a
+    link's CoM lies outside it, or when it reaches below the floor (off the feet) at the posture
+    of ``data``.
+    """
+    soles = body.legs.soles
+    bare_feet = [s for s in soles if not s.from_geometry]
+    geometry = body.geometry
+    moving = [j for j in range(1, model.njoints) if j not in {s.foot_joint for s in bare_feet}]
+    covered, added = missing_geometry(model, geometry, moving)
     for sole in bare_feet:
         covered[sole.foot_link] = "a box over the guessed footprint"
         added += (foot_box(model, data, sole),)
     misplaced = misplaced_geometry(model, geometry)
-    feet_joints = set(feet) | {j for f in feet for j in subtree(f)}
+    feet_joints = {j for f in body.legs.feet for j in body.tree.subtree(f)}
     misplaced.update(below_floor(model, data, geometry, feet_joints, floor_height(model, data, soles)))
     shapes = added + tuple(s for link in misplaced for s in skeleton(model, link))
+    checks = []
     if covered:
         checks.append(
             f"{len(covered)} moving links have no collision geometry: given "
@@ -268,87 +200,42 @@ def draft_robot(
             + "; ".join(f"{link}: {why}" for link, why in misplaced.items())
             + "): replaced by capsules along the joints"
         )
-    shared = set(arms[0]) & set(arms[1])  # the torso
-    full_geometry = _with_shapes(geometry, model, src, shapes)
+    return AddedGeometry(shapes, covered, misplaced), tuple(checks)
+
+
+def find_hands(model: pin.Model, data: pin.Data, geometry: Geometry, body: Body) -> tuple[list[Chain], tuple[str, ...]]:
+    """Each arm's hand, gripper frame and contact (at the posture of ``data``), left then right.
+
+    The chains' joints leave out the torso (the joints both arms share).
+    """
+    shared = set(body.arms[0]) & set(body.arms[1])
     chains = []
-    for name, sole, path in zip(("left", "right"), soles, arms, strict=True):
+    checks = []
+    for name, sole, path in zip(("left", "right"), body.legs.soles, body.arms, strict=True):
         hand = link_of_joint(model, path[-1])
         wrist = data.oMi[path[-1]].translation
         elbow = next((data.oMi[j].translation for j in reversed(path) if _apart(data.oMi[j].translation, wrist)), wrist)
-        fingers = set(subtree(path[-1])) - {path[-1]}
-        contact = hand_contact(model, data, full_geometry, name, hand, wrist - elbow, fingers)
+        fingers = set(body.tree.subtree(path[-1])) - {path[-1]}
+        contact = hand_contact(model, data, geometry, name, hand, wrist - elbow, fingers)
         joints = tuple(str(model.names[j]) for j in path if j not in shared)
         gripper = FrameConfig(f"{name}_gripper", hand, (0.0, 0.0, 0.0))
         chains.append(Chain(name, sole.frame, hand, gripper, joints, contact))
         checks.append(f"{name} hand ({hand}): {contact.how}; edit robot.frames to where it really touches")
-    speeds, urdf_speed = velocity_placeholders(model, kept)
-    if speeds:
-        checks.append(f"{len(speeds)} joints have no plausible URDF velocity limit: placeholders of 1 rad/s")
-    shoulder = data.oMi[model.getJointId(chains[0].joints[0])].translation
-    reach = arm_length(model, data, chains[0].joints, chains[0].hand, chains[0].contact.frames)
-    floor_z = floor_height(model, data, soles)
-    body = vertices(model, data, full_geometry.collision, set(range(1, model.njoints)), heading)  # (k, 3)
-    body[:, 2] -= floor_z
-    table = place_table(heading, shoulder, reach, floor_z, body)
-    checks.append(f"the table is a guess from the arm's reach ({reach:.2f} m): put it where yours is")
-    survey = _survey(model, src, shapes, q, locked, samples, seed)
-    foot_x = (max(s.x_m[0] for s in soles), min(s.x_m[1] for s in soles))
-    foot_y = (max(s.y_m[0] for s in soles), min(s.y_m[1] for s in soles))
-    rpy = tuple(round(float(v), 3) + 0.0 for v in np.rad2deg(pin.rpy.matrixToRpy(root.rotation)))
-    return Draft(
-        robot=robot,
-        source=src.source,
-        reference_posture=state,
-        root_rpy_deg=None if up == "+z" else (rpy[0], rpy[1], rpy[2]),
-        reference_joints=reference_joints,
-        up_axis=up,
-        soles=(soles[0], soles[1]),
-        foot_x_m=foot_x,
-        foot_y_m=foot_y,
-        floor_contact=tuple(dict.fromkeys(s.foot_link for s in soles)),
-        chains=(chains[0], chains[1]),
-        locked=locked,
-        velocity_limits=speeds,
-        urdf_velocity=urdf_speed,
-        shapes=shapes,
-        covered=covered,
-        misplaced=misplaced,
-        table_center_m=table[0],
-        table_size_m=table[1],
-        spots_x_m=table[2],
-        spots_y_m=table[3],
-        reach_m=reach,
-        survey=survey,
-        joint_limit_margin_rad=limit_margin,
-        checks=tuple(checks),
-        notes=tuple(notes),
-    )
+    return chains, tuple(checks)
 
 
-def _forward(root: pin.SE3) -> FloatArray:
-    """The robot's forward direction in the world: its root's x axis, levelled. Shape (3,)."""
-    for column in (0, 2, 1):
-        v = root.rotation[:, column].copy()
-        v[2] = 0.0
-        if np.linalg.norm(v) > 0.5:
-            return np.asarray(v / np.linalg.norm(v))
-    return np.array([1.0, 0.0, 0.0])
+def table_for(model: pin.Model, data: pin.Data, geometry: Geometry, body: Body, arm: Chain) -> tuple[Table, float]:
+    """The table placed from an arm's reach, clear of the body (at the posture of ``data``), and that reach (m)."""
+    shoulder = data.oMi[model.getJointId(arm.joints[0])].translation
+    reach = arm_length(model, data, arm.joints, arm.hand, arm.contact.frames)
+    floor_z = floor_height(model, data, body.legs.soles)
+    points = vertices(model, data, geometry.collision, set(range(1, model.njoints)), body.bearing.heading)  # (k, 3)
+    points[:, 2] -= floor_z
+    return place_table(body.bearing.heading, shoulder, reach, floor_z, points), reach
 
 
 def _apart(a: FloatArray, b: FloatArray) -> bool:
     return bool(np.linalg.norm(a - b) > 0.01)
-
-
-def _side(data: pin.Data, joint: int, left: FloatArray) -> float:
-    return float(data.oMi[joint].translation @ left)
-
-
-def _path(model: pin.Model, first: int, last: int) -> list[int]:
-    """Joints from ``first`` down to ``last`` (its descendant)."""
-    out = [last]
-    while out[-1] != first:
-        out.append(model.parents[out[-1]])
-    return out[::-1]
 
 
 def _with_shapes(geometry: Geometry, model: pin.Model, src: DraftSource, shapes: tuple[Shape, ...]) -> Geometry:
@@ -381,17 +268,3 @@ def _survey(
         return np.asarray(q)
 
     return survey_pairs(model, geom, reference, sample, COLLISION_MARGIN_M, samples, seed, REST_MARGIN_M)
-
-
-def _arm_paths(joint, path, children, subtree, mass, total, out) -> None:  # type: ignore[no-untyped-def]
-    """Chains of the upper body, through single joints and at a branching into its heavy branches.
-
-    A branching into light parts alone (fingers) ends the chain.
-    """
-    path = [*path, joint]
-    below = children[joint]
-    heavy = below if len(below) == 1 else [c for c in below if mass(subtree(c)) >= LIGHT_FRACTION * total]
-    if not heavy:
-        out.append(path)
-    for child in heavy:
-        _arm_paths(child, path, children, subtree, mass, total, out)

@@ -53,19 +53,6 @@ class Sole:
     from_geometry: bool  # False: guessed from the leg's length (a CHECK line)
 
 
-@dataclass(frozen=True)
-class Stance:
-    """How the robot stands."""
-
-    root: pin.SE3  # the root's pose at the reference (its orientation puts the up axis up)
-    up_axis: str  # the root axis pointing up, e.g. "+z"
-    legs: tuple[int, int]  # first joint of each leg, left then right
-    soles: tuple[Sole, Sole]  # left, right
-    reference: FloatArray  # (nq,) the reference configuration
-    bent: bool  # True: the legs were bent by the draft (no SRDF state)
-    notes: tuple[str, ...]
-
-
 Subtree = Callable[[int], list[int]]
 
 

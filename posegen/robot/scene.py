@@ -7,34 +7,30 @@ and hands each stage the typed sub-config it reads (``scene.margins``, ``scene.r
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError, InputError, unknown_name
-from posegen.io import provenance, read_text_file
-from posegen.robot.collision_geometry import check_link_names
+from posegen.io import provenance
 from posegen.robot.config import ChainConfig, Config, load_config, parse_config
-from posegen.robot.description import (
-    augmented_urdf,
-    contact_placement,
-    frame_id,
-    locked_configuration,
-    resolve_robot_files,
-    with_declared_frames,
+from posegen.robot.description import frame_id
+from posegen.robot.geometry import FloatArray, polygon_margin
+from posegen.robot.scene_parts import (
+    IntArray,
+    Spot,
+    actuated_joints,
+    apply_additions,
+    check_names,
+    contact_placements,
+    load_description,
+    read_srdf_states,
+    reference_configuration,
+    stand,
+    table_pose,
+    table_spots,
 )
-from posegen.robot.geometry import FloatArray, convex_hull_clockwise, flatten_on_floor, polygon_margin, yaw_rotation
-
-
-@dataclass(frozen=True)
-class Spot:
-    """A contact target spot on the table."""
-
-    name: str
-    xy_table_m: tuple[float, float]  # in the table frame
-    chains: tuple[str, ...]  # chains whose arm serves this spot
 
 
 class Scene:
@@ -59,6 +55,12 @@ class Scene:
     """
 
     def __init__(self, config: Config) -> None:
+        """The scene of ``config``, built in the steps of :mod:`posegen.robot.scene_parts`.
+
+        Raises:
+            ConfigError: The config names what the robot lacks, or its files do not load.
+
+        """
         self.config = config
         self.stance = config.stance
         self.chains = config.chains
@@ -67,153 +69,41 @@ class Scene:
         self.sampling = config.sampling
         self.route = config.route
         self.calibration = config.calibration
-        self.files = resolve_robot_files(config)
-        nominal_text = self.files.urdf_text()
-        try:
-            nominal = pin.buildModelFromXML(nominal_text, pin.JointModelFreeFlyer())
-        except (RuntimeError, ValueError) as exc:
-            raise ConfigError(f"cannot load URDF {self.files.urdf}: {exc}") from exc
-        declared_text = with_declared_frames(nominal_text, nominal, config.frames)
-        declared = pin.buildModelFromXML(declared_text, pin.JointModelFreeFlyer())
-        for chain in self.chains:
-            for field, frames in (
-                ("sole_frame", [chain.sole_frame]),
-                ("gripper_frame", [chain.gripper_frame]),
-                ("fingertip_frames", chain.fingertip_frames),
-                ("point_frame", [chain.point_frame] if chain.point_frame else []),
-                ("touching_links", chain.touching_links),
-            ):
-                for frame in frames:
-                    _named_frame(declared, frame, f"chains.{chain.name}.{field}")
-            if chain.fingertip_frames and declared.existFrame(chain.contact_frame):
-                raise ConfigError(f"chains.{chain.name}.contact_frame '{chain.contact_frame}' already exists")
-        for field, frames in (
-            ("sole_frames", self.stance.sole_frames),
-            ("floor_contact_frames", self.stance.floor_contact_frames),
-        ):
-            for frame in frames:
-                _named_frame(declared, frame, f"stance.{field}")
-        check_link_names(declared, config.collision)
-        held = locked_configuration(declared, config.locked_joints)  # fingertips are read with the fingers locked
-        self.urdf_xml = augmented_urdf(declared_text, declared, config, held)
-        self.model = pin.buildModelFromXML(self.urdf_xml, pin.JointModelFreeFlyer())
+        description = load_description(config)
+        check_names(description.model, config)
+        self.files = description.files
+        self.urdf_xml, self.model = apply_additions(description, config)
+        joints = actuated_joints(self.model, config)
+        self.joint_names = joints.names
+        self._q_index, self._v_index = joints.q_index, joints.v_index
+        self.lower, self.upper, self.velocity_limit = joints.lower, joints.upper, joints.velocity_limit
+        self.locked, self.locked_values = joints.locked, joints.locked_values  # (nj,) held during sampling, rad
         self._data = self.model.createData()  # scratch space of configuration()
         self._closing: tuple[int, list[int], np.ndarray] | None = None  # see close_stance
         self._anchor_frame = self.model.getFrameId(config.stance.sole_frames[0])
-        self.joint_names = tuple(
-            str(self.model.names[j]) for j in range(1, self.model.njoints) if self.model.joints[j].nq == 1
-        )
-        self._q_index = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in self.joint_names])
-        self._v_index = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in self.joint_names])
-        self.lower = self.model.lowerPositionLimit[self._q_index].copy()
-        self.upper = self.model.upperPositionLimit[self._q_index].copy()
-        self.locked = np.zeros(len(self.joint_names), dtype=bool)  # (nj,) held during sampling
-        self.locked_values = np.zeros(len(self.joint_names))  # (nj,) rad, where locked
-        for name, value in config.locked_joints.items():
-            i = self._joint(name, "robot.locked_joints")
-            if not self.lower[i] <= value <= self.upper[i]:
-                raise ConfigError(
-                    f"robot.locked_joints.{name}: {value} rad is outside [{self.lower[i]}, {self.upper[i]}]"
-                )
-            self.locked[i] = True
-            self.locked_values[i] = value
-        self.velocity_limit = self._velocity_limits()
-        held = self.model_configuration(self.locked_values)
-        self.contact_placements = {  # flush contact frames in their gripper frames
-            chain.name: contact_placement(self.model, chain, held) for chain in self.chains if chain.fingertip_frames
-        }
-        self.point_placements = {  # point frames in their gripper frames, the fingers locked
-            chain.name: self._placement_in(chain.gripper_frame, chain.point_frame, held)
-            for chain in self.chains
-            if chain.point_frame
-        }
-
-        if self.files.srdf is not None:
-            read_text_file(self.files.srdf, ConfigError)  # a clear error for a binary or unreadable SRDF
-            try:
-                pin.loadReferenceConfigurations(self.model, str(self.files.srdf), False)
-            except (RuntimeError, ValueError) as exc:
-                raise ConfigError(f"cannot read SRDF {self.files.srdf}: {str(exc).strip().splitlines()[0]}") from exc
-        reference = self._reference_configuration()
+        held = self.model_configuration(self.locked_values)  # fingertips are read with the fingers locked
+        self.contact_placements, self.point_placements = contact_placements(self.model, self.chains, held)
+        read_srdf_states(self.model, self.files)
+        reference = reference_configuration(self.model, self.stance, joints)
         self.reference = reference[self._q_index].copy()
+        self.sole_poses, self.support_polygon = stand(self.model, self.stance, reference)
+        self.table_pose = table_pose(self.table)
+        self.spots = table_spots(self.table, self.chains)
 
-        data = self.model.createData()
-        pin.framesForwardKinematics(self.model, data, reference)
-        self.sole_poses = {
-            f: flatten_on_floor(data.oMf[self.model.getFrameId(f)].homogeneous) for f in self.stance.sole_frames
-        }
-        corners = [
-            (pose @ np.array([x, y, 0.0, 1.0]))[:2]
-            for pose in self.sole_poses.values()
-            for x in self.stance.foot_x_m
-            for y in self.stance.foot_y_m
-        ]
-        self.support_polygon = convex_hull_clockwise(np.array(corners))
+    @classmethod
+    def from_config(cls, config: Config) -> Scene:
+        """The scene of ``config``, the same as ``Scene(config)``.
 
-        table = self.table
-        self.table_pose = np.eye(4)
-        self.table_pose[:3, :3] = yaw_rotation(np.deg2rad(table.yaw_deg))
-        self.table_pose[:3, 3] = table.top_center_m
-        self.spots = tuple(
-            Spot(
-                name=f"contact_{i * len(table.spots_y_m) + j:02d}",
-                xy_table_m=(x, y),
-                chains=tuple(c.name for c in self.chains if c.spot_y_range_m[0] <= y <= c.spot_y_range_m[1]),
-            )
-            for i, x in enumerate(table.spots_x_m)
-            for j, y in enumerate(table.spots_y_m)
-        )
+        Its steps, in order, each a function of :mod:`posegen.robot.scene_parts` testable alone:
+        ``load_description``, ``check_names``, ``apply_additions``, ``actuated_joints``,
+        ``contact_placements``, ``read_srdf_states``, ``reference_configuration``, ``stand``,
+        ``table_pose`` and ``table_spots``.
 
-    def _joint(self, name: str, field: str) -> int:
-        if name not in self.joint_names:
-            raise ConfigError(unknown_name("joint", name, self.joint_names) + f" ({field})")
-        return self.joint_names.index(name)
+        Raises:
+            ConfigError: The config names what the robot lacks, or its files do not load.
 
-    def _velocity_limits(self) -> FloatArray:
-        """URDF velocity limits (rad/s) with the config's overrides. Shape (nj,).
-
-        A free joint needs a positive limit. A locked one never moves: a missing limit
-        (0 in some URDFs) is replaced by the largest free one, so that it never binds.
         """
-        limit = self.model.velocityLimit[self._v_index].copy()
-        for name, value in self.config.velocity_limits.items():
-            limit[self._joint(name, "robot.velocity_limits_rad_s")] = value
-        missing = [n for i, n in enumerate(self.joint_names) if not self.locked[i] and not limit[i] > 0]
-        if missing:
-            raise ConfigError(
-                f"robot.velocity_limits_rad_s: the URDF gives no velocity limit (0 rad/s) for {', '.join(missing)}; "
-                "declare one for each, or lock the joint"
-            )
-        free = limit[~self.locked]
-        limit[self.locked & ~(limit > 0)] = float(free.max()) if len(free) else 1.0
-        return np.asarray(limit)
-
-    def _reference_configuration(self) -> FloatArray:
-        """The reference posture: an SRDF state (or every joint at 0) with the config's overrides.
-
-        The root's orientation: the state's, or ``stance.root_rpy_deg`` (a model whose up axis is not z).
-        """
-        postures = {str(e.key()): np.array(e.data()) for e in self.model.referenceConfigurations}
-        name = self.stance.reference_posture
-        if name and not postures:
-            raise ConfigError(
-                f"stance.reference_posture: '{name}' names an SRDF state but the robot has no SRDF; "
-                "give the posture as stance.reference_joints (and stance.root_rpy_deg), or name an SRDF"
-            )
-        if name and name not in postures:
-            raise ConfigError(unknown_name("reference posture", name, postures) + " (stance.reference_posture)")
-        q = postures[name].copy() if name else pin.neutral(self.model)
-        for joint, value in self.stance.reference_joints.items():
-            q[self._q_index[self._joint(joint, "stance.reference_joints")]] = value
-        if self.stance.root_rpy_deg is not None:
-            rotation = pin.rpy.rpyToMatrix(*np.deg2rad(self.stance.root_rpy_deg))
-            q[3:7] = pin.Quaternion(rotation).coeffs()
-        return np.asarray(q)
-
-    def _placement_in(self, parent: str, frame: str, q: FloatArray) -> pin.SE3:
-        data = self.model.createData()
-        pin.framesForwardKinematics(self.model, data, q)
-        return data.oMf[self.frame_id(parent)].actInv(data.oMf[self.frame_id(frame)])
+        return cls(config)
 
     def model_configuration(self, joints: FloatArray) -> FloatArray:
         """The model's configuration with these joint angles and the base at the origin. Shape (nq,)."""
@@ -376,14 +266,9 @@ class Scene:
                 return None
         return None
 
-    def velocity_indices(self) -> FloatArray:
+    def velocity_indices(self) -> IntArray:
         """Indices of the actuated joints in the velocity vector. Shape (nj,)."""
         return self._v_index.copy()
-
-
-def _named_frame(model: pin.Model, name: str, field: str) -> None:
-    if not model.existFrame(name):
-        raise ConfigError(unknown_name("frame", name, (f.name for f in model.frames)) + f" ({field})")
 
 
 def scene_for(recorded: dict[str, Any], config_path: str | None) -> Scene:

@@ -5,6 +5,8 @@ import yaml
 
 from posegen.errors import ConfigError
 from posegen.robot import Scene, load_config, parse_config
+from posegen.robot.config import read_chains, read_margins, read_sampling, read_source, read_stance, read_table
+from posegen.robot.config_reader import Reader
 from tests.conftest import CONFIG
 
 
@@ -81,3 +83,54 @@ def test_recording_section_and_wrench_topics():
     data["recording"] = {"trim_s": -1.0}
     with pytest.raises(ConfigError, match=r"recording\.trim_s: must be >= 0"):
         parse_config(data)
+
+
+def test_read_source_makes_paths_absolute_from_the_config_folder(tmp_path):
+    src = Reader({"urdf": "robot/r.urdf", "srdf": "package://pkg/r.srdf", "package_dirs": [".."]}, "robot.source")
+    source = read_source(src, str(tmp_path / "configs" / "c.yaml"))
+    assert source.urdf == str(tmp_path / "configs" / "robot" / "r.urdf")
+    assert source.srdf == "package://pkg/r.srdf"  # resolved later, in the package dirs
+    assert source.package_dirs == (str(tmp_path),)
+    for both_or_neither in ({"urdf": "r.urdf", "example_robot_data": "talos"}, {}):
+        with pytest.raises(ConfigError, match=r"^robot\.source: give either example_robot_data or urdf$"):
+            read_source(Reader(both_or_neither, "robot.source"))
+    with pytest.raises(ConfigError, match=r"is not a valid path"):
+        read_source(Reader({"urdf": "r\0.urdf"}, "robot.source"))
+
+
+def test_read_stance_and_chains_keep_the_files_order():
+    data = raw()
+    stance = read_stance(Reader(data["stance"], "stance"))
+    assert stance.sole_frames == tuple(data["stance"]["sole_frames"]) and stance.root_rpy_deg is None
+    data["stance"]["sole_frames"] *= 2
+    with pytest.raises(ConfigError, match=r"^stance\.sole_frames: expected exactly two"):
+        read_stance(Reader(data["stance"], "stance"))
+    data["chains"] = dict(reversed(data["chains"].items()))
+    assert [c.name for c in read_chains(Reader(data, ""))] == list(data["chains"]) == ["right", "left"]
+    data["chains"] = {}
+    with pytest.raises(ConfigError, match=r"^chains: expected a mapping"):
+        read_chains(Reader(data, ""))
+
+
+def test_read_table_wants_every_spot_on_the_table_and_served(config):
+    data = raw()["table"]
+    table = read_table(Reader(data, "table"), config.chains)
+    assert table.spots_y_m == tuple(data["spots_y_m"]) and table.size_m == tuple(data["size_m"])
+    left_only = tuple(c for c in config.chains if c.spot_y_range_m[0] > min(table.spots_y_m))
+    assert 0 < len(left_only) < len(config.chains)  # a chain that serves some spots, not the rightmost
+    with pytest.raises(ConfigError, match=r"^table\.spots_y_m: no chain's spot_y_range_m covers y = "):
+        read_table(Reader(data, "table"), left_only)
+    half = data["size_m"][0] / 2
+    with pytest.raises(ConfigError, match=rf"^table\.spots_x_m: spots must lie on the table \(\|x\| <= {half} m\)"):
+        read_table(Reader(dict(data, spots_x_m=[half + 0.01]), "table"), config.chains)
+
+
+def test_read_margins_and_sampling_bound_their_numbers():
+    data = raw()
+    margins = read_margins(Reader(data["margins"], "margins"))
+    assert margins.collision_m == data["margins"]["collision_m"]
+    with pytest.raises(ConfigError, match=r"^margins\.com_m: must be >= 0"):
+        read_margins(Reader(dict(data["margins"], com_m=-0.01), "margins"))
+    assert read_sampling(Reader(data["sampling"], "sampling")).chunk_size == data["sampling"]["chunk_size"]
+    with pytest.raises(ConfigError, match=r"^sampling\.chunk_size: expected an integer from 1 to 10000"):
+        read_sampling(Reader(dict(data["sampling"], chunk_size=10_001), "sampling"))

@@ -1,12 +1,19 @@
 """``posegen robot init``: a starting config found from the description alone."""
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from posegen.robot import Scene, load_config, write_draft
-from posegen.robot.additions import Capsule
-from posegen.robot.draft import draft_robot
+from posegen.robot.additions import Box, Capsule, CollisionConfig
+from posegen.robot.collision_geometry import robot_geometry
+from posegen.robot.draft import collision_additions, draft_robot, find_hands, table_for
+from posegen.robot.draft_body import study_body
+from posegen.robot.draft_geometry import Geometry, vertices
+from posegen.robot.draft_source import load_draft_source
+from posegen.robot.draft_stance import floor_height
 from tests.conftest import CONFIG, ROOT
+from tests.robot.humanoid_urdf import humanoid_urdf
 
 
 @pytest.fixture(scope="module")
@@ -46,3 +53,61 @@ def test_draft_flags_implausible_limits_and_misplaced_meshes():
     assert {"l_upper_leg", "r_upper_leg"} <= set(draft.misplaced)  # thighs' meshes miss their CoM by ~0.1 m
     capsules = {s.link for s in draft.shapes if isinstance(s, Capsule)}
     assert set(draft.misplaced) <= capsules and capsules - set(draft.misplaced) <= set(draft.covered)
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory):
+    """The synthetic humanoid with and without meshes: its source, body and kinematics at the reference."""
+    out = {}
+    for meshes in (True, False):
+        urdf = humanoid_urdf(tmp_path_factory.mktemp(f"meshes_{meshes}"), meshes=meshes)
+        src = load_draft_source(str(urdf), None, ())
+        body = study_body(src)
+        data = src.model.createData()
+        pin.framesForwardKinematics(src.model, data, body.reference)
+        out[meshes] = (src, body, data)
+    return out
+
+
+def test_collision_additions_cover_every_moving_link_and_box_bare_feet(synthetic):
+    for meshes, (src, body, data) in synthetic.items():
+        added, checks = collision_additions(src.model, data, body)
+        assert checks[0].startswith(f"{len(added.covered)} moving links have no collision geometry")
+        assert {"l_thigh", "r_shank", "torso"} <= set(added.covered)
+        assert ("l_foot" in added.covered) != meshes and ("l_hand" in added.covered) != meshes
+        boxes = {s.link for s in added.shapes if isinstance(s, Box)}
+        assert boxes == (set() if meshes else {"l_foot", "r_foot"})
+        assert {s.link for s in added.shapes} == set(added.covered) | set(added.misplaced)
+
+
+def test_find_hands_gives_each_arm_its_hand_without_the_torso(synthetic):
+    src, body, data = synthetic[True]
+    chains, checks = find_hands(src.model, data, body.geometry, body)
+    assert [(c.name, c.hand, c.joints[-1]) for c in chains] == [
+        ("left", "l_hand", "l_wrist"),
+        ("right", "r_hand", "r_wrist"),
+    ]
+    assert not set(chains[0].joints) & set(chains[1].joints) and "waist" not in chains[0].joints
+    assert all(c.contact.flush and c.gripper.parent == c.hand for c in chains)
+    assert [c.sole for c in chains] == [s.frame for s in body.legs.soles]
+    assert len(checks) == 2 and checks[0].startswith("left hand (l_hand): a flat face")
+
+
+def test_table_for_puts_the_table_within_reach_and_clear_of_the_body(synthetic):
+    src, body, data = synthetic[True]
+    added, _ = collision_additions(src.model, data, body)  # the torso's capsule stands above the table's top
+    shapes = CollisionConfig(shapes=added.shapes)
+    geometry = Geometry(robot_geometry(src.model, src.text, (), shapes, convex=False), body.geometry.visual)
+    chains, _ = find_hands(src.model, data, geometry, body)
+    (top, size, spots_x, spots_y), reach = table_for(src.model, data, geometry, body, chains[0])
+    assert 0.5 < reach < 0.6  # shoulder to wrist 0.5 m, then to the palm's face
+    heading = body.bearing.heading
+    shoulder = heading.actInv(data.oMi[src.model.getJointId("l_shoulder_pitch")].translation)
+    centre = heading.actInv(np.array(top))  # its height is from the floor
+    floor = floor_height(src.model, data, body.legs.soles)
+    assert centre[0] > shoulder[0] and shoulder[2] - floor - 0.5 * reach > top[2] > 0.0
+    points = vertices(src.model, data, geometry.collision, set(range(1, src.model.njoints)), heading)
+    points[:, 2] -= floor
+    beside = points[(points[:, 2] > top[2] - size[2]) & (np.abs(points[:, 1]) < size[1] / 2)]
+    assert len(beside) and np.all(beside[:, 0] < centre[0] - size[0] / 2)  # the near edge in front of the body
+    assert max(spots_x) <= size[0] / 2 and max(np.abs(spots_y)) <= size[1] / 2

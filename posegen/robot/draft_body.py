@@ -1,0 +1,342 @@
+"""A humanoid's body as ``posegen robot init`` finds it from its kinematic tree, one step each.
+
+:func:`study_body` runs them in order:
+
+1. :func:`srdf_state`: the SRDF's first state, unless it breaks the URDF's limits;
+2. :func:`orient`: the up axis, forward and left (:mod:`posegen.robot.draft_stance`);
+3. :func:`find_legs` then :func:`find_soles`: the two branches reaching the floor, their
+   feet and soles;
+4. :func:`bend_reference`: without an SRDF state, a standing posture with the knees bent;
+5. :func:`find_arms`: the two longest chains of the upper body, up to where they branch
+   into light parts only (fingers: under 1 % of the robot's mass);
+6. :func:`locked_joints` and :func:`clear_of_limits`: every joint off the legs and arms is
+   locked where it is; the arms' joints are moved clear of their limits.
+
+Each step returns what it found and the ``# CHECK:`` lines it adds, in the draft's order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.errors import ConfigError
+from posegen.robot.description import RobotFiles
+from posegen.robot.draft_geometry import Geometry, load_geometry
+from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limit, outside_limits
+from posegen.robot.draft_source import DraftSource
+from posegen.robot.draft_stance import (
+    ANKLE_HEIGHT,
+    FLOOR_TOL_M,
+    Sole,
+    bend_legs,
+    find_sole,
+    find_up,
+    foot_joint,
+    sole_pose,
+)
+from posegen.robot.geometry import FloatArray, yaw_rotation
+
+LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
+LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
+
+
+@dataclass(frozen=True, eq=False)
+class Tree:
+    """A model's kinematic tree: each joint's children (the root's are its branches)."""
+
+    model: pin.Model
+    children: dict[int, list[int]]
+
+    @classmethod
+    def of(cls, model: pin.Model) -> Tree:
+        """The tree of ``model`` (joint 1 is the free-flyer root)."""
+        return cls(
+            model, {j: [c for c in range(2, model.njoints) if model.parents[c] == j] for j in range(model.njoints)}
+        )
+
+    def subtree(self, joint: int) -> list[int]:
+        """``joint`` and every joint below it, depth first."""
+        out = [joint]
+        for child in self.children[joint]:
+            out += self.subtree(child)
+        return out
+
+    def mass(self, joints: list[int]) -> float:
+        """The mass (kg) the bodies of these joints carry."""
+        return float(sum(self.model.inertias[j].mass for j in joints))
+
+
+@dataclass(frozen=True, eq=False)
+class Bearing:
+    """How the robot is turned: its root's pose, the up axis, and the horizontal directions."""
+
+    root: pin.SE3  # the root's pose (its orientation puts the up axis up)
+    up: str  # the root's axis pointing up, e.g. "+z"
+    forward: FloatArray  # (3,) world, horizontal
+    left: FloatArray  # (3,) world, up x forward
+    heading: pin.SE3  # the yaw of forward, at the origin
+
+
+@dataclass(frozen=True, eq=False)
+class Legs:
+    """The two legs, left then right."""
+
+    roots: list[int]  # each leg's first joint
+    feet: list[int]  # each leg's last joint
+    paths: list[list[int]]  # each leg's joints, hip to foot
+    length_m: float  # hip to ankle
+    soles: list[Sole]
+
+    @property
+    def joints(self) -> set[int]:
+        """Every joint of both legs."""
+        return {j for path in self.paths for j in path}
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """What the body's structure gives the draft: its bearing, legs, arms, reference posture and locks."""
+
+    tree: Tree
+    state: str  # the SRDF state used ("" when none)
+    bearing: Bearing
+    legs: Legs
+    arms: list[list[int]]  # each arm's joints from the torso, left then right
+    geometry: Geometry
+    reference: FloatArray  # (nq,) root placed, legs bent (without a state), locked joints at their values
+    reference_joints: dict[str, float]  # rad, what the draft set (legs bent, joints off their limits)
+    locked: dict[str, float]  # rad
+    joint_limit_margin_rad: float
+    checks: tuple[str, ...]
+
+    @property
+    def kept(self) -> set[int]:
+        """The joints of the legs and arms (not locked)."""
+        return self.legs.joints | {j for arm in self.arms for j in arm}
+
+
+def study_body(src: DraftSource) -> Body:
+    """Find the legs, soles, arms, reference posture and joints to lock of a humanoid.
+
+    Raises:
+        ConfigError: Not two legs reaching the floor, or not two arms.
+
+    """
+    model, tree = src.model, Tree.of(src.model)
+    state, q, checks = srdf_state(model, src.files)
+    bearing = orient(model, q, tree, src.label)
+    q[:7] = pin.SE3ToXYZQUAT(bearing.root)
+    if bearing.up != "+z":
+        checks += (f"the model's up axis is its root's {bearing.up} axis: the root is turned by stance.root_rpy_deg",)
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    roots = find_legs(model, data, tree, bearing.left, src.label)
+    geometry = load_geometry(model, src.text, src.files.package_dirs)
+    legs, found = find_soles(model, data, geometry, tree, roots, bearing.heading)
+    reference_joints: dict[str, float] = {}
+    margin = JOINT_LIMIT_MARGIN_RAD
+    if not state:
+        q, reference_joints, margin, bent = bend_reference(model, q, legs, bearing.forward)
+        found += bent
+        pin.framesForwardKinematics(model, data, q)
+    arms = find_arms(model, data, tree, roots, bearing.left, src.label)
+    kept = legs.joints | {j for arm in arms for j in arm}
+    locked = locked_joints(model, q, kept)
+    q = with_joints(model, q, locked)
+    cleared = clear_of_limits(model, q, sorted(kept - legs.joints))
+    q = with_joints(model, q, cleared)
+    reference_joints.update({name: round(value, 4) for name, value in cleared.items()})
+    checks += found
+    return Body(tree, state, bearing, legs, arms, geometry, q, reference_joints, locked, margin, checks)
+
+
+def srdf_state(model: pin.Model, files: RobotFiles) -> tuple[str, FloatArray, tuple[str, ...]]:
+    """The SRDF's first state ("" without one) and its configuration (nq,), else the neutral one.
+
+    A state outside the URDF's limits is not used (a CHECK line says so). The SRDF's states
+    are added to ``model.referenceConfigurations``.
+    """
+    states: dict[str, FloatArray] = {}
+    if files.srdf is not None:
+        pin.loadReferenceConfigurations(model, str(files.srdf), False)
+        states = {str(e.key()): np.array(e.data()) for e in model.referenceConfigurations}
+    state = next(iter(states), "")
+    outside = outside_limits(model, states[state]) if state else []
+    if outside:
+        check = (
+            f"the SRDF's state '{state}' puts {', '.join(outside[:3])} outside the URDF's limits: "
+            "the draft finds its own reference posture"
+        )
+        return "", pin.neutral(model), (check,)
+    return state, (states[state].copy() if state else pin.neutral(model)), ()
+
+
+def orient(model: pin.Model, q: FloatArray, tree: Tree, label: str) -> Bearing:
+    """The root's pose putting the up axis up, in posture ``q`` (nq,), and the robot's forward and left.
+
+    Raises:
+        ConfigError: No up axis along which exactly two branches reach the lowest level.
+
+    """
+    root, up = find_up(model, q, tree.children[1], tree.subtree, label)
+    forward = _forward(root)
+    heading = pin.SE3(yaw_rotation(float(np.arctan2(forward[1], forward[0]))), np.zeros(3))
+    return Bearing(root, up, forward, np.cross([0.0, 0.0, 1.0], forward), heading)
+
+
+def _forward(root: pin.SE3) -> FloatArray:
+    """The robot's forward direction in the world: its root's x axis, levelled. Shape (3,)."""
+    for column in (0, 2, 1):
+        v = root.rotation[:, column].copy()
+        v[2] = 0.0
+        if np.linalg.norm(v) > 0.5:
+            return np.asarray(v / np.linalg.norm(v))
+    return np.array([1.0, 0.0, 0.0])
+
+
+def find_legs(model: pin.Model, data: pin.Data, tree: Tree, left: FloatArray, label: str) -> list[int]:
+    """The first joints of the root's two branches that reach the floor, left then right, at the posture of ``data``.
+
+    Raises:
+        ConfigError: Not exactly two such branches.
+
+    """
+    floor = min(float(data.oMi[j].translation[2]) for j in range(1, model.njoints))
+    lowest = {b: min(float(data.oMi[j].translation[2]) for j in tree.subtree(b)) for b in tree.children[1]}
+    reaching = (b for b in tree.children[1] if lowest[b] < floor + FLOOR_TOL_M)
+    legs = sorted(reaching, key=lambda b: -float(data.oMi[b].translation @ left))
+    if len(legs) != 2:
+        raise ConfigError(f"{label}: expected two legs reaching the floor, found {len(legs)}")
+    return legs
+
+
+def find_soles(
+    model: pin.Model, data: pin.Data, geometry: Geometry, tree: Tree, roots: list[int], heading: pin.SE3
+) -> tuple[Legs, tuple[str, ...]]:
+    """Each leg's foot (down its heaviest branch), path and sole, at the posture of ``data``."""
+    feet = [foot_joint(model, b, tree.children, tree.subtree) for b in roots]
+    paths = [_path(model, b, f) for b, f in zip(roots, feet, strict=True)]
+    length = float(np.linalg.norm(data.oMi[roots[0]].translation - data.oMi[feet[0]].translation))
+    soles = [
+        find_sole(model, data, geometry, side, f, length, heading)
+        for side, f in zip(("left", "right"), feet, strict=True)
+    ]
+    checks = []
+    for sole in soles:
+        if not sole.from_geometry:
+            checks.append(
+                f"{sole.foot_link} has no geometry: the sole '{sole.frame}' (robot.frames) is put "
+                f"{ANKLE_HEIGHT:.0%} of the leg's length below the ankle and the footprint (stance.foot_x_m, "
+                "foot_y_m) is a guess from the leg's length: measure the foot"
+            )
+        elif sole.declared is not None:
+            checks.append(f"sole '{sole.frame}' declared under the ankle, on the lowest vertices of {sole.foot_link}")
+    return Legs(roots, feet, paths, length, soles), tuple(checks)
+
+
+def _path(model: pin.Model, first: int, last: int) -> list[int]:
+    """Joints from ``first`` down to ``last`` (its descendant)."""
+    out = [last]
+    while out[-1] != first:
+        out.append(model.parents[out[-1]])
+    return out[::-1]
+
+
+def bend_reference(
+    model: pin.Model, q: FloatArray, legs: Legs, forward: FloatArray
+) -> tuple[FloatArray, dict[str, float], float, tuple[str, ...]]:
+    """A reference with the knees bent, soles flat where they stand in ``q`` (nq,), the CoM over the feet.
+
+    Returns:
+        The posture (nq,; ``q`` itself, copied, when the legs cannot bend), the leg joints set (rad,
+        rounded), the joint limit margin to draft (rad: 0 when straight legs sit at their limits),
+        and the CHECK lines.
+
+    """
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    bent = bend_legs(model, q, legs.paths, [sole_pose(model, data, s) for s in legs.soles], forward, legs.length_m)
+    if bent is None:
+        checks = ["the legs could not be bent within their limits: the reference stands with straight legs"]
+        tight = [str(model.names[j]) for path in legs.paths for j in path if near_limit(model, q, j)]
+        if not tight:
+            return q.copy(), {}, JOINT_LIMIT_MARGIN_RAD, tuple(checks)
+        checks.append(
+            f"straight, {', '.join(tight)} sit at their limits (the URDF's limits forbid a bent stance): "
+            "margins.joint_limit_rad is 0; check the URDF's limits"
+        )
+        return q.copy(), {}, 0.0, tuple(checks)
+    joints = {str(model.names[j]): round(float(bent[model.joints[j].idx_q]), 4) for path in legs.paths for j in path}
+    check = (
+        "no SRDF posture: the reference (stance.reference_joints) bends the knees, soles flat, CoM over the "
+        "feet; check it with `posegen view` on a pool"
+    )
+    return bent, joints, JOINT_LIMIT_MARGIN_RAD, (check,)
+
+
+def find_arms(
+    model: pin.Model, data: pin.Data, tree: Tree, legs: list[int], left: FloatArray, label: str
+) -> list[list[int]]:
+    """The two longest chains of the upper body, left then right (by their ends at the posture of ``data``).
+
+    Raises:
+        ConfigError: Fewer than two chains of at least three joints.
+
+    """
+    paths: list[list[int]] = []
+    total = tree.mass(list(range(1, model.njoints)))
+    for branch in tree.children[1]:
+        if branch not in legs:
+            _arm_paths(branch, [], tree, total, paths)
+    paths.sort(key=len, reverse=True)
+    if len(paths) < 2 or len(paths[1]) < 3:
+        found = ", ".join(f"'{model.names[p[-1]]}'" for p in paths) or "none"
+        upper = ", ".join(f"'{model.names[b]}'" for b in tree.children[1] if b not in legs) or "none"
+        raise ConfigError(f"{label}: no two arms: the upper body (from joint {upper}) has the chains ending at {found}")
+    return sorted(paths[:2], key=lambda p: -float(data.oMi[p[-1]].translation @ left))
+
+
+def _arm_paths(joint: int, path: list[int], tree: Tree, total: float, out: list[list[int]]) -> None:
+    """Chains of the upper body, through single joints and at a branching into its heavy branches.
+
+    A branching into light parts alone (fingers) ends the chain.
+    """
+    path = [*path, joint]
+    below = tree.children[joint]
+    heavy = below if len(below) == 1 else [c for c in below if tree.mass(tree.subtree(c)) >= LIGHT_FRACTION * total]
+    if not heavy:
+        out.append(path)
+    for child in heavy:
+        _arm_paths(child, path, tree, total, out)
+
+
+def locked_joints(model: pin.Model, q: FloatArray, kept: set[int]) -> dict[str, float]:
+    """Every 1-dof joint not kept, at its value in ``q`` (nq,) brought within its limits (rad)."""
+    return {
+        str(model.names[j]): float(np.clip(q[model.joints[j].idx_q], *limits(model, j)))
+        for j in range(2, model.njoints)
+        if model.joints[j].nq == 1 and j not in kept
+    }
+
+
+def clear_of_limits(model: pin.Model, q: FloatArray, joints: list[int]) -> dict[str, float]:
+    """The joints of ``joints`` that ``q`` (nq,) puts too near a limit, moved clear of it (rad)."""
+    out = {}
+    for j in joints:
+        low, high = limits(model, j)
+        value = float(q[model.joints[j].idx_q])
+        inside = float(np.clip(value, low + LIMIT_CLEARANCE_RAD, high - LIMIT_CLEARANCE_RAD))
+        if low + LIMIT_CLEARANCE_RAD <= high - LIMIT_CLEARANCE_RAD and inside != value:
+            out[str(model.names[j])] = inside
+    return out
+
+
+def with_joints(model: pin.Model, q: FloatArray, values: dict[str, float]) -> FloatArray:
+    """A copy of ``q`` (nq,) with these joints (1-dof, by name) set (rad)."""
+    out = np.array(q, dtype=float)
+    for name, value in values.items():
+        out[model.joints[model.getJointId(name)].idx_q] = value
+    return out

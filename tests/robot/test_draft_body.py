@@ -1,0 +1,161 @@
+"""The steps ``robot init`` finds a body in, each alone, on the synthetic humanoid (z up and y up)."""
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from posegen.robot.draft_body import (
+    LIMIT_CLEARANCE_RAD,
+    Tree,
+    bend_reference,
+    clear_of_limits,
+    find_arms,
+    find_legs,
+    find_soles,
+    locked_joints,
+    orient,
+    srdf_state,
+    study_body,
+    with_joints,
+)
+from posegen.robot.draft_geometry import load_geometry
+from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD
+from posegen.robot.draft_source import load_draft_source
+from posegen.robot.draft_stance import sole_pose
+from tests.robot.humanoid_urdf import humanoid_urdf
+
+
+@pytest.fixture(scope="module")
+def sources(tmp_path_factory):
+    """The synthetic humanoid, z up and y up, loaded as ``robot init`` loads it."""
+    return {up: load_draft_source(str(humanoid_urdf(tmp_path_factory.mktemp(up), up)), None, ()) for up in "zy"}
+
+
+@pytest.fixture(scope="module")
+def standing(sources):
+    """The z-up robot oriented, its kinematics at the neutral posture, its legs and soles."""
+    src = sources["z"]
+    model, tree = src.model, Tree.of(src.model)
+    bearing = orient(model, pin.neutral(model), tree, src.label)
+    q = pin.neutral(model)
+    q[:7] = pin.SE3ToXYZQUAT(bearing.root)
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    roots = find_legs(model, data, tree, bearing.left, src.label)
+    legs, checks = find_soles(model, data, load_geometry(model, src.text, ()), tree, roots, bearing.heading)
+    return src, tree, bearing, q, data, legs, checks
+
+
+def test_the_tree_holds_every_joint_once_and_the_whole_mass(sources):
+    model = sources["z"].model
+    tree = Tree.of(model)
+    assert sorted(tree.subtree(1)) == list(range(1, model.njoints))
+    for j, children in tree.children.items():
+        assert all(model.parents[c] == j for c in children)
+    assert tree.mass(tree.subtree(1)) == pytest.approx(sum(i.mass for i in model.inertias))
+
+
+def test_srdf_state_takes_the_first_state_unless_it_breaks_the_limits(sources, tmp_path):
+    src = sources["z"]
+    assert srdf_state(src.model, src.files) == ("", pytest.approx(pin.neutral(src.model)), ())
+    srdf = tmp_path / "robot.srdf"
+    arms = '<joint name="l_shoulder_roll" value="0.5"/><joint name="r_shoulder_roll" value="-0.5"/>'  # 0: outside
+    for knee, used in ((0.5, True), (3.0, False)):  # the knee's limits: [0, 2] rad
+        srdf.write_text(
+            '<robot name="synthetic"><group_state name="crouch" group="all">'
+            f'<joint name="l_knee" value="{knee}"/>{arms}</group_state></robot>'
+        )
+        model = src.model.copy()
+        state, q, checks = srdf_state(model, dataclasses.replace(src.files, srdf=srdf))
+        knee_q = q[model.joints[model.getJointId("l_knee")].idx_q]
+        if used:
+            assert (state, knee_q, checks) == ("crouch", 0.5, ())
+        else:
+            assert (state, knee_q) == ("", 0.0) and len(checks) == 1 and "'crouch' puts l_knee outside" in checks[0]
+
+
+def test_orient_turns_the_models_up_axis_up(sources):
+    for up, src in sources.items():
+        bearing = orient(src.model, pin.neutral(src.model), Tree.of(src.model), src.label)
+        assert bearing.up == f"+{up}"
+        model_up = np.eye(3)["xyz".index(up)]
+        assert bearing.root.rotation @ model_up == pytest.approx([0, 0, 1], abs=1e-12)
+        assert bearing.forward == pytest.approx(bearing.root.rotation[:, 0], abs=1e-12)  # the root's x, level
+        assert bearing.left == pytest.approx(np.cross([0, 0, 1], bearing.forward))
+        assert bearing.heading.rotation[:, 0] == pytest.approx(bearing.forward)
+
+
+def test_legs_and_soles_are_found_left_first_down_to_the_feet(standing):
+    src, _, bearing, _, data, legs, checks = standing
+    model = src.model
+    assert [str(model.names[j]) for j in legs.roots] == ["l_hip_yaw", "r_hip_yaw"]
+    assert [str(model.names[j]) for j in legs.feet] == ["l_ankle_roll", "r_ankle_roll"]
+    for path in legs.paths:
+        assert len(path) == 6 and all(model.parents[b] == a for a, b in itertools.pairwise(path))
+    assert legs.length_m == pytest.approx(0.8)  # hip to ankle: 0.4 + 0.4 m
+    for sole in legs.soles:
+        pose = sole_pose(model, data, sole)
+        assert pose.rotation[:, 2] == pytest.approx([0, 0, 1], abs=1e-9)
+        assert pose.translation[2] == pytest.approx(data.oMi[sole.foot_joint].translation[2] - 0.08, abs=1e-6)
+    assert [s.declared.parent for s in legs.soles] == ["l_foot", "r_foot"]
+    assert len(checks) == 2 and all("declared under the ankle" in c for c in checks)
+    assert float(data.oMi[legs.roots[0]].translation @ bearing.left) > 0
+
+
+def test_bend_reference_bends_the_knees_with_the_soles_flat_where_they_stood(standing):
+    src, _, bearing, q, data, legs, _ = standing
+    model = src.model
+    bent, joints, margin, checks = bend_reference(model, q, legs, bearing.forward)
+    assert margin == JOINT_LIMIT_MARGIN_RAD and len(checks) == 1 and checks[0].startswith("no SRDF posture")
+    assert q[7:] == pytest.approx(0.0)  # the caller's posture untouched
+    after = model.createData()
+    pin.framesForwardKinematics(model, after, bent)
+    heights = [sole_pose(model, after, s).translation[2] - sole_pose(model, data, s).translation[2] for s in legs.soles]
+    assert heights[0] == pytest.approx(heights[1], abs=1e-6) and heights[0] > 0  # the pelvis lowered
+    for sole in legs.soles:
+        assert sole_pose(model, after, sole).rotation[:, 2] == pytest.approx([0, 0, 1], abs=1e-6)
+    feet = np.mean([sole_pose(model, after, s).translation[:2] for s in legs.soles], axis=0)
+    assert pin.centerOfMass(model, after, bent)[:2] == pytest.approx(feet, abs=2e-3)
+    assert joints["l_knee"] > 0.2 and joints["r_knee"] > 0.2
+    for name, value in joints.items():
+        assert bent[model.joints[model.getJointId(name)].idx_q] == pytest.approx(value, abs=5e-5)
+
+
+def test_find_arms_takes_the_two_longest_chains_left_first(standing):
+    src, tree, bearing, _, data, legs, _ = standing
+    model = src.model
+    arms = find_arms(model, data, tree, legs.roots, bearing.left, src.label)
+    assert [str(model.names[a[-1]]) for a in arms] == ["l_wrist", "r_wrist"]
+    assert [str(model.names[a[0]]) for a in arms] == ["waist", "waist"]  # from the root's branch: the torso shared
+    for arm in arms:
+        assert all(model.parents[b] == a for a, b in itertools.pairwise(arm))
+        assert "neck" not in {str(model.names[j]) for j in arm}
+
+
+def test_locked_joints_and_clearance_from_the_limits(standing):
+    src, tree, bearing, q, data, legs, _ = standing
+    model = src.model
+    arms = find_arms(model, data, tree, legs.roots, bearing.left, src.label)
+    kept = legs.joints | {j for arm in arms for j in arm}
+    assert locked_joints(model, q, kept) == {"neck": 0.0}
+    elbow = model.getJointId("l_elbow")  # limits [-2, 0]: 0 is at the upper one
+    assert clear_of_limits(model, q, [elbow]) == {"l_elbow": pytest.approx(-LIMIT_CLEARANCE_RAD)}
+    moved = with_joints(model, q, {"l_elbow": -1.0})
+    assert clear_of_limits(model, moved, [elbow]) == {} and moved is not q and q[model.joints[elbow].idx_q] == 0.0
+    past = with_joints(model, q, {"neck": 3.0})  # outside [-1, 1]: locked at the limit
+    assert locked_joints(model, past, kept) == {"neck": 1.0}
+
+
+def test_study_body_gives_a_reference_with_its_locks_and_the_joints_it_set(sources):
+    for src in sources.values():
+        body = study_body(src)
+        model = src.model
+        assert body.state == "" and set(body.locked) == {"neck"}
+        for name, value in {**body.locked, **body.reference_joints}.items():
+            assert body.reference[model.joints[model.getJointId(name)].idx_q] == pytest.approx(value, abs=5e-5)
+        assert body.kept == set(range(2, model.njoints)) - {model.getJointId("neck")}
+        assert body.checks[-1].startswith("no SRDF posture")
+        assert pin.XYZQUATToSE3(body.reference[:7]).rotation == pytest.approx(body.bearing.root.rotation)
