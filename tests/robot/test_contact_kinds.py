@@ -143,9 +143,14 @@ def test_an_unregistered_kind_is_not_read_from_a_config():
 def test_a_registered_kind_is_read_from_a_config_and_declared_by_its_chains(registered):
     data = point_config_data()
     data["chains"]["left"]["contact_kind"] = "line"
-    chain = parse_config(data).chain("left")
+    config = parse_config(data)
+    chain = config.chain("left")
     assert chain.contact_kind is LINE and chain.kinds == (FLUSH, POINT, LINE)
     assert chain.frame(LINE) == chain.contact_frame
+    del data["chains"]["left"]["point_frame"]  # a line-only chain: saved and read back as one
+    saved = parse_config(data).to_dict()
+    assert saved["chains"]["left"]["contact_kind"] == "line" and "point_frame" not in saved["chains"]["left"]
+    assert parse_config(saved).chain("left").contact_kind is LINE
     del data["chains"]["left"]["fingertip_frames"]
     with pytest.raises(ConfigError, match=r"chains\.left\.fingertip_frames: missing"):
         parse_config(data)
