@@ -132,6 +132,8 @@ class ContactModel:
         for name, model in self.chains.items():
             for kind in self.kinds[name]:
                 params.extend(Parameter(Group(kind.group), model.frame(kind), f) for f in kind.fields)
+        if len(set(params)) < len(params):
+            raise ValueError(f"contact kinds of one chain name the same parameters (group and frame): {self.kinds}")
         nominal.extend([0.0] * (len(params) - len(nominal)))
         for session in self.sessions:
             params.extend(Parameter.plane(session, f) for f in OFFSET_FIELDS)

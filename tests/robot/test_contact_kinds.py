@@ -214,3 +214,8 @@ def test_a_model_refuses_contacts_of_a_kind_it_was_not_given(scene: Scene, examp
     with pytest.raises(ValueError, match="line contacts of chain 'left': the model has no such contact"):
         model.residuals(model.nominal(), left_contacts(example_pool, LINE))
     assert Parameter.contact(scene.chain("left").contact_frame, "roll").name in model.index
+
+
+def test_two_kinds_of_one_chain_may_not_share_their_parameters(scene: Scene):
+    with pytest.raises(ValueError, match="name the same parameters"):
+        ContactModel(scene, ["left"], ["s"], {"left": [FLUSH, LINE]})  # both offset the contact frame's z, pitch
