@@ -31,7 +31,7 @@ from posegen.calibrate.estimation import frozen_jacobian
 from posegen.errors import InputError, reason
 from posegen.io import load_yaml_file, write_atomic
 from posegen.model import Contacts, masked
-from posegen.robot import ContactKind, FloatArray
+from posegen.robot import DEFAULT_KIND, ContactKind, FloatArray, kind_named
 
 CALIBRATION_FILE = "calibration.yaml"
 CALIBRATION_FORMAT = "posegen-calibration"
@@ -61,7 +61,7 @@ class ContactResidual:
     joints: FloatArray  # (nj,) rad, in ``joint_names`` order
     before: FloatArray  # (3,) height (m), roll, pitch (rad): nominal model, fitted plane; NaN: not measured
     after: FloatArray  # (3,) the same, calibrated model
-    kind: ContactKind = ContactKind.FLUSH
+    kind: ContactKind = DEFAULT_KIND
 
 
 @dataclass(frozen=True)
@@ -213,7 +213,7 @@ def _read_residuals(path: Path) -> tuple[tuple[str, ...], tuple[ContactResidual,
                     joints=values[first - named :],
                     before=shown[:3],
                     after=shown[3:],
-                    kind=ContactKind(row[4]) if named == 5 else ContactKind.FLUSH,
+                    kind=kind_named(row[4]) if named == 5 else DEFAULT_KIND,
                 )
             )
     except (OSError, IndexError, ValueError, csv.Error) as exc:

@@ -46,7 +46,7 @@ import pinocchio as pin
 from posegen.calibrate.urdf_placement import PlacementWriter, UrdfTree, inverse
 from posegen.errors import ConfigError
 from posegen.model import ChainModel, ContactModel, placement_matrix
-from posegen.robot import ContactKind, FloatArray, Scene, contact_placement, with_declared_frames
+from posegen.robot import ContactKind, FloatArray, Scene, with_declared_frames
 
 TOLERANCE = 1e-9  # m and rad: the reloaded file against the model
 CHECK_DEVIATION = 1e-3  # m and rad: the deviation of every parameter in check_exportable
@@ -57,8 +57,7 @@ class _Item(enum.Enum):
 
     JOINT = "joint"  # a moving joint's placement in its parent joint frame
     FRAME = "frame"  # a sole or gripper frame's placement in its parent joint frame
-    CONTACT = "the contact frame of chain"  # a chain's flush contact frame in its gripper frame
-    POINT = "the point frame of chain"  # a chain's point frame in its gripper frame
+    TIP = "tip"  # a chain's contact frame of one kind (flush contact frame, point frame) in its gripper frame
 
 
 @dataclass(frozen=True)
@@ -66,8 +65,14 @@ class _Expected:
     """What the reloaded file must give."""
 
     item: _Item
-    name: str  # the joint or frame; the chain for CONTACT and POINT
+    name: str  # the joint or frame; the chain for TIP
     transform: FloatArray  # (4, 4)
+    kind: ContactKind | None = None  # TIP: the contact kind
+
+    @property
+    def title(self) -> str:
+        """What the item is, in an error message."""
+        return f"the {self.kind.frame_title} of chain" if self.kind is not None else self.item.value
 
 
 def _triple(values: FloatArray) -> tuple[float, float, float]:
@@ -174,26 +179,35 @@ def _write_ends(
     placements: dict[str, FloatArray],
     theta: FloatArray,
 ) -> list[_Expected]:
-    """Write a chain's sole, gripper (with the flush offsets folded) and point (with its offsets)."""
-    cfg = writer.scene.chain(chain.chain)
+    """Write a chain's sole, gripper (a folded kind's offsets in it) and the frames of its other kinds.
+
+    A folded kind's frame is derived at load from frames on the gripper (the flush contact
+    frame from the fingertips): its offsets move the gripper frame itself. Another kind's
+    frame (a point frame) is written at its calibrated placement under the gripper.
+    """
+    cfg = chain.config
     where = f"chains.{chain.chain}"
     sole, grip = chain.elements[0].name, chain.elements[-1].name
     kinds = model.kinds[chain.chain]
-    gripper = placements[grip]  # in the file: with the flush offsets folded in
-    if ContactKind.FLUSH in kinds:
-        offsets = theta[model.tip_columns(chain.chain, ContactKind.FLUSH)]
-        gripper = gripper @ chain.tip(offsets, ContactKind.FLUSH) @ inverse(chain.tip_nominal(ContactKind.FLUSH))
-    carried = [*cfg.fingertip_frames, *([cfg.point_frame] if cfg.point_frame else [])]
+    folded = [kind for kind in kinds if kind.folded]
+    if len(folded) > 1:
+        raise ValueError(f"{where}: kinds {', '.join(k.value for k in folded)} all fold into the gripper frame")
+    gripper = placements[grip]  # in the file: with the folded offsets in it
+    for kind in folded:
+        offsets = theta[model.tip_columns(chain.chain, kind)]
+        gripper = gripper @ chain.tip(offsets, kind) @ inverse(chain.tip_nominal(kind))
+    carried = [frame for kind in cfg.kinds for frame in kind.carried_frames(cfg)]
     writer.frame(sole, writer.parent_joint_world(sole), placements[sole], [], f"{where}.sole_frame")
     writer.frame(grip, writer.parent_joint_world(grip), gripper, carried, f"{where}.gripper_frame")
     out = [_Expected(_Item.FRAME, sole, placements[sole]), _Expected(_Item.FRAME, grip, gripper)]
-    if ContactKind.FLUSH in kinds:
-        out.append(_Expected(_Item.CONTACT, chain.chain, chain.tip_nominal(ContactKind.FLUSH)))
-    if ContactKind.POINT in kinds:
-        offsets = theta[model.tip_columns(chain.chain, ContactKind.POINT)]
-        point = inverse(gripper) @ placements[grip] @ chain.tip(offsets, ContactKind.POINT)  # in the file's gripper
-        writer.point(chain.point_frame, writer.frame_world(grip), point, f"{where}.point_frame")
-        out.append(_Expected(_Item.POINT, chain.chain, point))
+    for kind in kinds:
+        if kind.folded:
+            tip = chain.tip_nominal(kind)  # derived at load: it moved with the gripper
+        else:
+            offsets = theta[model.tip_columns(chain.chain, kind)]
+            tip = inverse(gripper) @ placements[grip] @ chain.tip(offsets, kind)  # in the file's gripper
+            writer.point(kind.frame(cfg), writer.frame_world(grip), tip, f"{where}.{kind.required_field}")
+        out.append(_Expected(_Item.TIP, chain.chain, tip, kind))
     return out
 
 
@@ -219,17 +233,13 @@ def _check(text: str, scene: Scene, expected: list[_Expected]) -> None:
             parent = nominal.frames[scene.frame_id(item.name)].parentJoint
             same_parent = model.names[frame.parentJoint] == nominal.names[parent]
         else:
-            cfg = scene.chain(item.name)
-            grip = data.oMf[model.getFrameId(cfg.gripper_frame)]
-            if item.item == _Item.CONTACT:
-                found = contact_placement(model, cfg, q).homogeneous
-            else:
-                found = grip.actInv(data.oMf[model.getFrameId(cfg.point_frame)]).homogeneous
+            assert item.kind is not None, "a tip names its kind"
+            found = item.kind.placement_in_gripper(model, data, scene.chain(item.name), q)
             same_parent = True
         gap = float(np.abs(found - item.transform).max())
         if not same_parent or gap > TOLERANCE:
             raise ConfigError(
-                f"the calibrated URDF cannot hold the placement of {item.item.value} '{item.name}' "
+                f"the calibrated URDF cannot hold the placement of {item.title} '{item.name}' "
                 f"(this layout of frames and fixed joints: off by {gap:.3g})"
             )
 

@@ -11,12 +11,12 @@ and the route's repair consults.
 
 from posegen.model.calibration_model import CalibrationModel, Evaluation, Observations, body_parts, start_point
 from posegen.model.contact_model import ContactModel, Contacts, planned_kinds
-from posegen.model.contact_rows import ROWS, masked, row_counts, row_mask
+from posegen.model.contact_rows import masked, row_counts, row_mask
 from posegen.model.design import RIDGE, SINGULAR, Design, build_design
 from posegen.model.floor_model import FLOOR_FIELDS, SESSION_FIELDS, FloorModel
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
 from posegen.model.kinds import Direction, Kind, Part, kind_basis
-from posegen.model.kinematics import ChainModel, offset_matrix, placement_derivatives, placement_matrix, rpy_matrix
+from posegen.model.kinematics import ChainModel
 from posegen.model.measurements import (
     LIMIT_TOLERANCE_RAD,
     MEASUREMENT_FORMAT,
@@ -50,6 +50,7 @@ from posegen.model.weights import (
     prior_scale,
     weights_for,
 )
+from posegen.robot import offset_matrix, placement_derivatives, placement_matrix, rpy_matrix  # the model's transforms
 
 __all__ = [
     "DEFAULT_FLOOR_NOISE",
@@ -64,7 +65,6 @@ __all__ = [
     "RANK_TOLERANCE",
     "RIDGE",
     "ROBOT_KINDS",
-    "ROWS",
     "SESSION_FIELDS",
     "SINGULAR",
     "STRUCTURAL_POSTURES",

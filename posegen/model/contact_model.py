@@ -2,12 +2,14 @@
 
 Parameters (a flat vector, named): every placement of every chain (shared placements,
 such as the torso's, appear once), each chain's contact parameters for each contact
-kind it makes (a flush contact frame's z, roll, pitch offsets; a contact point's x, y,
-z), and one plane per table session. Residuals of a set of contacts: (n, 3) per contact,
-height (m), roll, pitch (rad) of a flush contact frame in its session's plane frame, or
-height of a point above the plane less its tip radius and two zero rows: a point
-contact measures one number (:mod:`posegen.model.contact_rows` says which rows are real).
-The zero rows keep one layout for every design formula: their Jacobian is zero too.
+kind it makes (the kind's ``fields``: a flush contact frame's z, roll, pitch offsets; a
+contact point's x, y, z), and one plane per table session. Residuals of a set of
+contacts: (n, 3) per contact, what its kind measures of its tip frame in its session's
+plane frame (:class:`posegen.robot.ContactKind`): height (m), roll, pitch (rad) of a
+flush contact frame, or height of a point above the plane less its tip radius and two
+zero rows (:mod:`posegen.model.contact_rows` says which rows are real). The zero rows
+keep one layout for every design formula: their Jacobian is zero too. Nothing here
+names a kind: the model asks each kind.
 """
 
 from __future__ import annotations
@@ -19,18 +21,9 @@ from dataclasses import field as dataclass_field
 import numpy as np
 from numpy.typing import NDArray
 
-from posegen.model.kinematics import (
-    ChainModel,
-    element_derivatives,
-    joint_derivative,
-    offset_matrix,
-    placement_derivatives,
-    rigid_inverse,
-    tilt_measurement,
-    tilt_measurement_jacobian,
-)
-from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, POINT_FIELDS, Group, Parameter
-from posegen.robot import ContactKind, FloatArray, Indices, Scene
+from posegen.model.kinematics import ChainModel, element_derivatives, joint_derivative, rigid_inverse
+from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter
+from posegen.robot import DEFAULT_KIND, ContactKind, FloatArray, Indices, Scene, offset_derivatives, offset_matrix
 
 
 @dataclass(frozen=True)
@@ -41,11 +34,13 @@ class Contacts:
     chains: tuple[str, ...]  # chain in contact, per contact
     sessions: tuple[str, ...]  # table session (one plane each), per contact
     labels: tuple[str, ...]  # e.g. target spot or source row, per contact
-    kinds: tuple[ContactKind, ...] = dataclass_field(default=())  # per contact; () means every contact is flush
+    kinds: tuple[ContactKind, ...] = dataclass_field(
+        default=()
+    )  # per contact; () means every contact is of DEFAULT_KIND
 
     def __post_init__(self) -> None:
         if not self.kinds:
-            object.__setattr__(self, "kinds", (ContactKind.FLUSH,) * len(self.chains))
+            object.__setattr__(self, "kinds", (DEFAULT_KIND,) * len(self.chains))
         if len(self.kinds) != len(self.chains):
             raise ValueError(f"{len(self.kinds)} contact kinds for {len(self.chains)} contacts")
 
@@ -78,11 +73,11 @@ class Contacts:
         return Contacts(joints, self.chains, self.sessions, self.labels, self.kinds)
 
     def kinds_by_chain(self) -> dict[str, tuple[ContactKind, ...]]:
-        """Chain -> the contact kinds its rows make (in ContactKind order)."""
+        """Chain -> the contact kinds its rows make (in their names' order)."""
         out: dict[str, set[ContactKind]] = {}
         for chain, kind in zip(self.chains, self.kinds, strict=True):
             out.setdefault(chain, set()).add(kind)
-        return {c: tuple(k for k in ContactKind if k in kinds) for c, kinds in out.items()}
+        return {c: tuple(sorted(kinds)) for c, kinds in out.items()}
 
 
 def planned_kinds(scene: Scene, chains: Sequence[str]) -> tuple[ContactKind, ...]:
@@ -114,13 +109,12 @@ class ContactModel:
 
         """
         self.scene = scene
-        self.chains = {c: ChainModel(scene, c) for c in dict.fromkeys(chains)}
-        self.sessions = tuple(dict.fromkeys(sessions))
         given = dict(kinds or {})
-        self.kinds = {  # chain -> its contact kinds, in ContactKind order
-            c: tuple(k for k in ContactKind if k in set(given.get(c, (scene.chain(c).contact_kind,))))
-            for c in self.chains
+        self.kinds = {  # chain -> its contact kinds, in their names' order
+            c: tuple(sorted(set(given.get(c, (scene.chain(c).contact_kind,))))) for c in dict.fromkeys(chains)
         }
+        self.chains = {c: ChainModel(scene, c, self.kinds[c]) for c in self.kinds}
+        self.sessions = tuple(dict.fromkeys(sessions))
         for name, model in self.chains.items():
             for kind in self.kinds[name]:
                 model.tip_nominal(kind)  # raises when the chain declares no such contact
@@ -136,10 +130,10 @@ class ContactModel:
                     params.append(Parameter.placement(element.name, field))
                     nominal.append(float(value))
         for name, model in self.chains.items():
-            if ContactKind.FLUSH in self.kinds[name]:
-                params.extend(Parameter.contact(model.contact_frame, f) for f in OFFSET_FIELDS)
-            if ContactKind.POINT in self.kinds[name]:
-                params.extend(Parameter.point(model.point_frame, f) for f in POINT_FIELDS)
+            for kind in self.kinds[name]:
+                params.extend(Parameter(Group(kind.group), model.frame(kind), f) for f in kind.fields)
+        if len(set(params)) < len(params):
+            raise ValueError(f"contact kinds of one chain name the same parameters (group and frame): {self.kinds}")
         nominal.extend([0.0] * (len(params) - len(nominal)))
         for session in self.sessions:
             params.extend(Parameter.plane(session, f) for f in OFFSET_FIELDS)
@@ -187,11 +181,8 @@ class ContactModel:
         return list(self._blocks[Group.POINT, frame])
 
     def tip_columns(self, chain: str, kind: ContactKind) -> list[int]:
-        """Columns of a chain's contact parameters of one kind."""
-        model = self.chains[chain]
-        if kind == ContactKind.POINT:
-            return self.point_columns(model.point_frame)
-        return self.contact_columns(model.contact_frame)
+        """Columns of a chain's contact parameters of one kind, in the kind's ``fields`` order."""
+        return list(self._blocks[Group(kind.group), self.chains[chain].frame(kind)])
 
     def plane_columns(self, session: str) -> list[int]:
         """Columns of a session's plane (z, roll, pitch), in OFFSET_FIELDS order."""
@@ -229,7 +220,7 @@ class ContactModel:
         sessions = np.array(contacts.sessions)
         kinds = np.array([k.value for k in contacts.kinds])
         for name, model in self.chains.items():
-            for kind in ContactKind:
+            for kind in sorted(set(contacts.kinds)):
                 mine = (chains == name) & (kinds == kind.value)
                 if not mine.any():
                     continue
@@ -269,11 +260,8 @@ class ContactModel:
             prefixes.append(prefixes[-1] @ t)
         sole_to_contact = prefixes[-1] @ tip  # (n, 4, 4)
         frames = plane_inv @ sole_to_contact
-        point = kind == ContactKind.POINT
-        measured = _point_rows if point else tilt_measurement_jacobian
-        res: FloatArray = np.zeros((n, 3)) if point else tilt_measurement(frames)
-        if point:
-            res[:, 0] = frames[:, 2, 3] - model.point_radius_m
+        measured = kind.measure_jacobian
+        res = kind.measure(frames, model.config)
         if not jacobian:
             return res, np.zeros((n, 3, 0)), np.zeros((n, 3, 0))
         jac = np.zeros((n, 3, self.size))
@@ -290,30 +278,13 @@ class ContactModel:
                 d_row = np.einsum("ni,nij,njk->nk", u, joint_derivative(element, elements[k]), suffix)[:, None]
                 d_joints[:, :, element.joint] += measured(frames[:, 2], d_row)[:, :, 0]
             suffix = elements[k] @ suffix
-        # contact parameters: tip = C_nom Off(z, roll, pitch) (flush), C_nom Trans(x, y, z) (point)
-        offset = _TRANSLATIONS if point else _offset_derivatives(contact)  # (3, 4, 4)
+        # contact parameters: tip = C_nom Off(contact), the kind's offset (flush: z, roll, pitch; point: x, y, z)
+        offset = kind.tip_offset_derivatives(contact)  # (m, 4, 4)
         u = w @ prefixes[-1]  # (n, 4)
         d_row = np.einsum("ni,pij->npj", u, model.tip_nominal(kind) @ offset)
         jac[:, :, tip_columns] += measured(frames[:, 2], d_row)
         # plane: frames = P^-1 T -> d frames = -P^-1 dP frames
-        d_plane = _offset_derivatives(theta[self.plane_columns(session)])
+        d_plane = offset_derivatives(theta[self.plane_columns(session)])
         d_row = -np.einsum("i,pij,njk->npk", w, d_plane, frames)
         jac[:, :, self.plane_columns(session)] += measured(frames[:, 2], d_row)
         return res, jac, (d_joints if d_joints is not None else np.zeros((n, 3, 0)))
-
-
-_TRANSLATIONS = np.zeros((3, 4, 4))  # derivatives of Trans(x, y, z) w.r.t. x, y, z
-_TRANSLATIONS[[0, 1, 2], [0, 1, 2], 3] = 1.0
-
-
-def _point_rows(row: FloatArray, d_row: FloatArray) -> FloatArray:
-    """Derivative of a point contact's rows (height, 0, 0) given the frame's third row's (n, p, 4). Shape (n, 3, p)."""
-    out = np.zeros((d_row.shape[0], 3, d_row.shape[1]))
-    out[:, 0] = d_row[:, :, 3]
-    return out
-
-
-def _offset_derivatives(offset: FloatArray) -> FloatArray:
-    """Derivatives of offset_matrix(z, roll, pitch) w.r.t. its three arguments. Shape (3, 4, 4)."""
-    z, roll, pitch = offset
-    return placement_derivatives(np.array([0.0, 0.0, z, roll, pitch, 0.0]))[2:5]

@@ -2,8 +2,9 @@
 
 Every contact keeps the (height, roll, pitch) layout, (n, 3) residuals and (n, 3, p)
 Jacobians, so the design formulas (log det, rank-3 updates, Kiefer-Wolfowitz) hold for
-any mix of kinds. A flush contact measures all three rows; a point contact only the
-height: its roll and pitch rows are zero, residual and Jacobian alike. Whatever counts
+any mix of kinds. Each kind says which rows it measures (``ContactKind.rows``): a flush
+contact all three, a point contact only the height, its roll and pitch rows zero,
+residual and Jacobian alike. Whatever counts
 measurements (equations against unknowns, degrees of freedom of a noise estimate or an
 outlier test, the mean of a cross-validation score) counts the real rows, given here.
 """
@@ -17,18 +18,15 @@ from numpy.typing import NDArray
 
 from posegen.robot import ContactKind, FloatArray
 
-ROWS = {ContactKind.FLUSH: 3, ContactKind.POINT: 1}  # real measurement rows of a contact, per kind
-_MASK = {ContactKind.FLUSH: (True, True, True), ContactKind.POINT: (True, False, False)}
-
 
 def row_mask(kinds: Sequence[ContactKind]) -> NDArray[np.bool_]:
     """Which of each contact's (height, roll, pitch) rows are measured. Shape (n, 3)."""
-    return np.array([_MASK[k] for k in kinds], dtype=bool).reshape(len(kinds), 3)
+    return np.array([k.rows for k in kinds], dtype=bool).reshape(len(kinds), 3)
 
 
 def row_counts(kinds: Sequence[ContactKind]) -> NDArray[np.int_]:
     """Number of real rows of each contact (3 flush, 1 point). Shape (n,)."""
-    return np.array([ROWS[k] for k in kinds], dtype=int)
+    return np.array([sum(k.rows) for k in kinds], dtype=int)
 
 
 def masked(residuals: FloatArray, kinds: Sequence[ContactKind]) -> FloatArray:

@@ -22,10 +22,8 @@ from posegen.model.kinematics import (
     element_derivatives,
     joint_derivative,
     rigid_inverse,
-    tilt_measurement,
-    tilt_measurement_jacobian,
 )
-from posegen.robot import FloatArray
+from posegen.robot import FloatArray, tilt_measurement, tilt_measurement_jacobian
 
 FLOOR_FIELDS = ("x", "y", "z", "roll", "pitch", "yaw")  # m, m, m, rad, rad, rad
 SESSION_FIELDS = ("x", "y", "yaw")  # constants of a session; height, roll and pitch are zero

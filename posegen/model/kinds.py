@@ -25,9 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from posegen.model.contact_model import ContactModel
-from posegen.model.kinematics import rpy_derivatives, rpy_matrix
-from posegen.model.parameters import OFFSET_FIELDS, POINT_FIELDS
-from posegen.robot import ContactKind, FloatArray
+from posegen.model.parameters import OFFSET_FIELDS, Group, Unit
+from posegen.robot import FloatArray, rpy_derivatives, rpy_matrix
 
 
 class Kind(str, enum.Enum):
@@ -69,6 +68,13 @@ class Direction:
     def name(self) -> str:
         """``<owner>.<label>``, as reports show it."""
         return f"{self.owner}.{self.label}"
+
+
+def contact_prior(group: Group, unit: Unit) -> Kind:
+    """The prior kind of a contact parameter: a frame offset's height or tilt, or a point's coordinate."""
+    if group == Group.POINT:
+        return Kind.CONTACT_POINT
+    return Kind.CONTACT_HEIGHT if unit == Unit.LENGTH else Kind.CONTACT_TILT
 
 
 def body_rates(phi: FloatArray) -> FloatArray:
@@ -140,14 +146,11 @@ def kind_basis(
                 rpy = to_rpy @ axis
                 entries = {c: float(v) for c, v in zip(cols[3:], rpy, strict=True)}
                 add(Direction(kind, part, element.name, label), entries)
-    for name, chain in model.chains.items():
-        if ContactKind.FLUSH in model.kinds[name]:
-            for col, field in zip(model.contact_columns(chain.contact_frame), OFFSET_FIELDS, strict=True):
-                kind = Kind.CONTACT_HEIGHT if field == "z" else Kind.CONTACT_TILT
-                add(Direction(kind, Part.CONTACT, chain.contact_frame, field), {col: 1.0})
-        if ContactKind.POINT in model.kinds[name]:
-            for col, field in zip(model.point_columns(chain.point_frame), POINT_FIELDS, strict=True):
-                add(Direction(Kind.CONTACT_POINT, Part.CONTACT, chain.point_frame, field), {col: 1.0})
+    for name in model.chains:
+        for contact_kind in model.kinds[name]:
+            for col in model.tip_columns(name, contact_kind):
+                p = model.parameters[col]
+                add(Direction(contact_prior(p.group, p.unit), Part.CONTACT, p.owner, p.field), {col: 1.0})
     for session in model.sessions:
         for col, field in zip(model.plane_columns(session), OFFSET_FIELDS, strict=True):
             add(Direction(Kind.PLANE, Part.SCENE, session, field), {col: 1.0})

@@ -17,61 +17,22 @@ Everything is vectorised over postures: shapes ``(n, ...)`` with n postures.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError
-from posegen.robot import ContactKind, FloatArray, Scene
-
-
-def rpy_matrix(phi: FloatArray) -> FloatArray:
-    """URDF rpy rotation Rz(phiz) Ry(phiy) Rx(phix). phi: (3,), returns (3, 3)."""
-    return np.asarray(pin.rpy.rpyToMatrix(float(phi[0]), float(phi[1]), float(phi[2])))
-
-
-def _skew(axis: int) -> FloatArray:
-    e = np.zeros(3)
-    e[axis] = 1.0
-    return np.asarray(pin.skew(e))
-
-
-def rpy_derivatives(phi: FloatArray) -> FloatArray:
-    """Derivatives of the rpy rotation with respect to phix, phiy, phiz. Shape (3, 3, 3)."""
-    rx = pin.rpy.rpyToMatrix(float(phi[0]), 0.0, 0.0)
-    ry = pin.rpy.rpyToMatrix(0.0, float(phi[1]), 0.0)
-    rz = pin.rpy.rpyToMatrix(0.0, 0.0, float(phi[2]))
-    return np.array([rz @ ry @ rx @ _skew(0), rz @ ry @ _skew(1) @ rx, _skew(2) @ rz @ ry @ rx])
-
-
-def placement_matrix(params: FloatArray) -> FloatArray:
-    """Homogeneous transform of (px, py, pz, phix, phiy, phiz). Shape (4, 4)."""
-    out = np.eye(4)
-    out[:3, :3] = rpy_matrix(params[3:])
-    out[:3, 3] = params[:3]
-    return out
-
-
-def placement_derivatives(params: FloatArray) -> FloatArray:
-    """Derivatives of :func:`placement_matrix` w.r.t. its six parameters. Shape (6, 4, 4)."""
-    out = np.zeros((6, 4, 4))
-    for i in range(3):
-        out[i, i, 3] = 1.0
-    out[3:, :3, :3] = rpy_derivatives(params[3:])
-    return out
-
-
-def offset_matrix(z: float, roll: float, pitch: float) -> FloatArray:
-    """Transform Trans(0, 0, z) Rot_rpy(roll, pitch, 0) (a plane or contact offset). Shape (4, 4)."""
-    return placement_matrix(np.array([0.0, 0.0, z, roll, pitch, 0.0]))
-
-
-def translation_matrix(xyz: FloatArray) -> FloatArray:
-    """Transform Trans(x, y, z) (a contact point's offset). Shape (4, 4)."""
-    out = np.eye(4)
-    out[:3, 3] = xyz
-    return out
+from posegen.robot import (
+    DEFAULT_KIND,
+    ContactKind,
+    FloatArray,
+    Scene,
+    placement_derivatives,
+    placement_matrix,
+    registered_kinds,
+)
 
 
 @dataclass(frozen=True)
@@ -104,20 +65,18 @@ class ChainModel:
 
     Attributes:
         chain: Chain name.
+        config: The chain's config.
         elements: Placements from the sole to the gripper frame.
-        contact_nominal: Nominal flush contact frame in the gripper frame, (4, 4); None
-            when the chain declares no flush contact.
-        point_nominal: Nominal point frame in the gripper frame, (4, 4); None when the
-            chain declares no point contact.
-        point_radius_m: The point's tip radius (its centre's height at a contact).
         placement_names: Names of the placements, in chain order.
 
     """
 
-    def __init__(self, scene: Scene, chain: str) -> None:
+    def __init__(self, scene: Scene, chain: str, kinds: Sequence[ContactKind] = ()) -> None:
+        """Read the chain from the scene; ``kinds``: contact kinds to know beyond the registered ones."""
         cfg = scene.chain(chain)
         model = scene.model
         self.chain = chain
+        self.config = cfg
         sole = model.frames[scene.frame_id(cfg.sole_frame)]
         grip = model.frames[scene.frame_id(cfg.gripper_frame)]
         up = _ancestors(model, sole.parentJoint)  # sole joint .. first joint below the root
@@ -137,13 +96,8 @@ class ChainModel:
             )
         elements.append(Element(cfg.gripper_frame, _xyz_rpy(grip.placement), False, None, None))
         self.elements = tuple(elements)
-        flush = scene.contact_placements.get(chain)
-        point = scene.point_placements.get(chain)
-        self.contact_nominal = None if flush is None else np.array(flush.homogeneous)
-        self.point_nominal = None if point is None else np.array(point.homogeneous)
-        self.contact_frame = cfg.contact_frame
-        self.point_frame = cfg.point_frame
-        self.point_radius_m = cfg.point_radius_m
+        known = dict.fromkeys((*registered_kinds(), *kinds))
+        self._tips = {kind: kind.nominal_tip(scene, cfg) for kind in known}  # kind -> (4, 4) in the gripper, or None
         self.placement_names = tuple(e.name for e in elements)
         self._rotation_cache: dict[tuple[int, bytes], FloatArray] = {}
 
@@ -153,8 +107,8 @@ class ChainModel:
         return [e.joint for e in self.elements if e.joint is not None]
 
     def frame(self, kind: ContactKind) -> str:
-        """The frame a contact of this kind constrains (flush contact frame or point frame)."""
-        return self.point_frame if kind == ContactKind.POINT else self.contact_frame
+        """The frame a contact of this kind constrains (e.g. the flush contact frame, a point frame)."""
+        return kind.frame(self.config)
 
     def tip_nominal(self, kind: ContactKind) -> FloatArray:
         """Nominal tip frame of a contact kind in the gripper frame. Shape (4, 4).
@@ -163,17 +117,16 @@ class ChainModel:
             ConfigError: The chain declares no contact of this kind.
 
         """
-        tip = self.point_nominal if kind == ContactKind.POINT else self.contact_nominal
+        tip = self._tips.get(kind)
         if tip is None:
-            needed = "point_frame" if kind == ContactKind.POINT else "fingertip_frames"
-            raise ConfigError(f"chains.{self.chain}.{needed}: missing (a {kind.value} contact of this chain needs it)")
+            raise ConfigError(
+                f"chains.{self.chain}.{kind.required_field}: missing (a {kind.value} contact of this chain needs it)"
+            )
         return tip
 
-    def tip(self, contact: FloatArray, kind: ContactKind = ContactKind.FLUSH) -> FloatArray:
-        """Gripper-to-tip transform at contact parameters (flush: z, roll, pitch; point: x, y, z). Shape (4, 4)."""
-        if kind == ContactKind.POINT:
-            return self.tip_nominal(kind) @ translation_matrix(contact)
-        return self.tip_nominal(kind) @ offset_matrix(*contact)
+    def tip(self, contact: FloatArray, kind: ContactKind = DEFAULT_KIND) -> FloatArray:
+        """Gripper-to-tip transform at the kind's contact parameters (its ``fields``). Shape (4, 4)."""
+        return self.tip_nominal(kind) @ kind.tip_offset(contact)
 
     def transforms(
         self,
@@ -181,14 +134,14 @@ class ChainModel:
         placements: dict[str, FloatArray],
         contact: FloatArray,
         legs_only: bool = False,
-        kind: ContactKind = ContactKind.FLUSH,
+        kind: ContactKind = DEFAULT_KIND,
     ) -> tuple[list[FloatArray], FloatArray]:
         """Per-element transforms and the contact offset.
 
         Args:
             joints: (n, nj) joint angles, rad.
             placements: Placement name -> (6,) parameters.
-            contact: (3,) contact parameters (flush: z m, roll rad, pitch rad; point: x, y, z m).
+            contact: The kind's contact parameters (its ``fields``: flush z m, roll rad, pitch rad; point x, y, z m).
             legs_only: Only the elements from the sole up to the root (traversed in reverse);
                 the tip is then the identity.
             kind: The contact's kind.
@@ -216,7 +169,7 @@ class ChainModel:
         joints: FloatArray,
         placements: dict[str, FloatArray],
         contact: FloatArray,
-        kind: ContactKind = ContactKind.FLUSH,
+        kind: ContactKind = DEFAULT_KIND,
     ) -> FloatArray:
         """Contact (flush) or point frame, at its offset, in the sole frame. Shape (n, 4, 4)."""
         elements, tip = self.transforms(joints, placements, contact, kind=kind)
@@ -318,36 +271,3 @@ def _ancestors(model: pin.Model, joint: int) -> list[int]:
         out.append(joint)
         joint = model.parents[joint]
     return out
-
-
-def tilt_measurement(frames: FloatArray) -> FloatArray:
-    """Height (m), roll and pitch (rad) of frames expressed in the plane frame.
-
-    Args:
-        frames: (n, 4, 4) contact frames in the plane frame.
-
-    Returns:
-        (n, 3) measurements.
-
-    """
-    roll = np.arctan2(frames[:, 2, 1], frames[:, 2, 2])
-    pitch = np.arcsin(np.clip(-frames[:, 2, 0], -1.0, 1.0))
-    return np.column_stack([frames[:, 2, 3], roll, pitch])
-
-
-def tilt_measurement_jacobian(row: FloatArray, d_row: FloatArray) -> FloatArray:
-    """Derivative of :func:`tilt_measurement` given the third row of the frame.
-
-    Args:
-        row: (n, 4) third row of the frame (R20, R21, R22, z).
-        d_row: (n, p, 4) its derivatives with respect to p parameters.
-
-    Returns:
-        (n, 3, p) derivatives of (z, roll, pitch).
-
-    """
-    r20, r21, r22 = row[:, 0, None], row[:, 1, None], row[:, 2, None]
-    d_z = d_row[:, :, 3]
-    d_roll = (r22 * d_row[:, :, 1] - r21 * d_row[:, :, 2]) / (r21**2 + r22**2)
-    d_pitch = -d_row[:, :, 0] / np.sqrt(np.maximum(1.0 - r20**2, 1e-12))
-    return np.stack([d_z, d_roll, d_pitch], axis=1)

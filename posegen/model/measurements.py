@@ -38,7 +38,7 @@ import numpy as np
 from posegen.errors import InputError, reason, unknown_name
 from posegen.io import read_text_file, read_yaml, write_yaml
 from posegen.model.contact_model import Contacts, planned_kinds
-from posegen.robot import ContactKind, Scene
+from posegen.robot import Scene, kind_named, registered_kinds
 
 LOG = logging.getLogger(__name__)
 
@@ -229,7 +229,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         raise InputError(f"{path}: 'joint_names' must be a list of names")
     _check_names(scene, names, path)
     chains_known = {c.name for c in scene.chains}
-    kinds_known = ", ".join(k.value for k in ContactKind)
+    kinds_known = ", ".join(k.value for k in registered_kinds())
     joints, chains, sessions, labels, kinds = [], [], [], [], []
     for i, item in enumerate(raw):
         where = f"{path}: contact {i}"
@@ -240,12 +240,14 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
             raise InputError(f"{where}: malformed ({reason(exc)})") from exc
         if chain not in chains_known:
             raise InputError(f"{where}: unknown chain '{chain}'; valid chains: {', '.join(sorted(chains_known))}")
-        kind = str(item.get("kind", scene.chain(chain).contact_kind.value))
-        if kind not in {k.value for k in ContactKind}:
-            raise InputError(f"{where}: unknown contact kind '{kind}'; valid kinds: {kinds_known}")
-        if ContactKind(kind) not in scene.chain(chain).kinds:
+        name = str(item.get("kind", scene.chain(chain).contact_kind.value))
+        try:
+            kind = kind_named(name)
+        except ValueError:
+            raise InputError(f"{where}: unknown contact kind '{name}'; valid kinds: {kinds_known}") from None
+        if kind not in scene.chain(chain).kinds:
             declared = ", ".join(k.value for k in scene.chain(chain).kinds)
-            raise InputError(f"{where}: chain '{chain}' makes no {kind} contact in this config (it makes: {declared})")
+            raise InputError(f"{where}: chain '{chain}' makes no {name} contact in this config (it makes: {declared})")
         if len(values) != len(names):
             raise InputError(f"{where}: expected {len(names)} angles, got {len(values)}")
         _check_angles(scene, names, values, where, LIMIT_TOLERANCE_RAD)
@@ -253,7 +255,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         chains.append(chain)
         sessions.append(session or str(item.get("session", path.stem)))
         labels.append(f"{path.name}:{i}:{item.get('label', 'row')}")
-        kinds.append(ContactKind(kind))
+        kinds.append(kind)
     return Recording(Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels), tuple(kinds)), ())
 
 

@@ -8,7 +8,7 @@ selection, route).
 """
 
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
-from posegen.robot.chain_config import ChainConfig, ContactKind
+from posegen.robot.chain_config import ChainConfig
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
 from posegen.robot.collision_geometry import robot_geometry
 from posegen.robot.collision_matrix import PairSurvey
@@ -24,8 +24,17 @@ from posegen.robot.config import (
     load_config,
     parse_config,
 )
+from posegen.robot.contact_kinds import (
+    DEFAULT_KIND,
+    FLUSH,
+    POINT,
+    ContactKind,
+    contact_placement,
+    kind_named,
+    registered_kinds,
+)
 from posegen.robot.coverage import GeometryCoverage, geometry_coverage
-from posegen.robot.description import RobotFiles, contact_placement, kinematic_urdf, with_declared_frames
+from posegen.robot.description import RobotFiles, kinematic_urdf, with_declared_frames
 from posegen.robot.draft import Draft
 from posegen.robot.draft_text import survey_config_pairs, write_draft
 from posegen.robot.feasibility import (
@@ -79,15 +88,29 @@ from posegen.robot.trajectory import (
     route_arrays,
     stamp,
 )
+from posegen.robot.transforms import (
+    offset_derivatives,
+    offset_matrix,
+    placement_derivatives,
+    placement_matrix,
+    rpy_derivatives,
+    rpy_matrix,
+    tilt_measurement,
+    tilt_measurement_jacobian,
+    translation_matrix,
+)
 from posegen.robot.validation import check_for_planning
 from posegen.robot.verification import EXAMPLES, Verification, Worst, WorstSoFar, summarize, worst_case
 
 __all__ = [
     "ACCELERATION_STEP",
+    "DEFAULT_KIND",
     "EXAMPLES",
+    "FLUSH",
     "MAX_DURATION_S",
     "MIN_STEP_S",
     "MOMENT_ARM_M",
+    "POINT",
     "POOL_FORMAT",
     "POOL_VERSION",
     "POSITION_DTYPE",
@@ -143,25 +166,36 @@ __all__ = [
     "geometry_coverage",
     "gravity_torques",
     "is_route_file",
+    "kind_named",
     "kinematic_urdf",
     "load_config",
     "load_plan",
     "load_pool",
+    "offset_derivatives",
+    "offset_matrix",
     "parse_candidate",
     "parse_config",
+    "placement_derivatives",
+    "placement_matrix",
     "plan_entries",
     "points_problem",
     "polygon_margin",
     "pool_from_dict",
     "posture_from_dict",
     "read_route",
+    "registered_kinds",
     "robot_geometry",
     "route_arrays",
+    "rpy_derivatives",
+    "rpy_matrix",
     "scene_for",
     "stamp",
     "summarize",
     "survey_config_pairs",
     "tilt_angles",
+    "tilt_measurement",
+    "tilt_measurement_jacobian",
+    "translation_matrix",
     "with_declared_frames",
     "worst_case",
     "write_draft",

@@ -2,18 +2,11 @@
 
 from __future__ import annotations
 
-import enum
 from dataclasses import dataclass
 
 from posegen.errors import ConfigError
 from posegen.robot.config_reader import Reader
-
-
-class ContactKind(str, enum.Enum):
-    """How a hand touches the table."""
-
-    FLUSH = "flush"  # three fingertips (or a face) on the plane: height, roll and pitch
-    POINT = "point"  # one fingertip or a round hand: height only
+from posegen.robot.contact_kinds import DEFAULT_KIND, ContactKind, kind_named, registered_kinds
 
 
 @dataclass(frozen=True)
@@ -35,7 +28,7 @@ class ChainConfig:
     spot_y_range_m: tuple[float, float]  # table-frame y range of the spots this arm serves
     recorded_as: str = ""  # the name recordings give this gripper (e.g. "robot/gripper_a")
     wrench_topic: str = ""  # rosbag2 topic of this wrist's force/torque sensor (geometry_msgs/WrenchStamped)
-    contact_kind: ContactKind = ContactKind.FLUSH  # what `pool` plans
+    contact_kind: ContactKind = DEFAULT_KIND  # what `pool` plans
     point_frame: str = ""  # the point contact's frame ("": no point contact)
     point_radius_m: float = 0.0  # the tip's rounding: its centre stays this far above the table
     point_cone_deg: float = 30.0  # largest tilt of the point frame's z from the table normal
@@ -43,17 +36,16 @@ class ChainConfig:
 
     def frame(self, kind: ContactKind) -> str:
         """The frame whose pose a contact of this kind constrains."""
-        return self.point_frame if kind == ContactKind.POINT else self.contact_frame
+        return kind.frame(self)
 
     @property
     def kinds(self) -> tuple[ContactKind, ...]:
-        """The contact kinds this chain declares."""
-        declared = {ContactKind.FLUSH: bool(self.fingertip_frames), ContactKind.POINT: bool(self.point_frame)}
-        return tuple(kind for kind, present in declared.items() if present)
+        """The registered contact kinds this chain declares."""
+        return tuple(kind for kind in registered_kinds() if kind.declared(self))
 
 
 CHAIN_DEFAULTS = {
-    "contact_kind": ContactKind.FLUSH.value,
+    "contact_kind": DEFAULT_KIND.value,
     "point_frame": "",
     "point_radius_m": 0.0,
     "point_cone_deg": 30.0,
@@ -63,21 +55,14 @@ CHAIN_DEFAULTS = {
 
 def read_chain(ch: Reader, name: str) -> ChainConfig:
     """One chain: its frames, the contacts its hand makes, the spots it serves."""
-    kinds = ", ".join(k.value for k in ContactKind)
-    kind_name = ch.text("contact_kind", ContactKind.FLUSH.value)
-    if kind_name not in {k.value for k in ContactKind}:
-        raise ConfigError(f"chains.{name}.contact_kind: unknown kind '{kind_name}'; valid kinds: {kinds}")
-    kind = ContactKind(kind_name)
+    try:
+        kind = kind_named(ch.text("contact_kind", DEFAULT_KIND.value))
+    except ValueError as exc:
+        raise ConfigError(f"chains.{name}.contact_kind: {exc}") from exc
     point = ch.text("point_frame", "") if "point_frame" in ch.data else ""
     tips = ch.texts("fingertip_frames", [])
-    if kind == ContactKind.POINT and not point:
-        raise ConfigError(f"chains.{name}.point_frame: missing (needed by contact_kind point)")
-    if (kind == ContactKind.FLUSH or tips) and len(tips) < 3:
-        raise ConfigError(f"chains.{name}.fingertip_frames: a flush contact needs 3 fingertips")
     cone = ch.number("point_cone_deg", 30.0, minimum=0.0)
-    if cone >= 90.0:
-        raise ConfigError(f"chains.{name}.point_cone_deg: must be below 90 deg, got {cone}")
-    return ChainConfig(
+    chain = ChainConfig(
         name=name,
         sole_frame=ch.text("sole_frame"),
         gripper_frame=ch.text("gripper_frame"),
@@ -93,3 +78,6 @@ def read_chain(ch: Reader, name: str) -> ChainConfig:
         point_cone_deg=cone,
         touching_links=ch.texts("touching_links", []),
     )
+    for each in registered_kinds():
+        each.check(chain, planned=each == kind)
+    return chain

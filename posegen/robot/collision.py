@@ -71,7 +71,7 @@ class CollisionChecker:
         table_index = self._names.index(TABLE)
         self._exempt: dict[str | None, list[int]] = {None: []}
         for chain in scene.chains:
-            touching = (*chain.fingertip_frames, *((chain.point_frame,) if chain.point_frame else ()))
+            touching = tuple(frame for kind in chain.kinds for frame in kind.carried_frames(chain))
             tips = carrying_links(model, touching, set(frame_of)) | set(chain.touching_links)
             self._exempt[chain.name] = [
                 k

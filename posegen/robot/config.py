@@ -166,7 +166,7 @@ class Config:
             fields = dataclasses.asdict(chain)
             fields["contact_kind"] = chain.contact_kind.value
             for key in ("contact_kind", "point_frame", "point_radius_m", "point_cone_deg"):
-                if fields[key] == CHAIN_DEFAULTS[key] or not chain.point_frame:
+                if fields[key] == CHAIN_DEFAULTS[key] or (key != "contact_kind" and not chain.point_frame):
                     del fields[key]  # a flush-only chain saves as before
             if not chain.touching_links:
                 del fields["touching_links"]

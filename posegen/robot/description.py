@@ -23,8 +23,10 @@ import pinocchio as pin
 from posegen.errors import ConfigError, unknown_name
 from posegen.io import read_text_file
 from posegen.robot.additions import FrameConfig
-from posegen.robot.config import PACKAGE_URI, ChainConfig, Config, RobotSource
+from posegen.robot.config import PACKAGE_URI, Config, RobotSource
+from posegen.robot.contact_kinds.flush import contact_placement
 from posegen.robot.geometry import FloatArray
+from posegen.robot.geometry import frame_id as frame_id  # now in geometry (flush contacts use it); scene reads it here
 
 
 @dataclass(frozen=True)
@@ -165,18 +167,6 @@ def package_uri(path: Path) -> str | None:
     return None
 
 
-def frame_id(model: pin.Model, name: str) -> int:
-    """Pinocchio id of a frame.
-
-    Raises:
-        ConfigError: No such frame (the valid ones are listed).
-
-    """
-    if not model.existFrame(name):
-        raise ConfigError(unknown_name("frame", name, (f.name for f in model.frames)))
-    return int(model.getFrameId(name))
-
-
 def locked_configuration(model: pin.Model, locked: dict[str, float]) -> FloatArray:
     """The model's neutral configuration with the locked joints at their values. Shape (nq,).
 
@@ -191,36 +181,6 @@ def locked_configuration(model: pin.Model, locked: dict[str, float]) -> FloatArr
             raise ConfigError(unknown_name("joint", name, joints) + " (robot.locked_joints)")
         q[model.joints[model.getJointId(name)].idx_q] = value
     return q
-
-
-def contact_placement(model: pin.Model, chain: ChainConfig, q: FloatArray | None = None) -> pin.SE3:
-    """Placement of a chain's contact frame in its gripper frame.
-
-    Origin: centroid of the fingertip ends (each ``fingertip_length_m`` beyond its link
-    origin, against the normal). z: normal of the fingertip plane, pointing to the side
-    of the gripper frame origin. x: the gripper frame's x projected on the plane.
-
-    Args:
-        model: The robot model.
-        chain: The chain.
-        q: Configuration the fingertips are read at (locked finger joints matter);
-            None for the neutral one. Shape (nq,).
-
-    """
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, pin.neutral(model) if q is None else q)
-    grip = data.oMf[frame_id(model, chain.gripper_frame)]
-    tips = np.array([grip.actInv(data.oMf[frame_id(model, f)]).translation for f in chain.fingertip_frames])  # (n, 3)
-    centroid = tips.mean(axis=0)
-    normal = np.linalg.svd(tips - centroid)[2][-1]
-    if normal @ (-centroid) < 0:
-        normal = -normal
-    x_axis = np.array([1.0, 0.0, 0.0]) - normal[0] * normal
-    if np.linalg.norm(x_axis) < 1e-6:
-        x_axis = np.array([0.0, 1.0, 0.0]) - normal[1] * normal
-    x_axis /= np.linalg.norm(x_axis)
-    rotation = np.column_stack([x_axis, np.cross(normal, x_axis), normal])
-    return pin.SE3(rotation, centroid - chain.fingertip_length_m * normal)
 
 
 def with_declared_frames(urdf_text: str, model: pin.Model, frames: tuple[FrameConfig, ...]) -> str:

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot.chain_config import ContactKind
 from posegen.robot.collision import CollisionChecker, Proximity
+from posegen.robot.contact_kinds import DEFAULT_KIND, ContactKind
 from posegen.robot.geometry import FloatArray, tilt_angles
 from posegen.robot.scene import Scene
 
@@ -48,7 +48,7 @@ class Assessment:
     com_margin_m: float  # signed: negative outside the polygon
     joint_limit_margin_rad: float  # smallest distance of a free joint to a limit (negative outside)
     closest: Proximity | None  # None: collisions not measured here
-    contact_kind: ContactKind = ContactKind.FLUSH
+    contact_kind: ContactKind = DEFAULT_KIND
     contact_tilt_rad: float = 0.0  # angle between the contact frame's z and the table normal
     cone_rad: float = 0.0  # a point contact's largest tilt (not used by a flush one)
 
@@ -70,25 +70,10 @@ class Assessment:
 
     def contact_detail(self) -> str:
         """The contact's measured figures, as a short text."""
-        if self.contact_kind == ContactKind.POINT:
-            return (
-                f"height {self.contact_height_m:.2e} m, tilt {np.rad2deg(self.contact_tilt_rad):.1f} deg "
-                f"(cone {np.rad2deg(self.cone_rad):.0f} deg)"
-            )
-        return (
-            f"height {self.contact_height_m:.2e} m, roll {self.contact_roll_rad:.2e} rad, "
-            f"pitch {self.contact_pitch_rad:.2e} rad"
-        )
+        return self.contact_kind.detail(self)
 
     def _contact_excess(self) -> float:
-        height = abs(self.contact_height_m) - CONTACT_HEIGHT_TOL_M
-        if self.contact_kind == ContactKind.POINT:
-            return max(height, self.contact_tilt_rad - self.cone_rad)
-        return max(
-            height,
-            abs(self.contact_roll_rad) - CONTACT_ANGLE_TOL_RAD,
-            abs(self.contact_pitch_rad) - CONTACT_ANGLE_TOL_RAD,
-        )
+        return self.contact_kind.excess(self, CONTACT_HEIGHT_TOL_M, CONTACT_ANGLE_TOL_RAD)
 
     def violations(self, scene: Scene) -> dict[Invariant, float]:
         """The violated invariants with their excess over the bound."""
@@ -123,7 +108,7 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
     sole_error = pin.SE3(scene.sole_poses[other]).actInv(data.oMf[scene.frame_id(other)])
     contact = contact_in_table(scene, data, chain)
     config = scene.chain(chain)
-    lift = config.point_radius_m if config.contact_kind == ContactKind.POINT else 0.0
+    lift = config.contact_kind.lift_m(config)
     roll, pitch = tilt_angles(contact.rotation)
     limit_margin = float(scene.limit_margin(joints))  # locked joints may sit on a limit: not counted
     closest = checker.closest(q, chain) if checker is not None else None

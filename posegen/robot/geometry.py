@@ -1,4 +1,4 @@
-"""Small geometric helpers: planar poses, support polygons, roll/pitch of a frame."""
+"""Small geometric helpers: planar poses, support polygons, roll/pitch of a frame, a frame's id."""
 
 from __future__ import annotations
 
@@ -6,7 +6,10 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import NDArray
+
+from posegen.errors import ConfigError, unknown_name
 
 FloatArray = NDArray[np.floating[Any]]
 Indices = Sequence[int] | NDArray[np.integer[Any]]  # row or column indices
@@ -104,3 +107,15 @@ def polygon_margin(polygon_cw: FloatArray, point: FloatArray) -> float:
         inward = np.array([edge[1], -edge[0]]) / np.linalg.norm(edge)
         margin = min(margin, float(inward @ (point - a)))
     return margin
+
+
+def frame_id(model: pin.Model, name: str) -> int:
+    """Pinocchio id of a frame.
+
+    Raises:
+        ConfigError: No such frame (the valid ones are listed).
+
+    """
+    if not model.existFrame(name):
+        raise ConfigError(unknown_name("frame", name, (f.name for f in model.frames)))
+    return int(model.getFrameId(name))

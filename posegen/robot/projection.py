@@ -19,7 +19,6 @@ from dataclasses import dataclass
 import numpy as np
 import placo
 
-from posegen.robot.chain_config import ContactKind
 from posegen.robot.description import kinematic_urdf
 from posegen.robot.geometry import FloatArray
 from posegen.robot.scene import Scene
@@ -70,9 +69,9 @@ class _ChainProblem:
         self.spot.mask.set_axises("xy", "world")
         self.spot.configure(f"{chain}_spot", "soft", SPOT_WEIGHT)
         self.flush = self.solver.add_axisalign_task(contact, np.array([0.0, 0.0, 1.0]), table_normal)
-        if self.kind == ContactKind.POINT:  # a weak pull toward the cone's axis; the sample keeps the tilts varied
+        if not self.kind.aligned:  # a weak pull toward the cone's axis; the sample keeps the tilts varied
             self.flush.configure("tilt", "soft", TILT_WEIGHT)
-        self.lift_m = config.point_radius_m if self.kind == ContactKind.POINT else 0.0  # the tip's centre
+        self.lift_m = self.kind.lift_m(config)  # e.g. a point contact's tip centre
         com = self.solver.add_com_polygon_constraint(scene.support_polygon, scene.margins.com_m + COM_BUFFER_M)
         com.configure("com", "hard", 1.0)
         self.posture = self.solver.add_joints_task()
@@ -85,7 +84,7 @@ class _ChainProblem:
         for k, task in enumerate(self.feet):
             task.configure(f"foot_{k}", mode, FOOT_WEIGHT)
         self.height.configure("height", mode, CONTACT_WEIGHT)
-        if self.kind == ContactKind.FLUSH:
+        if self.kind.aligned:
             self.flush.configure("flush", mode, CONTACT_WEIGHT)
 
 
@@ -127,8 +126,8 @@ class Projector:
         contact = self.robot.get_T_world_frame(problem.contact).tolist()
         normal = self._normal
         position = max(position, abs(sum(normal[i] * (contact[i][3] - target_m[i]) for i in range(3))))
-        if problem.kind == ContactKind.POINT:
-            return position, angle  # a point contact's tilt is free (its cone is checked afterwards)
+        if not problem.kind.aligned:
+            return position, angle  # e.g. a point contact's tilt is free (its cone is checked afterwards)
         cosine = sum(contact[i][2] * normal[i] for i in range(3))
         return position, max(angle, math.acos(min(1.0, max(-1.0, cosine))))
 

@@ -26,9 +26,8 @@ from posegen.model import (
     start_point,
     write_measurements,
 )
-from posegen.robot import CandidateConfig, ContactKind, PriorConfig, Scene
+from posegen.robot import FLUSH, POINT, CandidateConfig, PriorConfig, Scene
 
-FLUSH, POINT = ContactKind.FLUSH, ContactKind.POINT
 OFFSETS = CandidateConfig("offsets", ("*.joint_offset",))
 FULL = CandidateConfig("full", ("*.*",))
 

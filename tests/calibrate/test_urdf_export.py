@@ -31,7 +31,7 @@ from posegen.calibrate import (
 from posegen.errors import ConfigError
 from posegen.io import write_yaml
 from posegen.model import CalibrationModel, ContactModel, Contacts, Kind, placement_matrix
-from posegen.robot import ContactKind, Scene, contact_placement, load_config, parse_config, with_declared_frames
+from posegen.robot import FLUSH, POINT, Scene, contact_placement, load_config, parse_config, with_declared_frames
 from tests.conftest import ROOT, point_config_data
 
 
@@ -193,9 +193,7 @@ def exported(request, tmp_path_factory) -> Exported:
     folder = tmp_path_factory.mktemp(request.param)
     scene = Scene(parse_config(layout_config(request.param, folder)))
     chains = [c.name for c in scene.chains]
-    kinds = {
-        c.name: (ContactKind.FLUSH, ContactKind.POINT) if c.point_frame else (c.contact_kind,) for c in scene.chains
-    }
+    kinds = {c.name: (FLUSH, POINT) if c.point_frame else (c.contact_kind,) for c in scene.chains}
     model = ContactModel(scene, chains, [PLANE], kinds)
     theta = random_theta(model, np.random.default_rng(len(request.param)))
     (folder / "calibrated.urdf").write_text(calibrated_urdf(scene.files.urdf.read_text(), model, theta))
@@ -247,7 +245,7 @@ def test_pinocchio_alone_finds_the_calibrated_frames(exported):
                     q[urdf.joints[urdf.getJointId(joint)].idx_q] = value
                 pin.framesForwardKinematics(urdf, data, q)
                 sole = data.oMf[urdf.getFrameId(cfg.sole_frame)]
-                if kind == ContactKind.POINT:
+                if kind == POINT:
                     tip = data.oMf[urdf.getFrameId(cfg.point_frame)]
                 else:
                     tip = data.oMf[urdf.getFrameId(cfg.gripper_frame)] * contact_placement(urdf, cfg, q)
@@ -279,7 +277,7 @@ def test_the_file_keeps_every_link_and_joint_and_the_config_its_frames(exported)
         link = mount.removesuffix("_mount")
         assert joints[f"{link}_calibration_joint"].find("child").get("link") == link
         assert link in ends | {parents[f] for f in ends if f in parents}
-    points = {c.point_frame for c in scene.chains if ContactKind.POINT in exported.model.kinds[c.name]}
+    points = {c.point_frame for c in scene.chains if POINT in exported.model.kinds[c.name]}
     frames = {f.name: f for f in load_config(exported.folder / "calibrated.yaml").frames}
     assert set(frames) == {f.name for f in scene.config.frames}
     for frame in scene.config.frames:
@@ -323,6 +321,6 @@ def test_a_point_frame_that_is_also_a_fingertip_is_refused_not_written_wrong():
     data = point_config_data()
     data["chains"]["left"]["point_frame"] = "gripper_left_fingertip_3_link"
     scene = Scene(parse_config(data))
-    model = ContactModel(scene, ["left"], [PLANE], {"left": (ContactKind.FLUSH, ContactKind.POINT)})
+    model = ContactModel(scene, ["left"], [PLANE], {"left": (FLUSH, POINT)})
     with pytest.raises(ConfigError, match="contact frame of chain 'left'"):
         check_exportable(model)

@@ -19,10 +19,8 @@ from posegen.model import (
     weights_for,
 )
 from posegen.model.identifiability import RANK_TOLERANCE
-from posegen.robot import ContactKind
+from posegen.robot import FLUSH, POINT
 from tests.conftest import RADIUS_M
-
-FLUSH, POINT = ContactKind.FLUSH, ContactKind.POINT
 
 
 def seeds(pool, chain, kind, session="s", n=20):

@@ -8,7 +8,7 @@ import pytest
 
 from posegen.errors import ConfigError
 from posegen.pool import generate_pool, verify_postures
-from posegen.robot import ContactKind, Invariant, Scene, assess, parse_config
+from posegen.robot import FLUSH, POINT, Invariant, Scene, assess, parse_config
 from tests.conftest import RADIUS_M, point_config_data
 
 
@@ -19,7 +19,7 @@ def point_pool(point_scene):
 
 def test_point_chain_config_round_trips_and_keeps_flush_geometry(point_scene):
     chain = point_scene.chain("left")
-    assert chain.contact_kind == ContactKind.POINT and chain.kinds == (ContactKind.FLUSH, ContactKind.POINT)
+    assert chain.contact_kind == POINT and chain.kinds == (FLUSH, POINT)
     again = parse_config(point_scene.config.to_dict())
     assert again.to_dict() == point_scene.config.to_dict()
     assert "left" in point_scene.point_placements and "left" in point_scene.contact_placements
@@ -69,7 +69,7 @@ def test_a_point_only_chain_needs_no_fingertips():
     for key in ("fingertip_frames", "fingertip_length_m", "contact_frame"):
         del data["chains"]["left"][key]
     config = parse_config(data)
-    assert config.chain("left").kinds == (ContactKind.POINT,)
+    assert config.chain("left").kinds == (POINT,)
     assert parse_config(config.to_dict()).to_dict() == config.to_dict()
     scene = Scene(config)
     assert "left" not in scene.contact_placements and not scene.model.existFrame("left_contact")
