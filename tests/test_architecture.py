@@ -2,7 +2,7 @@
 
 Layers, bottom first (docs/architecture.md)::
 
-    posegen (version), errors, progress
+    posegen (version), errors, progress, numeric
     extras
     io | parallel | arguments
     robot
@@ -33,6 +33,7 @@ LAYERS = {
     "posegen.resources": 0,
     "posegen.extras": 0.5,  # optional packages: raises errors.ExtraError for io, parallel and view
     "posegen.errors": 0,
+    "posegen.numeric": 0,  # array types (FloatArray)
     "posegen.progress": 0,
     "posegen.io": 1,
     "posegen.parallel": 1,

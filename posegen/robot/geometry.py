@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.floating[Any]]
+from posegen.numeric import FloatArray as FloatArray  # re-exported for the robot package
+
 Indices = Sequence[int] | NDArray[np.integer[Any]]  # row or column indices
 
 

@@ -25,6 +25,7 @@ Postures are numbered as nodes: ``0..n-1`` the input postures, ``n + r`` pool ro
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import itertools
 import logging
@@ -35,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from posegen.errors import InfeasibleError, InputError
-from posegen.parallel import Backend, Job, ProcessBackend, job_name
+from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Posture, Scene, SegmentType, check_for_planning
 from posegen.route.ordering import Order, order_postures, rest_to_rest_time
@@ -128,13 +129,10 @@ def plan_route(
     joints = np.array([p.joints for p in postures], dtype=float).reshape(len(postures), -1)
     order = order_postures(start, joints, velocity, acceleration, seed)
     job = planning_job(scene, seed, given)
-    if isinstance(workers, Backend):
-        run = _Routing(scene, postures, substitutes, start, _all_in_flight(workers, job), progress)
+    backend = as_backend(workers)
+    with contextlib.nullcontext() if backend is workers else backend:  # one made here keeps its workers, then stops
+        run = _Routing(scene, postures, substitutes, start, _all_in_flight(backend, job), progress)
         run.plan(order.sequence)
-    else:
-        with ProcessBackend(workers) as backend:
-            run = _Routing(scene, postures, substitutes, start, _all_in_flight(backend, job), progress)
-            run.plan(order.sequence)
     return run.assemble(order)
 
 
