@@ -36,7 +36,7 @@ from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
 from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
-from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
+from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_postures_file
 
 __all__ = [
     "CALIBRATION_FILE",
@@ -94,7 +94,7 @@ __all__ = [
     "residual_stats",
     "select_model",
     "simulate",
-    "simulate_plan_file",
+    "simulate_postures_file",
     "simulate_route_bag",
     "spot_of",
     "true_parameters",

@@ -37,7 +37,7 @@ from posegen.model import (
 )
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Scene, load_config, load_plan, scene_for
+from posegen.robot import FloatArray, Scene, load_config, load_postures, scene_for
 
 TRUTH_FORMAT = "posegen-truth"
 
@@ -59,8 +59,8 @@ class Calibrated:
     training_contacts: int  # read from the training files (outliers included)
 
 
-def simulate_plan_file(
-    plan_path: str,
+def simulate_postures_file(
+    postures_path: str,
     output: str,
     *,
     config_path: str | None,
@@ -76,9 +76,9 @@ def simulate_plan_file(
     """Contacts of a perturbed robot at the postures of a pool or selection file.
 
     Args:
-        plan_path: Pool or selection file.
+        postures_path: Pool or selection file.
         output: Measurement file to write; the truth goes beside it (``*.truth.yaml``).
-        config_path: Scene config; None: the one saved in the plan.
+        config_path: Scene config; None: the one saved in the postures file.
         seed: Seed of the robot's errors and of the encoder noise.
         error_mm: Sigma of placement length errors (mm).
         error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
@@ -88,11 +88,11 @@ def simulate_plan_file(
         contact_noise_mm: Sigma of each contact's local table height (mm).
         contact_noise_deg: Sigma of each contact's local table roll and pitch (deg).
 
-    The arguments, the plan (its robot model included) and the outputs' place are
+    The arguments, the postures file (its robot model included) and the outputs' place are
     checked before any work; the output is locked while it is made.
 
     Raises:
-        PosegenError: Bad arguments, config or plan, a plan of another robot model, an
+        PosegenError: Bad arguments, config or postures file, one of another robot model, an
             output that cannot be written, or a contact that does not settle.
 
     """
@@ -106,21 +106,21 @@ def simulate_plan_file(
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
     check_writable(measurements)
     check_writable(truth)
-    check_apart([measurements, truth], [plan_path, config_path])
-    plan, _ = load_plan(plan_path)
-    scene = scene_for(plan.provenance, config_path)  # None: the config saved in the plan
+    check_apart([measurements, truth], [postures_path, config_path])
+    chosen, _ = load_postures(postures_path)
+    scene = scene_for(chosen.provenance, config_path)  # None: the config saved in the postures file
     check_compliance(scene, compliance_rad_per_knm)
-    scene.check_made_for(plan.provenance, plan_path)
-    plan.check_joints(scene.joint_names, plan_path)
-    plan.check_limits(scene.joint_names, scene.lower, scene.upper, plan_path)
-    chains = tuple(p.chain for p in plan.postures)
-    spots = tuple(p.spot for p in plan.postures)
-    planned = Contacts(plan.joints(), chains, (session,) * len(chains), spots, planned_kinds(scene, chains))
+    scene.check_made_for(chosen.provenance, postures_path)
+    chosen.check_joints(scene.joint_names, postures_path)
+    chosen.check_limits(scene.joint_names, scene.lower, scene.upper, postures_path)
+    chains = tuple(p.chain for p in chosen.postures)
+    spots = tuple(p.spot for p in chosen.postures)
+    planned = Contacts(chosen.joints(), chains, (session,) * len(chains), spots, planned_kinds(scene, chains))
     with claim_output(measurements, beside=(truth,)):
         recorded, model, x = simulate(scene, planned, perturbation, seed)
         prov = scene.provenance(seed)
         prov["simulation"] = {
-            "postures": plan_path,
+            "postures": postures_path,
             "error_mm": error_mm,
             "error_deg": error_deg,
             "encoder_noise_deg": noise_deg,

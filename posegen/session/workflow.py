@@ -25,7 +25,7 @@ from posegen.session.batch import (
     MEASUREMENTS_FILE,
     ROUTE_FILE,
     SELECTION_FILE,
-    Plan,
+    BatchSources,
     missing_rows,
     route_batch,
     select_first,
@@ -270,7 +270,7 @@ def _plan_next(folder: Path, index: SessionIndex, batch: Batch, backend: Backend
     predicted = batch.assessment.predicted_z_mm
     weakest = max(sorted(predicted), key=lambda c: predicted[c]) if predicted else None
     missing = batch.recording.missing
-    plan = Plan(
+    sources = BatchSources(
         given=tuple(_measurement_files(folder, index)),
         calibration=str(folder / batch.folder / CALIBRATION_FOLDER / "calibration.yaml") if calibrated else None,
         weakest=weakest,
@@ -281,5 +281,5 @@ def _plan_next(folder: Path, index: SessionIndex, batch: Batch, backend: Backend
     pool = load_pool(index.pool)
     sub = folder / batch_folder(number)
     sub.mkdir(exist_ok=True)
-    select_next(index.pool, pool, sub, plan, index.settings)
+    select_next(index.pool, pool, sub, sources, index.settings)
     return route_batch(folder, number, index.pool, index.settings, backend)
