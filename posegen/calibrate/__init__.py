@@ -10,6 +10,7 @@ perturbed robot, the calibrated URDF, the report and the folder read back
 
 from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
+from posegen.calibrate.calibration_file import format_table, residual_stats, write_calibration
 from posegen.calibrate.compliance import Compliance, ComplianceGroup, compensate, read_compliance, uncompensate
 from posegen.calibrate.deliverable_files import load_line
 from posegen.calibrate.deliverables import Deliverable, DeliverableKind, Deliverables
@@ -31,7 +32,6 @@ from posegen.calibrate.record import (
     read_calibration,
     write_record,
 )
-from posegen.calibrate.report import format_table, residual_stats, write_calibration
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters

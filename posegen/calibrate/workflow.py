@@ -12,8 +12,8 @@ import numpy as np
 
 from posegen.arguments import check_seed, check_size
 from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
+from posegen.calibrate.calibration_file import write_calibration
 from posegen.calibrate.record import CALIBRATION_FILE
-from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.errors import ArgumentError, InputError
 from posegen.io import (

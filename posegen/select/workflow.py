@@ -22,8 +22,8 @@ from posegen.robot import (
     scene_for,
 )
 from posegen.select.followup import follow_up, read_calibration_model
-from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import detmax_runs, iroc, select_k
+from posegen.select.selection_file import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.subset_selection import Subset, subset_of
 
 LOG = logging.getLogger(__name__)
