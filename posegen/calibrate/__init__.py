@@ -8,7 +8,7 @@ perturbed robot, the calibrated URDF, the report and the folder read back
 (:func:`read_calibration`).
 """
 
-from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
+from posegen.calibrate.bag_workflow import Measured, SimulatedBag, measure_bag, simulate_route_bag
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
 from posegen.calibrate.calibration_file import format_table, residual_stats, write_calibration
 from posegen.calibrate.compliance import Compliance, ComplianceGroup, compensate, read_compliance, uncompensate
@@ -67,7 +67,7 @@ __all__ = [
     "ScaleSearch",
     "Settings",
     "Simulated",
-    "SimulatedSession",
+    "SimulatedBag",
     "apply_offsets",
     "calibrate",
     "calibrate_files",

@@ -1,6 +1,6 @@
 """The calibrate stage's rosbag2 commands: ``posegen simulate ROUTE --bag`` and ``posegen measure``.
 
-``simulate --bag`` rehearses a session (:mod:`posegen.calibrate.session`) and records it
+``simulate --bag`` simulates a recording (:mod:`posegen.calibrate.simulated_recording`) and writes it
 as a real robot would: ``sensor_msgs/JointState`` at the recording rate and one
 ``geometry_msgs/WrenchStamped`` topic per wrist (the chains' ``wrench_topic``). ``measure``
 reads such a bag, finds the contact windows (:mod:`posegen.calibrate.contact_windows`)
@@ -26,7 +26,7 @@ from posegen.calibrate.contact_windows import (
     match_windows,
     wrist_force,
 )
-from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
+from posegen.calibrate.simulated_recording import Motion, SensorSettings, route_motion, simulate_recording
 from posegen.calibrate.workflow import check_compliance, contact_noise_record, perturbation_of, truth_record
 from posegen.errors import ArgumentError, InputError, unknown_name
 from posegen.io import (
@@ -49,7 +49,7 @@ TRUTH_FILE = "truth.yaml"  # a simulated session's true parameters, inside its b
 
 
 @dataclass(frozen=True)
-class SimulatedSession:
+class SimulatedBag:
     """What ``posegen simulate --bag`` wrote."""
 
     bag: Path
@@ -119,7 +119,7 @@ def simulate_route_bag(
     every_chain: bool = False,
     contact_noise_mm: float = 0.0,
     contact_noise_deg: float = 0.0,
-) -> SimulatedSession:
+) -> SimulatedBag:
     """Record a perturbed robot executing a route, as a rosbag2 with the truth in its folder.
 
     Args:
@@ -159,9 +159,9 @@ def simulate_route_bag(
     wrench_topics(scene)  # before the simulation: every wrist needs a topic
     if not motion.contacts:
         raise InputError(f"{route_path}: the route makes no contact")
-    settings = SessionSettings(rate_hz=rate_hz)
+    settings = SensorSettings(rate_hz=rate_hz)
     with claim_output(bag_path, OutputKind.FOLDER):
-        recorded = simulate_session(scene, motion, session, perturbation, settings, seed, every_chain)
+        recorded = simulate_recording(scene, motion, session, perturbation, settings, seed, every_chain)
         prov = scene.provenance(seed)
         prov["simulation"] = {
             "route": route_path,
@@ -182,7 +182,7 @@ def simulate_route_bag(
         joints = JointStates(scene.joint_names, recorded.times_s, recorded.positions)
         true = dump_yaml(truth_record(recorded.model, recorded.theta, prov))
         write_recording(bag_path, joints, joint_topic, wrenches, prov, extra={TRUTH_FILE: true})
-    return SimulatedSession(bag_path, truth, len(motion.contacts), float(recorded.times_s[-1]), len(recorded.times_s))
+    return SimulatedBag(bag_path, truth, len(motion.contacts), float(recorded.times_s[-1]), len(recorded.times_s))
 
 
 def _columns(scene: Scene, joints: JointStates, where: str) -> tuple[list[int], list[str]]:
