@@ -84,7 +84,8 @@ def wrench_topics(scene: Scene) -> dict[str, str]:
     missing = [c.name for c in scene.config.chains if not c.wrench_topic]
     if missing:
         raise InputError(
-            f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with --no-wrench)"
+            f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with use_wrench=False)",
+            parameter="use_wrench=False",
         )
     return {c.name: c.wrench_topic for c in scene.config.chains}
 
@@ -144,11 +145,11 @@ def simulate_route_bag(
             contact that does not settle on the true plane.
 
     """
-    check_seed(seed, "--seed")
+    check_seed(seed, "seed")
     perturbation = perturbation_of(
         error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
     )
-    check_size(rate_hz, "--rate", positive=True)
+    check_size(rate_hz, "rate_hz", positive=True)
     bag_path = Path(bag)
     truth = bag_path / TRUTH_FILE
     check_writable(bag_path, OutputKind.FOLDER)
@@ -269,9 +270,11 @@ def measure_bag(
 
     """
     if route_path is None and not use_wrench:
-        raise InputError("without a wrench topic, --route is needed to tell contacts from pauses")
+        raise InputError(
+            "without a wrench topic, route_path is needed to tell contacts from pauses", parameter="route_path"
+        )
     if session is not None and not session.strip():
-        raise ArgumentError("--session: give a session name")
+        raise ArgumentError("session: give a session name", parameter="session")
     check_writable(output)
     check_apart([output], [bag, route_path, config_path])
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find

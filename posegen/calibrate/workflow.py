@@ -96,12 +96,12 @@ def simulate_postures_file(
             output that cannot be written, or a contact that does not settle.
 
     """
-    check_seed(seed, "--seed")
+    check_seed(seed, "seed")
     perturbation = perturbation_of(
         error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
     )
     if not session:
-        raise ArgumentError("--session: give a session name")
+        raise ArgumentError("session: give a session name", parameter="session")
     measurements = Path(output)
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
     check_writable(measurements)
@@ -146,15 +146,15 @@ def perturbation_of(
         ArgumentError: A size that is negative or not a finite number.
 
     """
-    for value, flag in (
-        (error_mm, "--error-mm"),
-        (error_deg, "--error-deg"),
-        (noise_deg, "--noise-deg"),
-        (compliance_rad_per_knm, "--compliance"),
-        (contact_noise_mm, "--contact-noise-mm"),
-        (contact_noise_deg, "--contact-noise-deg"),
+    for value, name in (
+        (error_mm, "error_mm"),
+        (error_deg, "error_deg"),
+        (noise_deg, "noise_deg"),
+        (compliance_rad_per_knm, "compliance_rad_per_knm"),
+        (contact_noise_mm, "contact_noise_mm"),
+        (contact_noise_deg, "contact_noise_deg"),
     ):
-        check_size(value, flag)
+        check_size(value, name)
     return Perturbation(
         length_m=error_mm * 1e-3,
         angle_rad=float(np.deg2rad(error_deg)),
@@ -181,7 +181,9 @@ def check_compliance(scene: Scene, compliance_rad_per_knm: float) -> None:
     """
     if compliance_rad_per_knm and not scene.calibration.compliance:
         raise ArgumentError(
-            f"--compliance {compliance_rad_per_knm:g}: the config defines no calibration.compliance group to act on"
+            f"compliance_rad_per_knm={compliance_rad_per_knm:g}: "
+            "the config defines no calibration.compliance group to act on",
+            parameter="compliance_rad_per_knm",
         )
 
 
@@ -276,7 +278,7 @@ def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> N
     """No file is both fitted and held out (its contacts would judge the fit they made).
 
     Raises:
-        InputError: A file given as training and with ``--validate`` (by path, link or name).
+        InputError: A file given as training and held out (by path, link or name).
 
     """
     for kept in held_out:
@@ -284,7 +286,9 @@ def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> N
             if Path(kept).resolve() == Path(fitted).resolve() or (
                 Path(kept).exists() and Path(fitted).exists() and os.path.samefile(kept, fitted)
             ):
-                raise InputError(f"{kept} is a training file and a held-out one (--validate): give it once")
+                raise InputError(
+                    f"{kept} is a training file and a held-out one (held_out): give it once", parameter="held_out"
+                )
 
 
 def _check_trained(train: Contacts, held_out: Contacts) -> None:
@@ -316,4 +320,7 @@ def _saved_scene(items: Sequence[str]) -> Scene:
         if Path(path).suffix.lower() in (".yaml", ".yml"):
             data = read_yaml(path, MEASUREMENT_FORMAT)
             return scene_for(data.get("provenance", {}), None)
-    raise InputError("the measurement files carry no scene config (recorded CSV files do not): give --config")
+    raise InputError(
+        "the measurement files carry no scene config (recorded CSV files do not): give config_path",
+        parameter="config_path",
+    )

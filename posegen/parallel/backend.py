@@ -295,4 +295,3 @@ class ProcessBackend(Backend):
         self._executors.clear()
         self._states.clear()
         self._keep = False
-

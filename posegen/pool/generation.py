@@ -82,7 +82,7 @@ def generate_pool(
 
     """
     if n <= 0:
-        raise InfeasibleError(f"--n must be a positive number of postures, got {n}")
+        raise InfeasibleError(f"n must be a positive number of postures, got {n}", parameter="n")
     check_seed(seed)
     scene = Scene(config)
     check_for_planning(scene)  # soles, balance and reach of the reference posture: cheap, before any sample

@@ -18,6 +18,7 @@ from posegen.route.repair import Substitutes, Substitution, insertion_places, ra
 from posegen.route.route import Route, Segment, plan_route
 from posegen.route.smoothing import blend_corners, corners, path_length, shortcut
 from posegen.route.timing import SAFETY, Timed, hold, parameterize
+from posegen.route.unplanned import Unplanned, UnplannedCause
 from posegen.route.workflow import Exported, Routed, check_route_file, export_route_bag, route_postures_file
 
 __all__ = [
@@ -39,6 +40,8 @@ __all__ = [
     "Substitution",
     "Timed",
     "Transfer",
+    "Unplanned",
+    "UnplannedCause",
     "Vertical",
     "blend_corners",
     "check_poses",

@@ -34,6 +34,7 @@ import numpy as np
 
 from posegen.robot import FloatArray, StanceSpace
 from posegen.route.motion import straight, through
+from posegen.route.unplanned import Unplanned, UnplannedCause
 
 LOG = logging.getLogger(__name__)
 
@@ -123,13 +124,13 @@ def plan_free(
     goal: FloatArray,
     vias: Sequence[Sequence[FloatArray]],
     stream: int,
-) -> FreeMotion | str:
+) -> FreeMotion | Unplanned:
     """A checked free motion from ``start`` to ``goal`` (both valid), or why there is none.
 
     The first of :func:`free_motions` (the ladder stops at the first that works).
     """
     found = free_motions(space, start, goal, vias, stream, via_candidates=1)
-    return found if isinstance(found, str) else found[0]
+    return found if isinstance(found, Unplanned) else found[0]
 
 
 def free_motions(
@@ -139,7 +140,7 @@ def free_motions(
     vias: Sequence[Sequence[FloatArray]],
     stream: int,
     via_candidates: int = VIA_CANDIDATES,
-) -> list[FreeMotion] | str:
+) -> list[FreeMotion] | Unplanned:
     """Checked free motions from ``start`` to ``goal`` (both valid), or why there is none.
 
     Args:
@@ -178,9 +179,10 @@ def free_motions(
         planned = _plan_ompl(space, start, goal, checks, (stream + offset * (STREAMS // 2)) % STREAMS)
         if planned is not None:
             return [FreeMotion(tuple(planned[0]), method, planned[1])]
-    return (
-        f"no free motion: straight line and {len(vias)} via sequences blocked, "
-        f"OMPL found no checked path in {budget} nor {LARGER_BUDGET * budget} state checks"
+    return Unplanned(
+        UnplannedCause.NO_FREE_MOTION,
+        f"straight line and {len(vias)} via sequences blocked, "
+        f"OMPL found no checked path in {budget} nor {LARGER_BUDGET * budget} state checks",
     )
 
 

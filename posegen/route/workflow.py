@@ -94,10 +94,10 @@ def route_postures_file(
             cannot be written, or no posture reachable.
 
     """
-    check_seed(seed, "--seed")
+    check_seed(seed, "seed")
     path = Path(output)
     if path.suffix.lower() not in ROUTE_SUFFIXES:
-        raise ArgumentError(f"-o {output}: a route file ends in {' or '.join(ROUTE_SUFFIXES)}")
+        raise ArgumentError(f"output={output}: a route file ends in {' or '.join(ROUTE_SUFFIXES)}", parameter="output")
     outputs = route_outputs(path, csv)
     for output_path in outputs:
         check_writable(output_path)
@@ -248,7 +248,7 @@ def check_route_file(
             for another robot model.
 
     """
-    check_size(min_dt, "--min-dt", positive=True)
+    check_size(min_dt, "min_dt", positive=True)
     data = read_route(path)
     recorded = data.get("provenance") or {}
     scene = scene_for(recorded, config_path)

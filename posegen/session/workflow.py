@@ -66,14 +66,14 @@ def check_settings(settings: SessionSettings) -> None:
         ArgumentError: A target, margin or count out of range.
 
     """
-    check_size(settings.target_mm, "--target-mm", positive=True)
-    check_size(settings.margin, "--margin")
-    check_seed(settings.seed, "--seed")
-    check_count(settings.batch_postures, "--batch")
+    check_size(settings.target_mm, "target_mm", positive=True)
+    check_size(settings.margin, "margin")
+    check_seed(settings.seed, "seed")
+    check_count(settings.batch_postures, "batch_postures")
     if settings.fold_seeds is not None:
-        check_count(settings.fold_seeds, "--fold-seeds")
+        check_count(settings.fold_seeds, "fold_seeds")
     if settings.prior_scale is not None:
-        check_size(settings.prior_scale, "--prior-scale", positive=True)
+        check_size(settings.prior_scale, "prior_scale", positive=True)
 
 
 def start_session(pool_path: str, output: str, settings: SessionSettings, backend: Backend) -> SessionIndex:
@@ -88,7 +88,10 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
     folder = Path(output)
     check_writable(folder, OutputKind.FOLDER)
     if (folder / INDEX_FILE).exists():
-        raise InputError(f"{folder} already holds a session: add bags with posegen session add, or choose another -o")
+        raise InputError(
+            f"{folder} already holds a session: add bags with posegen session add, or choose another output",
+            parameter="output",
+        )
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, None)
     scene.check_made_for(pool.provenance, pool_path)
@@ -99,7 +102,7 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
     names = [c.name for c in scene.calibration.candidates]
     for name in settings.candidates:
         if name not in names:
-            raise ArgumentError(f"--candidates: {unknown_name('candidate model', name, names)}")
+            raise ArgumentError(f"candidates: {unknown_name('candidate model', name, names)}", parameter="candidates")
     pool_abs = str(Path(pool_path).resolve())
     with claim_output(folder, OutputKind.FOLDER):
         try:
