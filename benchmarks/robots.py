@@ -55,7 +55,7 @@ def _first_of_selection(selection: Path, out: Path, count: int) -> None:
 
 def bench_robot(config: str, workdir: Path, n: int, routed: int) -> dict[str, str]:
     """Run one robot's pipeline in ``workdir``; its README row."""
-    from posegen.robot import load_plan, load_pool, write_pool
+    from posegen.robot import load_pool, load_postures, write_pool
 
     pool = workdir / "pool.yaml"
     t_pool, _ = _run("pool", "--n", str(n), "--config", f"configs/{config}", "--workers", "2", "-q", "-o", str(pool))
@@ -66,7 +66,7 @@ def bench_robot(config: str, workdir: Path, n: int, routed: int) -> dict[str, st
     base = _base_per_chain(pool)
     selection = workdir / "selected.yaml"
     t_select, out = _run("select", str(pool), "-q", "-o", str(selection))
-    selected, _ = load_plan(selection)
+    selected, _ = load_postures(selection)
     k = len(selected.postures)
     subset = workdir / "route_input.yaml"  # the first postures of the selection, still a selection of its pool
     _first_of_selection(selection, subset, routed)

@@ -13,7 +13,7 @@ import argparse
 import time
 from pathlib import Path
 
-from posegen.calibrate import Settings, calibrate_files, simulate_plan_file
+from posegen.calibrate import Settings, calibrate_files, simulate_postures_file
 from posegen.resources import shipped_path
 from posegen.select import SelectionSettings, follow_up_pool_file, select_pool_file
 
@@ -30,7 +30,7 @@ def main(output: Path) -> None:
     select_pool_file(pool, str(first), SelectionSettings(k=40))
     measured = output / "day1.yaml"
     robot = {"seed": 3, "error_mm": 2.0, "error_deg": 0.5, "noise_deg": 0.005}
-    simulate_plan_file(str(first), str(measured), config_path=None, session="day1", **robot)
+    simulate_postures_file(str(first), str(measured), config_path=None, session="day1", **robot)
     settings = Settings(candidates=("offsets",), prior_scale=5.0, fold_seeds=1)
     calibrate_files([str(measured)], [], str(output / "calibration"), settings, None)
 

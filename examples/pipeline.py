@@ -21,12 +21,12 @@ from posegen.calibrate import (
     format_table,
     load_line,
     measure_bag,
-    simulate_plan_file,
+    simulate_postures_file,
     simulate_route_bag,
 )
 from posegen.pool import generate_pool_file
 from posegen.resources import DEFAULT_CONFIG, shipped_path
-from posegen.route import check_route_file, export_route_bag, route_plan_file
+from posegen.route import check_route_file, export_route_bag, route_postures_file
 from posegen.select import SelectionSettings, select_pool_file
 
 SIMULATED_ROBOT = {"seed": 7, "error_mm": 2.0, "error_deg": 0.5, "noise_deg": 0.005}  # its errors (sigmas)
@@ -47,7 +47,7 @@ def main(output: Path, workers: int) -> None:
     selected = select_pool_file(str(output / "pool.yaml"), str(output / "selected.yaml"), SelectionSettings(k=38))
     print(f"select: {len(selected['postures'])} postures ({lap()})")
 
-    route_plan_file(str(output / "selected.yaml"), str(output / "route.yaml"), seed=0, workers=workers)
+    route_postures_file(str(output / "selected.yaml"), str(output / "route.yaml"), seed=0, workers=workers)
     checked = check_route_file(str(output / "route.yaml"), None)
     print(f"route: {checked.checked} points re-checked, {'no violation' if checked.ok else 'VIOLATIONS'} ({lap()})")
 
@@ -65,11 +65,12 @@ def main(output: Path, workers: int) -> None:
         print(f"robot: route exported as a rosbag2, recorded by a simulated TALOS, contacts measured ({lap()})")
     else:
         selected_path = str(output / "selected.yaml")
-        simulate_plan_file(selected_path, str(measured), config_path=None, session="sim", **SIMULATED_ROBOT)
+        simulate_postures_file(selected_path, str(measured), config_path=None, session="sim", **SIMULATED_ROBOT)
         print("robot: contacts of a simulated TALOS at the selected postures (pip install 'posegen[ros]' for bags)")
 
     held_out = output / "held_out.yaml"  # the same robot at the pool's other postures judges the result
-    simulate_plan_file(str(output / "pool.yaml"), str(held_out), config_path=None, session="check", **SIMULATED_ROBOT)
+    pool_file = str(output / "pool.yaml")
+    simulate_postures_file(pool_file, str(held_out), config_path=None, session="check", **SIMULATED_ROBOT)
     settings = Settings(candidates=("offsets",), prior_scale=5.0, fold_seeds=1)
     calibrated = calibrate_files([str(measured)], [str(held_out)], str(output / "calibration"), settings, None)
     print(format_table(calibrated.report))

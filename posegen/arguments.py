@@ -1,7 +1,8 @@
 """Checks of the numbers a command is given (seeds, counts, sizes), made before any work.
 
-The stages call these at the top of their public functions; the command line uses the
-same checks as argument types, so a bad value gets the same message either way.
+The stages call these at the top of their public functions, naming the value by its
+parameter (``seed``, ``k``); the command line uses the same checks as argument types, and
+shows a stage's error with the flag in the parameter's place (:mod:`posegen.cli.options`).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ def is_finite_number(value: object) -> TypeGuard[int | float]:
 
 def _integer(value: object, name: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
-        raise ArgumentError(f"{name} must be an integer, got {value!r}")
+        raise ArgumentError(f"{name} must be an integer, got {value!r}", parameter=name)
     return value
 
 
@@ -34,7 +35,7 @@ def check_seed(value: object, name: str = "seed") -> int:
     """
     number = _integer(value, name)
     if not 0 <= number <= MAX_SEED:
-        raise ArgumentError(f"{name} must be an integer from 0 to {MAX_SEED}, got {number}")
+        raise ArgumentError(f"{name} must be an integer from 0 to {MAX_SEED}, got {number}", parameter=name)
     return number
 
 
@@ -47,7 +48,7 @@ def check_count(value: object, name: str, minimum: int = 1, maximum: int = 10**9
     """
     number = _integer(value, name)
     if not minimum <= number <= maximum:
-        raise ArgumentError(f"{name} must be an integer from {minimum} to {maximum}, got {number}")
+        raise ArgumentError(f"{name} must be an integer from {minimum} to {maximum}, got {number}", parameter=name)
     return number
 
 
@@ -59,7 +60,7 @@ def check_size(value: object, name: str, positive: bool = False) -> float:
 
     """
     if not is_finite_number(value):
-        raise ArgumentError(f"{name} must be a finite number, got {value!r}")
+        raise ArgumentError(f"{name} must be a finite number, got {value!r}", parameter=name)
     if value < 0 or (positive and value == 0):
-        raise ArgumentError(f"{name} must be {'> 0' if positive else '>= 0'}, got {value}")
+        raise ArgumentError(f"{name} must be {'> 0' if positive else '>= 0'}, got {value}", parameter=name)
     return float(value)

@@ -7,10 +7,21 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
+from typing import Any
 
 
 class PosegenError(Exception):
-    """Base class of every error posegen raises on purpose."""
+    """Base class of every error posegen raises on purpose.
+
+    Its message speaks the library's words: a parameter by its name (``k must be an
+    integer from 1 to ...``, ``k=80: the pool has only 50 postures``), never by a
+    command-line flag. ``parameter`` is those words, as the message writes them, when the
+    error is about one parameter: :mod:`posegen.cli` shows its flag in their place.
+    """
+
+    def __init__(self, *args: object, parameter: str | None = None, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)  # kwargs: those of a second base (ImportError's ``name``)
+        self.parameter = parameter  # the parameter's name as the message writes it (first occurrence)
 
 
 class ConfigError(PosegenError):

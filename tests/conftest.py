@@ -21,7 +21,7 @@ from posegen.io import write_yaml
 from posegen.model import Contacts
 from posegen.pool import generate_pool
 from posegen.robot import Config, Pool, Scene, load_config
-from posegen.route import route_plan_file
+from posegen.route import route_postures_file
 from posegen.select import select_pool_file
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -130,7 +130,7 @@ def route_file(example_pool: Pool, tmp_path_factory: pytest.TempPathFactory) -> 
     data["postures"] = [data["postures"][i] for i in ROUTE_ROWS]
     plan = folder / "two.yaml"
     write_yaml(plan, data)
-    route_plan_file(str(plan), str(folder / "route.yaml"), 0, None)
+    route_postures_file(str(plan), str(folder / "route.yaml"), 0, None)
     return folder / "route.yaml"
 
 

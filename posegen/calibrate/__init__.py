@@ -8,8 +8,9 @@ perturbed robot, the calibrated URDF, the report and the folder read back
 (:func:`read_calibration`).
 """
 
-from posegen.calibrate.bag_workflow import Measured, SimulatedSession, measure_bag, simulate_route_bag
+from posegen.calibrate.bag_workflow import Measured, SimulatedBag, measure_bag, simulate_route_bag
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
+from posegen.calibrate.calibration_file import format_table, residual_stats, write_calibration
 from posegen.calibrate.compliance import Compliance, ComplianceGroup, compensate, read_compliance, uncompensate
 from posegen.calibrate.deliverable_files import load_line
 from posegen.calibrate.deliverables import Deliverable, DeliverableKind, Deliverables
@@ -31,12 +32,11 @@ from posegen.calibrate.record import (
     read_calibration,
     write_record,
 )
-from posegen.calibrate.report import format_table, residual_stats, write_calibration
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
 from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
-from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
+from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_postures_file
 
 __all__ = [
     "CALIBRATION_FILE",
@@ -67,7 +67,7 @@ __all__ = [
     "ScaleSearch",
     "Settings",
     "Simulated",
-    "SimulatedSession",
+    "SimulatedBag",
     "apply_offsets",
     "calibrate",
     "calibrate_files",
@@ -94,7 +94,7 @@ __all__ = [
     "residual_stats",
     "select_model",
     "simulate",
-    "simulate_plan_file",
+    "simulate_postures_file",
     "simulate_route_bag",
     "spot_of",
     "true_parameters",

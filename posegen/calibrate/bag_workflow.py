@@ -1,6 +1,6 @@
 """The calibrate stage's rosbag2 commands: ``posegen simulate ROUTE --bag`` and ``posegen measure``.
 
-``simulate --bag`` rehearses a session (:mod:`posegen.calibrate.session`) and records it
+``simulate --bag`` simulates a recording (:mod:`posegen.calibrate.simulated_recording`) and writes it
 as a real robot would: ``sensor_msgs/JointState`` at the recording rate and one
 ``geometry_msgs/WrenchStamped`` topic per wrist (the chains' ``wrench_topic``). ``measure``
 reads such a bag, finds the contact windows (:mod:`posegen.calibrate.contact_windows`)
@@ -26,7 +26,7 @@ from posegen.calibrate.contact_windows import (
     match_windows,
     wrist_force,
 )
-from posegen.calibrate.session import Motion, SessionSettings, route_motion, simulate_session
+from posegen.calibrate.simulated_recording import Motion, SensorSettings, route_motion, simulate_recording
 from posegen.calibrate.workflow import check_compliance, contact_noise_record, perturbation_of, truth_record
 from posegen.errors import ArgumentError, InputError, unknown_name
 from posegen.io import (
@@ -49,7 +49,7 @@ TRUTH_FILE = "truth.yaml"  # a simulated session's true parameters, inside its b
 
 
 @dataclass(frozen=True)
-class SimulatedSession:
+class SimulatedBag:
     """What ``posegen simulate --bag`` wrote."""
 
     bag: Path
@@ -84,7 +84,8 @@ def wrench_topics(scene: Scene) -> dict[str, str]:
     missing = [c.name for c in scene.config.chains if not c.wrench_topic]
     if missing:
         raise InputError(
-            f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with --no-wrench)"
+            f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with use_wrench=False)",
+            parameter="use_wrench=False",
         )
     return {c.name: c.wrench_topic for c in scene.config.chains}
 
@@ -119,7 +120,7 @@ def simulate_route_bag(
     every_chain: bool = False,
     contact_noise_mm: float = 0.0,
     contact_noise_deg: float = 0.0,
-) -> SimulatedSession:
+) -> SimulatedBag:
     """Record a perturbed robot executing a route, as a rosbag2 with the truth in its folder.
 
     Args:
@@ -144,11 +145,11 @@ def simulate_route_bag(
             contact that does not settle on the true plane.
 
     """
-    check_seed(seed, "--seed")
+    check_seed(seed, "seed")
     perturbation = perturbation_of(
         error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
     )
-    check_size(rate_hz, "--rate", positive=True)
+    check_size(rate_hz, "rate_hz", positive=True)
     bag_path = Path(bag)
     truth = bag_path / TRUTH_FILE
     check_writable(bag_path, OutputKind.FOLDER)
@@ -159,9 +160,9 @@ def simulate_route_bag(
     wrench_topics(scene)  # before the simulation: every wrist needs a topic
     if not motion.contacts:
         raise InputError(f"{route_path}: the route makes no contact")
-    settings = SessionSettings(rate_hz=rate_hz)
+    settings = SensorSettings(rate_hz=rate_hz)
     with claim_output(bag_path, OutputKind.FOLDER):
-        recorded = simulate_session(scene, motion, session, perturbation, settings, seed, every_chain)
+        recorded = simulate_recording(scene, motion, session, perturbation, settings, seed, every_chain)
         prov = scene.provenance(seed)
         prov["simulation"] = {
             "route": route_path,
@@ -182,7 +183,7 @@ def simulate_route_bag(
         joints = JointStates(scene.joint_names, recorded.times_s, recorded.positions)
         true = dump_yaml(truth_record(recorded.model, recorded.theta, prov))
         write_recording(bag_path, joints, joint_topic, wrenches, prov, extra={TRUTH_FILE: true})
-    return SimulatedSession(bag_path, truth, len(motion.contacts), float(recorded.times_s[-1]), len(recorded.times_s))
+    return SimulatedBag(bag_path, truth, len(motion.contacts), float(recorded.times_s[-1]), len(recorded.times_s))
 
 
 def _columns(scene: Scene, joints: JointStates, where: str) -> tuple[list[int], list[str]]:
@@ -269,9 +270,11 @@ def measure_bag(
 
     """
     if route_path is None and not use_wrench:
-        raise InputError("without a wrench topic, --route is needed to tell contacts from pauses")
+        raise InputError(
+            "without a wrench topic, route_path is needed to tell contacts from pauses", parameter="route_path"
+        )
     if session is not None and not session.strip():
-        raise ArgumentError("--session: give a session name")
+        raise ArgumentError("session: give a session name", parameter="session")
     check_writable(output)
     check_apart([output], [bag, route_path, config_path])
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find

@@ -100,10 +100,10 @@ def check_settings(settings: Settings) -> None:
 
     """
     if settings.prior_scale is not None:
-        check_size(settings.prior_scale, "--prior-scale", positive=True)
+        check_size(settings.prior_scale, "prior_scale", positive=True)
     if settings.fold_seeds is not None:
-        check_count(settings.fold_seeds, "--fold-seeds")
-    check_seed(settings.seed, "--seed")
+        check_count(settings.fold_seeds, "fold_seeds")
+    check_seed(settings.seed, "seed")
 
 
 def check_candidates(scene: Scene, settings: Settings) -> None:

@@ -56,7 +56,7 @@ from posegen.calibrate.folds import Fold
 from posegen.calibrate.scoring import CvResult, implausible, one_standard_error, score_folds
 from posegen.errors import InfeasibleError
 from posegen.model import CalibrationModel, Kind, Observations, Spec, candidate_spec, masked, spec_for_rows, start_point
-from posegen.parallel import Backend, Job, ProcessBackend
+from posegen.parallel import Backend, Job, as_backend
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray
 
@@ -280,7 +280,7 @@ def select_model(
     cost = {c.name: (c.floor, len(candidate_spec(model, c, settings.prior, 1.0).free)) for c in items}
     order = sorted(range(len(items)), key=lambda i: cost[items[i].name], reverse=True)
     by_item: dict[int, list[tuple[CvResult, Estimate]]] = {}
-    runner = backend or ProcessBackend(1)
+    runner = as_backend(backend or 1)
     for i, scored in zip(order, runner.map(job, [items[i] for i in order], len(items)), strict=True):
         say(f"cross-validation: {items[i].name}")
         by_item[i] = scored

@@ -1,6 +1,6 @@
 """A calibration folder read back: the report, every contact's residuals and the posterior.
 
-Besides ``calibration.yaml`` (:mod:`posegen.calibrate.report`), a calibration writes::
+Besides ``calibration.yaml`` (:mod:`posegen.calibrate.calibration_file`), a calibration writes::
 
     residuals.csv    one row per contact: set (training | outlier | held_out), label,
                      chain, session, kind (flush | point), height/roll/pitch residuals

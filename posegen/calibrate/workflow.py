@@ -12,8 +12,8 @@ import numpy as np
 
 from posegen.arguments import check_seed, check_size
 from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
+from posegen.calibrate.calibration_file import write_calibration
 from posegen.calibrate.record import CALIBRATION_FILE
-from posegen.calibrate.report import write_calibration
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.errors import ArgumentError, InputError
 from posegen.io import (
@@ -37,7 +37,7 @@ from posegen.model import (
 )
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Scene, load_config, load_plan, scene_for
+from posegen.robot import FloatArray, Scene, load_config, load_postures, scene_for
 
 TRUTH_FORMAT = "posegen-truth"
 
@@ -59,8 +59,8 @@ class Calibrated:
     training_contacts: int  # read from the training files (outliers included)
 
 
-def simulate_plan_file(
-    plan_path: str,
+def simulate_postures_file(
+    postures_path: str,
     output: str,
     *,
     config_path: str | None,
@@ -76,9 +76,9 @@ def simulate_plan_file(
     """Contacts of a perturbed robot at the postures of a pool or selection file.
 
     Args:
-        plan_path: Pool or selection file.
+        postures_path: Pool or selection file.
         output: Measurement file to write; the truth goes beside it (``*.truth.yaml``).
-        config_path: Scene config; None: the one saved in the plan.
+        config_path: Scene config; None: the one saved in the postures file.
         seed: Seed of the robot's errors and of the encoder noise.
         error_mm: Sigma of placement length errors (mm).
         error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
@@ -88,39 +88,39 @@ def simulate_plan_file(
         contact_noise_mm: Sigma of each contact's local table height (mm).
         contact_noise_deg: Sigma of each contact's local table roll and pitch (deg).
 
-    The arguments, the plan (its robot model included) and the outputs' place are
+    The arguments, the postures file (its robot model included) and the outputs' place are
     checked before any work; the output is locked while it is made.
 
     Raises:
-        PosegenError: Bad arguments, config or plan, a plan of another robot model, an
+        PosegenError: Bad arguments, config or postures file, one of another robot model, an
             output that cannot be written, or a contact that does not settle.
 
     """
-    check_seed(seed, "--seed")
+    check_seed(seed, "seed")
     perturbation = perturbation_of(
         error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
     )
     if not session:
-        raise ArgumentError("--session: give a session name")
+        raise ArgumentError("session: give a session name", parameter="session")
     measurements = Path(output)
     truth = measurements.with_name(measurements.stem + ".truth.yaml")
     check_writable(measurements)
     check_writable(truth)
-    check_apart([measurements, truth], [plan_path, config_path])
-    plan, _ = load_plan(plan_path)
-    scene = scene_for(plan.provenance, config_path)  # None: the config saved in the plan
+    check_apart([measurements, truth], [postures_path, config_path])
+    chosen, _ = load_postures(postures_path)
+    scene = scene_for(chosen.provenance, config_path)  # None: the config saved in the postures file
     check_compliance(scene, compliance_rad_per_knm)
-    scene.check_made_for(plan.provenance, plan_path)
-    plan.check_joints(scene.joint_names, plan_path)
-    plan.check_limits(scene.joint_names, scene.lower, scene.upper, plan_path)
-    chains = tuple(p.chain for p in plan.postures)
-    spots = tuple(p.spot for p in plan.postures)
-    planned = Contacts(plan.joints(), chains, (session,) * len(chains), spots, planned_kinds(scene, chains))
+    scene.check_made_for(chosen.provenance, postures_path)
+    chosen.check_joints(scene.joint_names, postures_path)
+    chosen.check_limits(scene.joint_names, scene.lower, scene.upper, postures_path)
+    chains = tuple(p.chain for p in chosen.postures)
+    spots = tuple(p.spot for p in chosen.postures)
+    planned = Contacts(chosen.joints(), chains, (session,) * len(chains), spots, planned_kinds(scene, chains))
     with claim_output(measurements, beside=(truth,)):
         recorded, model, x = simulate(scene, planned, perturbation, seed)
         prov = scene.provenance(seed)
         prov["simulation"] = {
-            "postures": plan_path,
+            "postures": postures_path,
             "error_mm": error_mm,
             "error_deg": error_deg,
             "encoder_noise_deg": noise_deg,
@@ -146,15 +146,15 @@ def perturbation_of(
         ArgumentError: A size that is negative or not a finite number.
 
     """
-    for value, flag in (
-        (error_mm, "--error-mm"),
-        (error_deg, "--error-deg"),
-        (noise_deg, "--noise-deg"),
-        (compliance_rad_per_knm, "--compliance"),
-        (contact_noise_mm, "--contact-noise-mm"),
-        (contact_noise_deg, "--contact-noise-deg"),
+    for value, name in (
+        (error_mm, "error_mm"),
+        (error_deg, "error_deg"),
+        (noise_deg, "noise_deg"),
+        (compliance_rad_per_knm, "compliance_rad_per_knm"),
+        (contact_noise_mm, "contact_noise_mm"),
+        (contact_noise_deg, "contact_noise_deg"),
     ):
-        check_size(value, flag)
+        check_size(value, name)
     return Perturbation(
         length_m=error_mm * 1e-3,
         angle_rad=float(np.deg2rad(error_deg)),
@@ -181,7 +181,9 @@ def check_compliance(scene: Scene, compliance_rad_per_knm: float) -> None:
     """
     if compliance_rad_per_knm and not scene.calibration.compliance:
         raise ArgumentError(
-            f"--compliance {compliance_rad_per_knm:g}: the config defines no calibration.compliance group to act on"
+            f"compliance_rad_per_knm={compliance_rad_per_knm:g}: "
+            "the config defines no calibration.compliance group to act on",
+            parameter="compliance_rad_per_knm",
         )
 
 
@@ -276,7 +278,7 @@ def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> N
     """No file is both fitted and held out (its contacts would judge the fit they made).
 
     Raises:
-        InputError: A file given as training and with ``--validate`` (by path, link or name).
+        InputError: A file given as training and held out (by path, link or name).
 
     """
     for kept in held_out:
@@ -284,7 +286,9 @@ def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> N
             if Path(kept).resolve() == Path(fitted).resolve() or (
                 Path(kept).exists() and Path(fitted).exists() and os.path.samefile(kept, fitted)
             ):
-                raise InputError(f"{kept} is a training file and a held-out one (--validate): give it once")
+                raise InputError(
+                    f"{kept} is a training file and a held-out one (held_out): give it once", parameter="held_out"
+                )
 
 
 def _check_trained(train: Contacts, held_out: Contacts) -> None:
@@ -316,4 +320,7 @@ def _saved_scene(items: Sequence[str]) -> Scene:
         if Path(path).suffix.lower() in (".yaml", ".yml"):
             data = read_yaml(path, MEASUREMENT_FORMAT)
             return scene_for(data.get("provenance", {}), None)
-    raise InputError("the measurement files carry no scene config (recorded CSV files do not): give --config")
+    raise InputError(
+        "the measurement files carry no scene config (recorded CSV files do not): give config_path",
+        parameter="config_path",
+    )

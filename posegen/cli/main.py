@@ -20,6 +20,7 @@ from typing import NoReturn
 
 from posegen import __version__
 from posegen.cli import calibrate, check, export, measure, pool, robot, route, select, session, simulate, view
+from posegen.cli.options import in_flags
 from posegen.errors import PosegenError
 
 # the robot's set-up, then pipeline order, as --help lists them
@@ -82,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     except PosegenError as exc:
         if held is not None:
             held.buffer.clear()  # -q: a failed run says one line, its error
-        print(f"posegen: error: {' '.join(str(exc).split())}", file=sys.stderr)  # one line, always
+        print(f"posegen: error: {' '.join(in_flags(exc).split())}", file=sys.stderr)  # one line, always
         return EXIT_ERROR
     except KeyboardInterrupt:
         print("posegen: interrupted; rerun the same command to resume", file=sys.stderr)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 from collections.abc import Callable
 from typing import TypeVar
 
@@ -19,6 +20,58 @@ EXIT_VIOLATIONS = 1  # a check found violations
 JOINT_STATES_TOPIC = "/joint_states"  # ROS 2 convention (joint_state_broadcaster)
 
 T = TypeVar("T")
+
+FLAGS = {  # the library's words for a parameter (PosegenError.parameter) -> the flag that sets it
+    "output": "-o",
+    "seed": "--seed",
+    "n": "--n",
+    "workers": "--workers",
+    "k": "--k",
+    "runs": "--runs",
+    "given": "--given",
+    "min_dt": "--min-dt",
+    "rate_hz": "--rate",
+    "session": "--session",
+    "route_path": "--route",
+    "use_wrench=False": "--no-wrench",
+    "config_path": "--config",
+    "held_out": "--validate",
+    "prior_scale": "--prior-scale",
+    "fold_seeds": "--fold-seeds",
+    "error_mm": "--error-mm",
+    "error_deg": "--error-deg",
+    "noise_deg": "--noise-deg",
+    "compliance_rad_per_knm": "--compliance",
+    "contact_noise_mm": "--contact-noise-mm",
+    "contact_noise_deg": "--contact-noise-deg",
+    "target_mm": "--target-mm",
+    "margin": "--margin",
+    "batch_postures": "--batch",
+    "candidates": "--candidates",
+    "max_batches": "--max-batches",
+    "package_dirs": "--package-dir",
+}
+
+
+def in_flags(error: PosegenError) -> str:
+    """An error's message as the command line says it: the flag in place of the parameter it names.
+
+    The parameter is the message's subject when the message starts with it, followed by
+    ``=``, ``:`` or `` must `` (``k=80: ...`` reads ``--k 80: ...``); else its last mention
+    is (advice: ``..., give config_path``), as a path given earlier may hold the same
+    word. A message about no parameter, or one no flag sets, is left as is.
+    """
+    words = error.parameter
+    text = str(error)
+    if words is None or words not in FLAGS:
+        return text
+    mentions = list(re.finditer(rf"(?<![\w./-]){re.escape(words)}(?![\w./-])(=?)", text))  # words, not in a path
+    if not mentions:
+        return text
+    subject = re.match(rf"{re.escape(words)}(=|:| must )", text) is not None
+    found = mentions[0] if subject else mentions[-1]
+    flag = FLAGS[words] + (" " if found.group(1) else "")
+    return text[: found.start()] + flag + text[found.end() :]
 
 
 def _checked(parse: Callable[[str], object], check: Callable[[object], T]) -> Callable[[str], T]:

@@ -36,10 +36,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Plan the route, write it and print its figures."""
     from posegen.parallel import open_backend
-    from posegen.route import route_plan_file
+    from posegen.route import route_postures_file
 
     with open_backend(args.workers, args.scheduler) as backend, ProgressBar(args.quiet) as bar:
-        routed = route_plan_file(
+        routed = route_postures_file(
             args.selection,
             args.output,
             args.seed,

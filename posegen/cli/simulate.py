@@ -52,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Simulate, write the measurements (or the bag) and the truth, and say where."""
-    from posegen.calibrate import simulate_plan_file, simulate_route_bag
+    from posegen.calibrate import simulate_postures_file, simulate_route_bag
 
     robot = {
         "config_path": args.config,
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
             f"({recorded.samples} joint states) -> {recorded.bag}/ (true parameters: {recorded.truth})"
         )
         return 0
-    simulated = simulate_plan_file(args.postures, args.output, **robot)
+    simulated = simulate_postures_file(args.postures, args.output, **robot)
     print(
         f"simulate: {simulated.contacts} contacts of a perturbed robot -> {simulated.measurements} "
         f"(true parameters: {simulated.truth})"

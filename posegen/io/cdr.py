@@ -18,15 +18,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from posegen.numeric import FloatArray
+
 ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little endian
 STAMP = slice(4, 12)  # builtin_interfaces/Time (int32 sec, uint32 nanosec): first field of a header
 
-FloatArray = NDArray[np.floating[Any]]
 ByteRows = NDArray[np.uint8]  # (n, L): one message per row
 Nanoseconds = NDArray[np.int64]
 

@@ -23,7 +23,6 @@ from types import FrameType, TracebackType
 from typing import Any, Generic, Protocol, TypeVar
 
 from posegen.errors import BackendError, reason
-from posegen.extras import Extra, require
 
 StateT = TypeVar("StateT")
 ItemT = TypeVar("ItemT")
@@ -296,24 +295,3 @@ class ProcessBackend(Backend):
         self._executors.clear()
         self._states.clear()
         self._keep = False
-
-
-def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:
-    """The backend a command asked for.
-
-    Args:
-        workers: Local worker processes (ignored with ``scheduler``).
-        scheduler: Address of a Dask scheduler (``tcp://host:8786``); None: local processes.
-
-    Raises:
-        BackendError: The scheduler cannot be reached, has no worker, or a worker runs
-            another posegen version.
-        ExtraError: ``scheduler`` is given and Dask is not installed (``posegen[dask]``).
-
-    """
-    if scheduler is None:
-        return ProcessBackend(workers)
-    require(Extra.DASK, "scheduler (a Dask cluster)")
-    from posegen.parallel.cluster import DaskBackend
-
-    return DaskBackend(scheduler)

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from posegen.errors import BackendError
-from posegen.parallel import Backend, Job, ProcessBackend, job_name
+from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import (
     CollisionChecker,
@@ -103,7 +103,7 @@ def verify_postures(
         BackendError: A worker cannot run the check (another version or robot model).
 
     """
-    backend = workers if isinstance(workers, Backend) else ProcessBackend(workers)
+    backend = as_backend(workers)
     worst: WorstSoFar[Invariant] = WorstSoFar(list(Invariant))
     for measured in backend.map(checking_job(scene), _chunks(postures)):
         for excess, details in measured:

@@ -19,7 +19,7 @@ from pathlib import Path
 from posegen.arguments import check_seed
 from posegen.errors import BackendError, InfeasibleError
 from posegen.io import provenance
-from posegen.parallel import Backend, Job, ProcessBackend
+from posegen.parallel import Backend, Job, as_backend
 from posegen.pool.checkpoint import Checkpoint, Outcome, run_key
 from posegen.pool.sampler import PostureSampler, rejection_counts
 from posegen.progress import Progress, ProgressCallback, ignore_progress
@@ -82,7 +82,7 @@ def generate_pool(
 
     """
     if n <= 0:
-        raise InfeasibleError(f"--n must be a positive number of postures, got {n}")
+        raise InfeasibleError(f"n must be a positive number of postures, got {n}", parameter="n")
     check_seed(seed)
     scene = Scene(config)
     check_for_planning(scene)  # soles, balance and reach of the reference posture: cheap, before any sample
@@ -98,7 +98,7 @@ def generate_pool(
         LOG.info("resuming: %d samples already done, %d postures accepted", len(outcomes), accepted)
     progress(Progress(min(accepted, n), n, "posture", attempts=len(outcomes)))
     max_samples = max(PROBE_SAMPLES, MAX_SAMPLES_PER_POSTURE * n)
-    backend = workers if isinstance(workers, Backend) else ProcessBackend(workers)
+    backend = as_backend(workers)
     size = config.sampling.chunk_size
     ranges = (range(c * size, (c + 1) * size) for c in itertools.count(len(done)))
     chunks = backend.map(sampling_job(config, seed, model_sha), ranges)

@@ -49,10 +49,10 @@ def generate_pool_file(
             infeasible scene, or a checkpoint of another run.
 
     """
-    check_count(n, "--n")
-    check_seed(seed, "--seed")
+    check_count(n, "n")
+    check_seed(seed, "seed")
     if not isinstance(workers, Backend):
-        check_count(workers, "--workers")
+        check_count(workers, "workers")
     path = Path(output)
     checkpoint = path.with_name(path.name + ".partial.jsonl")
     check_apart([path, checkpoint], [config_path])

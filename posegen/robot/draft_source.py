@@ -102,7 +102,8 @@ def check_meshes(urdf: Path, text: str, package_dirs: tuple[str, ...]) -> None:
                     where = f"package dirs {', '.join(package_dirs) or '(none)'}" if PACKAGE_URI in filename else ""
                     raise ConfigError(
                         f"{urdf}: link '{link.get('name')}' {kind} mesh '{filename}' not found"
-                        + (f" (looked in {where}; add --package-dir)" if where else "")
+                        + (f" (looked in {where}; add package_dirs)" if where else ""),
+                        parameter="package_dirs" if where else None,
                     )
 
 

@@ -10,8 +10,8 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from posegen.errors import ConfigError, unknown_name
+from posegen.numeric import FloatArray as FloatArray  # re-exported for the robot package
 
-FloatArray = NDArray[np.floating[Any]]
 Indices = Sequence[int] | NDArray[np.integer[Any]]  # row or column indices
 
 

@@ -41,7 +41,7 @@ from posegen.io import read_arrays, read_yaml, write_with_arrays
 from posegen.robot.geometry import FloatArray
 
 POOL_FORMAT = "posegen-pool"
-SELECTION_FORMAT = "posegen-selection"  # a pool's fields plus the selection's (posegen.select.report)
+SELECTION_FORMAT = "posegen-selection"  # a pool's fields plus the selection's (posegen.select.selection_file)
 POOL_VERSION = 1  # postures inline
 POOL_ARRAYS_VERSION = 2  # postures in a .npz sidecar
 _SCALARS = ("contact_yaw_rad", "min_distance_m", "com_margin_m")  # float fields, one value per posture
@@ -302,7 +302,7 @@ def write_pool(path: str | Path, pool: Pool) -> None:
     write_with_arrays(path, header, arrays)
 
 
-def load_plan(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
+def load_postures(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
     """Read a pool or a selection that has postures: the postures, and their entries as plain data.
 
     Raises:
@@ -310,14 +310,14 @@ def load_plan(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
 
     """
     data = read_yaml(path, (POOL_FORMAT, SELECTION_FORMAT))
-    plan = pool_from_dict(data, str(path))
-    if not plan.postures:
+    chosen = pool_from_dict(data, str(path))
+    if not chosen.postures:
         raise InputError(f"{path}: no postures")
-    return plan, plan_entries(data, plan)
+    return chosen, posture_entries(data, chosen)
 
 
-def plan_entries(data: dict[str, Any], plan: Pool) -> list[dict[str, Any]]:
+def posture_entries(data: dict[str, Any], chosen: Pool) -> list[dict[str, Any]]:
     """The posture entries of a pool or selection file as plain data (a version-2 pool has none inline)."""
     if "postures" in data:
         return list(data["postures"])
-    return [plan.entry(i) for i in range(len(plan.postures))]
+    return [chosen.entry(i) for i in range(len(chosen.postures))]

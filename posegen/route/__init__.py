@@ -18,7 +18,8 @@ from posegen.route.repair import Substitutes, Substitution, insertion_places, ra
 from posegen.route.route import Route, Segment, plan_route
 from posegen.route.smoothing import blend_corners, corners, path_length, shortcut
 from posegen.route.timing import SAFETY, Timed, hold, parameterize
-from posegen.route.workflow import Exported, Routed, check_route_file, export_route_bag, route_plan_file
+from posegen.route.unplanned import Unplanned, UnplannedCause
+from posegen.route.workflow import Exported, Routed, check_route_file, export_route_bag, route_postures_file
 
 __all__ = [
     "MIN_DT_S",
@@ -39,6 +40,8 @@ __all__ = [
     "Substitution",
     "Timed",
     "Transfer",
+    "Unplanned",
+    "UnplannedCause",
     "Vertical",
     "blend_corners",
     "check_poses",
@@ -61,7 +64,7 @@ __all__ = [
     "rest_to_rest_time",
     "route_arrays_of",
     "route_header",
-    "route_plan_file",
+    "route_postures_file",
     "shortcut",
     "start_posture",
     "straight",

@@ -34,6 +34,7 @@ import numpy as np
 
 from posegen.robot import FloatArray, StanceSpace
 from posegen.route.motion import straight, through
+from posegen.route.unplanned import Unplanned, UnplannedCause
 
 LOG = logging.getLogger(__name__)
 
@@ -124,13 +125,13 @@ def plan_free(
     goal: FloatArray,
     vias: Sequence[Sequence[FloatArray]],
     stream: int,
-) -> FreeMotion | str:
+) -> FreeMotion | Unplanned:
     """A checked free motion from ``start`` to ``goal`` (both valid), or why there is none.
 
     The first of :func:`free_motions` (the ladder stops at the first that works).
     """
     found = free_motions(space, start, goal, vias, stream, via_candidates=1)
-    return found if isinstance(found, str) else found[0]
+    return found if isinstance(found, Unplanned) else found[0]
 
 
 def free_motions(
@@ -140,7 +141,7 @@ def free_motions(
     vias: Sequence[Sequence[FloatArray]],
     stream: int,
     via_candidates: int = VIA_CANDIDATES,
-) -> list[FreeMotion] | str:
+) -> list[FreeMotion] | Unplanned:
     """Checked free motions from ``start`` to ``goal`` (both valid), or why there is none.
 
     Args:
@@ -179,9 +180,10 @@ def free_motions(
         planned = _plan_ompl(space, start, goal, checks, (stream + offset * (STREAMS // 2)) % STREAMS)
         if planned is not None:
             return [FreeMotion(tuple(planned[0]), method, planned[1])]
-    return (
-        f"no free motion: straight line and {len(vias)} via sequences blocked, "
-        f"OMPL found no checked path in {budget} nor {LARGER_BUDGET * budget} state checks"
+    return Unplanned(
+        UnplannedCause.NO_FREE_MOTION,
+        f"straight line and {len(vias)} via sequences blocked, "
+        f"OMPL found no checked path in {budget} nor {LARGER_BUDGET * budget} state checks",
     )
 
 
@@ -272,6 +274,14 @@ def _plan_ompl(
     simplifier.reduceVertices(solution, SIMPLIFY_STEPS, SIMPLIFY_STEPS // 4)
     simplifier.ropeShortcutPath(solution)
     vertices = [np.array([solution.getState(k)[i] for i in range(n)]) for k in range(solution.getStateCount())]
+    path = _fine_path(space, start, goal, vertices)
+    return None if path is None else (path, max(len(vertices) - 2, 0))
+
+
+def _fine_path(
+    space: StanceSpace, start: FloatArray, goal: FloatArray, vertices: Sequence[FloatArray]
+) -> list[FloatArray] | None:
+    """OMPL's vertices (stance coordinates) as joint waypoints, each leg checked finely; None if one fails."""
     path = [np.array(start, dtype=float)]
     for k, vertex in enumerate(vertices[1:], start=1):
         target = goal if k == len(vertices) - 1 else space.joints_of(vertex, path[-1])
@@ -280,4 +290,4 @@ def _plan_ompl(
             LOG.info("OMPL's path failed the fine check")
             return None
         path.extend(leg[1:])
-    return path, max(len(vertices) - 2, 0)
+    return path

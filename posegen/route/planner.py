@@ -32,6 +32,7 @@ from posegen.route.free_motion import FreeMotion, Method, free_motions, raised_m
 from posegen.route.motion import vertical_paths
 from posegen.route.smoothing import blend_corners, shortcut
 from posegen.route.timing import Timed, parameterize
+from posegen.route.unplanned import Unplanned, UnplannedCause
 
 START = -1  # the node id of the start posture
 KEEP_VERTICAL = 0.5  # fraction of each approach and release (from the table up) that stays exactly vertical
@@ -91,19 +92,19 @@ def start_posture(scene: Scene) -> FloatArray | None:
     return scene.close_stance(np.where(scene.locked, scene.locked_values, scene.reference))
 
 
-def plan_stop(planner: Planner, request: tuple[int, tuple[float, ...], str]) -> Stop | str:
+def plan_stop(planner: Planner, request: tuple[int, tuple[float, ...], str]) -> Stop | Unplanned:
     """The stop of a posture ``(node, joints, chain)``, or why there is none."""
     node, joints, chain = request
     scene = planner.scene
     vertical = vertical_paths(planner.space, planner.projector, np.array(joints, dtype=float), chain)
     if vertical is None:
-        return "no balanced, collision-free vertical approach above the contact"
+        return Unplanned(UnplannedCause.NO_VERTICAL)
     limit = scene.velocity_limit * scene.route.velocity_scale_contact
     timed = parameterize(np.array(vertical.go_to_contact), limit, _acceleration(scene))
     return Stop(node, chain, np.array(vertical.approach), timed, vertical.clearance)
 
 
-def plan_transfer(planner: Planner, request: tuple[Stop | None, Stop | None]) -> Transfer | str:
+def plan_transfer(planner: Planner, request: tuple[Stop | None, Stop | None]) -> Transfer | Unplanned:
     """The transfer between two stops (None: the start posture), or why there is none."""
     source, target = request
     space = planner.space
@@ -114,7 +115,7 @@ def plan_transfer(planner: Planner, request: tuple[Stop | None, Stop | None]) ->
     vias = [[m] for m in raised_midpoints(space, a, b, *lifts)] + via_sequences(*lifts, planner.start)
     keys = (source.node if source else START, target.node if target else START)
     found = free_motions(space, a, b, vias, stream_of(planner.seed, *keys))
-    if isinstance(found, str):
+    if isinstance(found, Unplanned):
         return found
     best: Transfer | None = None
     for motion in found:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from posegen.parallel import Backend, Job, ProcessBackend, job_name
+from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback
 from posegen.robot import (
     SOLE_ANGLE_TOL_RAD,
@@ -176,7 +176,7 @@ def _check_collisions(
     jobs = [points[i : i + CHUNK] for i in range(0, len(points), CHUNK)]
     excess = np.full(len(positions), -np.inf)
     detail: dict[int, str] = {}
-    backend = workers if isinstance(workers, Backend) else ProcessBackend(workers)
+    backend = as_backend(workers)
     requests = ((positions[idx], [chains[k] for k in idx], margins[idx]) for idx in jobs)
     done = 0
     for idx, results in zip(jobs, backend.map(collision_job(scene), requests), strict=True):

@@ -25,6 +25,7 @@ Postures are numbered as nodes: ``0..n-1`` the input postures, ``n + r`` pool ro
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import itertools
 import logging
@@ -35,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from posegen.errors import InfeasibleError, InputError
-from posegen.parallel import Backend, Job, ProcessBackend, job_name
+from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Posture, Scene, SegmentType, check_for_planning
 from posegen.route.ordering import Order, order_postures, rest_to_rest_time
@@ -48,6 +49,7 @@ from posegen.route.repair import (
     substitution,
 )
 from posegen.route.timing import SAFETY, Timed, hold, parameterize
+from posegen.route.unplanned import Unplanned
 
 LOG = logging.getLogger(__name__)
 
@@ -128,24 +130,21 @@ def plan_route(
     joints = np.array([p.joints for p in postures], dtype=float).reshape(len(postures), -1)
     order = order_postures(start, joints, velocity, acceleration, seed)
     job = planning_job(scene, seed, given)
-    if isinstance(workers, Backend):
-        run = _Routing(scene, postures, substitutes, start, _all_in_flight(workers, job), progress)
+    backend = as_backend(workers)
+    with contextlib.nullcontext() if backend is workers else backend:  # one made here keeps its workers, then stops
+        run = _Routing(scene, postures, substitutes, start, _all_in_flight(backend, job), progress)
         run.plan(order.sequence)
-    else:
-        with ProcessBackend(workers) as backend:
-            run = _Routing(scene, postures, substitutes, start, _all_in_flight(backend, job), progress)
-            run.plan(order.sequence)
     return run.assemble(order)
 
 
 def _all_in_flight(
-    backend: Backend, job: Job[Planner, tuple[str, Any], Stop | Transfer | str]
-) -> Callable[[Sequence[tuple[str, Any]]], Iterator[Stop | Transfer | str]]:
+    backend: Backend, job: Job[Planner, tuple[str, Any], Stop | Transfer | Unplanned]
+) -> Callable[[Sequence[tuple[str, Any]]], Iterator[Stop | Transfer | Unplanned]]:
     """The backend's map of the planning job with every item of a batch in flight (their costs differ 100-fold)."""
     return lambda requests: backend.map(job, requests, window=len(requests))
 
 
-def _plan_one(planner: Planner, request: tuple[str, Any]) -> Stop | Transfer | str:
+def _plan_one(planner: Planner, request: tuple[str, Any]) -> Stop | Transfer | Unplanned:
     """One job of a route: a stop (``("stop", ...)``) or a transfer (``("transfer", ...)``)."""
     kind, item = request
     return plan_stop(planner, item) if kind == "stop" else plan_transfer(planner, item)
@@ -153,7 +152,7 @@ def _plan_one(planner: Planner, request: tuple[str, Any]) -> Stop | Transfer | s
 
 def planning_job(
     scene: Scene, seed: int, start: tuple[float, ...] | None = None
-) -> Job[Planner, tuple[str, Any], Stop | Transfer | str]:
+) -> Job[Planner, tuple[str, Any], Stop | Transfer | Unplanned]:
     """The route's work: stops and transfers, each planned by a worker's planner (from ``start``; None: reference)."""
     parts: tuple[Any, ...] = (scene.config.to_dict(), scene.files.sha256(), seed)
     return Job(
@@ -172,7 +171,7 @@ class _Routing:
         postures: Sequence[Posture],
         substitutes: Substitutes | None,
         start: FloatArray,
-        run: Callable[[Sequence[tuple[str, Any]]], Iterator[Stop | Transfer | str]],
+        run: Callable[[Sequence[tuple[str, Any]]], Iterator[Stop | Transfer | Unplanned]],
         progress: ProgressCallback,
     ) -> None:
         self.scene = scene
@@ -181,8 +180,8 @@ class _Routing:
         self.start = start
         self.run = run  # the backend's map of the planning job
         self.progress = progress
-        self.stops: dict[int, Stop | str] = {}
-        self.transfers: dict[tuple[int, int], Transfer | str] = {}
+        self.stops: dict[int, Stop | Unplanned] = {}
+        self.transfers: dict[tuple[int, int], Transfer | Unplanned] = {}
         self.sequence: list[int] = []
         self.closed = scene.route.return_to_start
         self.skipped: list[tuple[int, str]] = []
@@ -236,7 +235,7 @@ class _Routing:
         for pair, transfer in zip(todo, self.run(requests), strict=True):
             assert not isinstance(transfer, Stop)
             self.transfers[pair] = transfer
-            if isinstance(transfer, str):
+            if isinstance(transfer, Unplanned):
                 LOG.info("transfer %s -> %s: %s", *pair, transfer)
             self._report()
 
@@ -244,7 +243,7 @@ class _Routing:
         if node == START:
             return None
         stop = self.stops[node]
-        assert not isinstance(stop, str)
+        assert not isinstance(stop, Unplanned)
         return stop
 
     def pairs(self, sequence: Sequence[int], closed: bool) -> list[tuple[int, int]]:
@@ -257,13 +256,13 @@ class _Routing:
     def plan(self, order: Sequence[int]) -> None:
         """Plan stops and transfers, then place again or substitute what could not be reached."""
         self.plan_stops(order)
-        lost = {n: s for n in order if isinstance(s := self.stops[n], str)}
+        lost: dict[int, Unplanned | str] = {n: s for n in order if isinstance(s := self.stops[n], Unplanned)}
         self.sequence = [n for n in order if n not in lost]
         unplaced: list[tuple[int, str]] = []
         while self.sequence:
             pairs = self.pairs(self.sequence, self.closed)
             self.plan_transfers(pairs)
-            failed = [(a, b) for a, b in pairs if isinstance(self.transfers[(a, b)], str)]
+            failed = [(a, b) for a, b in pairs if isinstance(self.transfers[(a, b)], Unplanned)]
             if not failed:
                 break
             for a, b in failed:
@@ -296,7 +295,7 @@ class _Routing:
         self.plan_transfers(needed)
         for k in places:
             trial = [*self.sequence[:k], node, *self.sequence[k:]]
-            if all(not isinstance(self.transfers[p], str) for p in self.pairs(trial, self.closed) if node in p):
+            if all(not isinstance(self.transfers[p], Unplanned) for p in self.pairs(trial, self.closed) if node in p):
                 self.sequence = trial
                 return True
         return False
@@ -311,7 +310,7 @@ class _Routing:
         nodes = [len(self.postures) + r for r in rows]
         self.plan_stops(nodes)
         for node in nodes:
-            if not isinstance(self.stops[node], str) and self.insert(node):
+            if not isinstance(self.stops[node], Unplanned) and self.insert(node):
                 row = node - len(self.postures)
                 record = substitution(self.substitutes, lost, reason, row, [*routed, row])
                 self.substitutions.append(record)

@@ -32,7 +32,7 @@ from posegen.robot import (
     SegmentType,
     Verification,
     geometry_coverage,
-    load_plan,
+    load_postures,
     read_route,
     route_arrays,
     scene_for,
@@ -58,8 +58,8 @@ class Routed:
     repair: str  # how a lost posture would be repaired: from which pool, or why not
 
 
-def route_plan_file(
-    plan_path: str,
+def route_postures_file(
+    postures_path: str,
     output: str,
     seed: int = 0,
     config_path: str | None = None,
@@ -73,10 +73,10 @@ def route_plan_file(
     """Plan, time and export a trajectory through the postures of a selection (or pool) file.
 
     Args:
-        plan_path: Selection or pool file.
+        postures_path: Selection or pool file.
         output: Route file, ``.yaml`` or ``.json``; its arrays go to ``.npz`` beside it.
         seed: Seed of the ordering, of OMPL's streams and of the shortcuts.
-        config_path: Scene config; None: the one saved in the plan.
+        config_path: Scene config; None: the one saved in the postures file.
         progress: Told after each planning job.
         workers: Local worker processes planning the route's segments, or the backend to run them on.
         pool_path: The pool a selection came from (to substitute a posture that cannot
@@ -86,38 +86,38 @@ def route_plan_file(
             starts there and returns there (recorded in the summary as
             ``start_posture_rad``). None: the reference posture.
 
-    The seed, the plan, its robot model and the outputs' place are checked before any
+    The seed, the postures file, its robot model and the outputs' place are checked before any
     planning; the output is locked while it is made.
 
     Raises:
-        PosegenError: Bad seed, bad or empty plan, another robot model, an output that
+        PosegenError: Bad seed, a bad or empty postures file, another robot model, an output that
             cannot be written, or no posture reachable.
 
     """
-    check_seed(seed, "--seed")
+    check_seed(seed, "seed")
     path = Path(output)
     if path.suffix.lower() not in ROUTE_SUFFIXES:
-        raise ArgumentError(f"-o {output}: a route file ends in {' or '.join(ROUTE_SUFFIXES)}")
+        raise ArgumentError(f"output={output}: a route file ends in {' or '.join(ROUTE_SUFFIXES)}", parameter="output")
     outputs = route_outputs(path, csv)
     for output_path in outputs:
         check_writable(output_path)
-    check_apart(outputs, [plan_path, pool_path, config_path])
-    plan, entries = load_plan(plan_path)
-    plan, entries, repeated = _without_repeats(plan, entries, plan_path)
-    scene = scene_for(plan.provenance, config_path)
-    scene.check_made_for(plan.provenance, plan_path)
-    plan.check_joints(scene.joint_names, plan_path)
-    plan.check_limits(scene.joint_names, scene.lower, scene.upper, plan_path)
-    substitutes, pool_entries, repair = _substitutes(scene, plan, entries, plan_path, pool_path)
+    check_apart(outputs, [postures_path, pool_path, config_path])
+    chosen, entries = load_postures(postures_path)
+    chosen, entries, repeated = _without_repeats(chosen, entries, postures_path)
+    scene = scene_for(chosen.provenance, config_path)
+    scene.check_made_for(chosen.provenance, postures_path)
+    chosen.check_joints(scene.joint_names, postures_path)
+    chosen.check_limits(scene.joint_names, scene.lower, scene.upper, postures_path)
+    substitutes, pool_entries, repair = _substitutes(scene, chosen, entries, postures_path, pool_path)
     with claim_output(path, beside=outputs[1:]):
-        progress(Progress(0, 2 * len(plan.postures) + 1, "job"))
+        progress(Progress(0, 2 * len(chosen.postures) + 1, "job"))
         start = time.perf_counter()
-        route = plan_route(scene, plan.postures, seed, workers, substitutes, progress, from_posture)
+        route = plan_route(scene, chosen.postures, seed, workers, substitutes, progress, from_posture)
         elapsed = time.perf_counter() - start
         n = len(entries)
         nodes = {i: entries[i] for i in range(n)}
         nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
-        summary = _summary(scene, route, len(plan.postures))
+        summary = _summary(scene, route, len(chosen.postures))
         summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
         if from_posture is not None:
             summary["start_posture_rad"] = [float(v) for v in from_posture]
@@ -126,12 +126,12 @@ def route_plan_file(
         if substitutes is not None and route.substitutions:
             rows = [r for v in route.visited if (r := substitutes.row(v, n)) is not None]
             summary["information"] = o1_figures(substitutes, rows)
-        provenance = dict(plan.provenance)
+        provenance = dict(chosen.provenance)
         provenance.update(
             {
                 "seed": seed,
-                "selection": plan_path,
-                "selection_sha256": hashlib.sha256(Path(plan_path).read_bytes()).hexdigest(),
+                "selection": postures_path,
+                "selection_sha256": hashlib.sha256(Path(postures_path).read_bytes()).hexdigest(),
             }
         )
         written = write_route(path, route, route_header(route, nodes, provenance, summary), csv)
@@ -139,47 +139,49 @@ def route_plan_file(
 
 
 def _without_repeats(
-    plan: Pool, entries: list[dict[str, Any]], plan_path: str
+    chosen: Pool, entries: list[dict[str, Any]], postures_path: str
 ) -> tuple[Pool, list[dict[str, Any]], list[dict[str, int]]]:
-    """The plan without the postures it holds twice (same chain, same joints), each one said.
+    """The postures without those held twice (same chain, same joints), each one said.
 
     Returns:
-        The plan and its entries, first occurrences kept; and each repeat as
+        The postures and their entries, first occurrences kept; and each repeat as
         ``{posture, same_as}`` (indices in the input).
 
     """
     first: dict[tuple[str, tuple[float, ...]], int] = {}
     keep, repeated = [], []
-    for k, posture in enumerate(plan.postures):
+    for k, posture in enumerate(chosen.postures):
         seen = first.setdefault((posture.chain, posture.joints), k)
         if seen == k:
             keep.append(k)
         else:
             repeated.append({"posture": k, "same_as": seen})
-            LOG.warning("%s: posture %d repeats posture %d (same chain and joints): routed once", plan_path, k, seen)
+            LOG.warning(
+                "%s: posture %d repeats posture %d (same chain and joints): routed once", postures_path, k, seen
+            )
     if not repeated:
-        return plan, entries, []
-    postures = tuple(plan.postures[k] for k in keep)
-    return dataclasses.replace(plan, postures=postures), [entries[k] for k in keep], repeated
+        return chosen, entries, []
+    postures = tuple(chosen.postures[k] for k in keep)
+    return dataclasses.replace(chosen, postures=postures), [entries[k] for k in keep], repeated
 
 
 def _substitutes(
-    scene: Scene, plan: Pool, entries: list[dict[str, Any]], plan_path: str, pool_path: str | None
+    scene: Scene, chosen: Pool, entries: list[dict[str, Any]], postures_path: str, pool_path: str | None
 ) -> tuple[Substitutes | None, list[dict[str, Any]], str]:
     """The pool a selection came from, if it can be found; and a word on what a repair can use."""
     if not all("pool_id" in e for e in entries):
         return None, [], "no repair: the input is a pool, not a selection"
-    recorded = plan.provenance.get("pool")
+    recorded = chosen.provenance.get("pool")
     path = Path(pool_path) if pool_path else (Path(recorded) if recorded else None)
     if path is None or not path.exists():
         return None, [], f"no repair: the selection's pool {path} is not there (give it with --pool)"
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    expected = plan.provenance.get("pool_sha256")
+    expected = chosen.provenance.get("pool_sha256")
     if expected and digest != expected:
         if pool_path:
-            raise InputError(f"{path}: sha256 differs from the pool the selection {plan_path} was made from")
+            raise InputError(f"{path}: sha256 differs from the pool the selection {postures_path} was made from")
         return None, [], f"no repair: {path} changed since the selection was made (sha256 differs)"
-    pool, pool_entries = load_plan(path)
+    pool, pool_entries = load_postures(path)
     pool.check_joints(scene.joint_names, str(path))
     chains = [p.chain for p in pool.postures]
 
@@ -246,7 +248,7 @@ def check_route_file(
             for another robot model.
 
     """
-    check_size(min_dt, "--min-dt", positive=True)
+    check_size(min_dt, "min_dt", positive=True)
     data = read_route(path)
     recorded = data.get("provenance") or {}
     scene = scene_for(recorded, config_path)

@@ -9,8 +9,8 @@ file with its plots.
 from posegen.model import Design, build_design
 from posegen.select.followup import FollowUp, follow_up, read_calibration_model
 from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
-from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import Iroc, detmax_runs, iroc, select_k, weight_of
+from posegen.select.selection_file import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.subset_selection import Subset, detmax, exchange, greedy, subset_of
 from posegen.select.workflow import SelectionSettings, follow_up_pool_file, select_pool_file
 

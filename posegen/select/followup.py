@@ -136,12 +136,14 @@ def follow_up(
     if chain not in chain_rows:
         raise InputError(f"the pool has no posture of chain '{chain}'; its chains: {', '.join(chain_rows)}")
     if not 1 <= k <= len(pool):
-        raise InputError(f"--k {k}: choose between 1 and {len(pool)} postures")
+        raise InputError(f"k={k}: choose between 1 and {len(pool)} postures", parameter="k")
     excluded = sorted({int(r) for r in exclude})
     if excluded and not 0 <= excluded[0] <= excluded[-1] < len(pool):
         raise InputError(f"excluded pool rows must lie in 0..{len(pool) - 1}")
     if k > len(pool) - len(excluded):
-        raise InputError(f"--k {k}: only {len(pool) - len(excluded)} pool postures are left to choose from")
+        raise InputError(
+            f"k={k}: only {len(pool) - len(excluded)} pool postures are left to choose from", parameter="k"
+        )
     scaled = targets[chain_rows[chain]] / units[None, :, None]  # (m, 3, f)
     target = np.einsum("nmf,nmg->fg", scaled, scaled) / len(scaled)  # mean over the chain's postures
     chosen: list[int] = []

@@ -22,8 +22,8 @@ from posegen.robot import (
     scene_for,
 )
 from posegen.select.followup import follow_up, read_calibration_model
-from posegen.select.report import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.selection import detmax_runs, iroc, select_k
+from posegen.select.selection_file import plot_detmax, plot_o1, selection_to_dict
 from posegen.select.subset_selection import Subset, subset_of
 
 LOG = logging.getLogger(__name__)
@@ -72,9 +72,9 @@ def select_pool_file(
     settings = settings or SelectionSettings()
     k, runs, seed = settings.k, settings.runs, settings.seed
     if k is not None:
-        check_count(k, "--k")
-    check_count(runs, "--runs", minimum=0)
-    check_seed(seed, "--seed")
+        check_count(k, "k")
+    check_count(runs, "runs", minimum=0)
+    check_seed(seed, "seed")
     path = Path(output)
     plots = [path.with_name(path.stem + "_o1.png"), path.with_name(path.stem + "_detmax.png")]
     check_writable(path)
@@ -89,7 +89,7 @@ def select_pool_file(
     if not pool.postures:
         raise InfeasibleError(f"{pool_path}: the pool is empty")
     if k is not None and k > len(pool.postures):
-        raise InfeasibleError(f"--k {k}: the pool has only {len(pool.postures)} postures")
+        raise InfeasibleError(f"k={k}: the pool has only {len(pool.postures)} postures", parameter="k")
     with claim_output(path, beside=plots):
         timings: dict[str, float] = {}
         say = Steps(4 + runs, progress)
@@ -153,11 +153,11 @@ def follow_up_pool_file(
             more than the postures left).
 
     """
-    check_count(k, "--k")
+    check_count(k, "k")
     path = Path(output)
     check_writable(path)
     if not given:
-        raise InputError("--given: at least one measurement file")
+        raise InputError("given: at least one measurement file", parameter="given")
     check_apart([path], [pool_path, calibration_path, config_path, *(measurement_item(g)[0] for g in given)])
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, config_path)
@@ -165,7 +165,7 @@ def follow_up_pool_file(
     pool.check_joints(scene.joint_names, pool_path)
     pool.check_limits(scene.joint_names, scene.lower, scene.upper, pool_path)
     if k > len(pool.postures):
-        raise InfeasibleError(f"--k {k}: the pool has only {len(pool.postures)} postures")
+        raise InfeasibleError(f"k={k}: the pool has only {len(pool.postures)} postures", parameter="k")
     contacts: Contacts | None = None
     for item in given:
         measured, session = measurement_item(item)

@@ -35,7 +35,7 @@ from posegen.robot import (
     route_arrays,
     scene_for,
 )
-from posegen.route import check_route_file, export_route_bag, route_plan_file, start_posture
+from posegen.route import check_route_file, export_route_bag, route_postures_file, start_posture
 from posegen.select import SelectionSettings, follow_up_pool_file, iroc, select_pool_file
 from posegen.session.index import Batch, SessionSettings, batch_folder, sha256_of
 
@@ -49,7 +49,7 @@ _POOL_ROW = re.compile(r"\(pool (\d+)\)")
 
 
 @dataclass(frozen=True)
-class Plan:
+class BatchSources:
     """Where a batch's postures come from."""
 
     given: tuple[str, ...] = ()  # measurement files so far (none: the first batch)
@@ -88,7 +88,7 @@ def select_first(pool_path: str, pool: Pool, output: Path, settings: SessionSett
         k = min(len(pool.postures), k + max(1, k // 10))
 
 
-def select_next(pool_path: str, pool: Pool, folder: Path, plan: Plan, settings: SessionSettings) -> None:
+def select_next(pool_path: str, pool: Pool, folder: Path, sources: BatchSources, settings: SessionSettings) -> None:
     """The next batch's selection: the missing postures first, then ``select --given`` on the weakest chain.
 
     The follow-up chooses among the pool postures no batch of the session holds yet (up to
@@ -100,27 +100,27 @@ def select_next(pool_path: str, pool: Pool, folder: Path, plan: Plan, settings: 
     """
     followed: list[dict[str, Any]] = []
     provenance = {**pool.provenance, "pool": pool_path, "pool_sha256": sha256_of(Path(pool_path))}
-    figures: dict[str, Any] = {"missing_postures": list(plan.missing)}
-    excluded = sorted(set(plan.planned) | set(plan.missing))
+    figures: dict[str, Any] = {"missing_postures": list(sources.missing)}
+    excluded = sorted(set(sources.planned) | set(sources.missing))
     k = min(settings.batch_postures, len(pool.postures) - len(excluded))
-    if k <= 0 and not plan.missing:
+    if k <= 0 and not sources.missing:
         raise InfeasibleError(
             f"{pool_path}: every posture of the pool is in the session already and the target is not met: "
             "generate a larger pool (posegen pool) and start a new session"
         )
-    if plan.follow and k > 0:
+    if sources.follow and k > 0:
         data = follow_up_pool_file(
             pool_path,
             str(folder / FOLLOW_UP_FILE),
-            list(plan.given),
-            plan.calibration,
+            list(sources.given),
+            sources.calibration,
             k,
-            weakest=plan.weakest,
+            weakest=sources.weakest,
             exclude=excluded,
         )
         followed, provenance = data["postures"], data["provenance"]
         figures["follow_up"] = data["figures"]
-    again = [{"pool_id": row, "rank": 0, "weight": 0.0, **pool.entry(row)} for row in plan.missing]
+    again = [{"pool_id": row, "rank": 0, "weight": 0.0, **pool.entry(row)} for row in sources.missing]
     write_yaml(
         folder / SELECTION_FILE,
         {
@@ -164,7 +164,7 @@ def route_batch(session: Path, number: int, pool_path: str, settings: SessionSet
     folder = session / batch_folder(number)
     route = folder / ROUTE_FILE
     standing = standing_posture(session / batch_folder(number - 1) / ROUTE_FILE) if number > 1 else None
-    routed = route_plan_file(
+    routed = route_postures_file(
         str(folder / SELECTION_FILE),
         str(route),
         settings.seed,

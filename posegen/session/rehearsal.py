@@ -63,8 +63,8 @@ def rehearse_session(
         PosegenError: Not a session, a file edited by hand, or a step that fails.
 
     """
-    check_seed(robot.seed, "--seed")
-    check_count(max_batches, "--max-batches")
+    check_seed(robot.seed, "seed")
+    check_count(max_batches, "max_batches")
     folder = Path(session)
     added: list[Added] = []
     index = open_session(folder)

@@ -25,7 +25,7 @@ from posegen.session.batch import (
     MEASUREMENTS_FILE,
     ROUTE_FILE,
     SELECTION_FILE,
-    Plan,
+    BatchSources,
     missing_rows,
     route_batch,
     select_first,
@@ -66,14 +66,14 @@ def check_settings(settings: SessionSettings) -> None:
         ArgumentError: A target, margin or count out of range.
 
     """
-    check_size(settings.target_mm, "--target-mm", positive=True)
-    check_size(settings.margin, "--margin")
-    check_seed(settings.seed, "--seed")
-    check_count(settings.batch_postures, "--batch")
+    check_size(settings.target_mm, "target_mm", positive=True)
+    check_size(settings.margin, "margin")
+    check_seed(settings.seed, "seed")
+    check_count(settings.batch_postures, "batch_postures")
     if settings.fold_seeds is not None:
-        check_count(settings.fold_seeds, "--fold-seeds")
+        check_count(settings.fold_seeds, "fold_seeds")
     if settings.prior_scale is not None:
-        check_size(settings.prior_scale, "--prior-scale", positive=True)
+        check_size(settings.prior_scale, "prior_scale", positive=True)
 
 
 def start_session(pool_path: str, output: str, settings: SessionSettings, backend: Backend) -> SessionIndex:
@@ -88,7 +88,10 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
     folder = Path(output)
     check_writable(folder, OutputKind.FOLDER)
     if (folder / INDEX_FILE).exists():
-        raise InputError(f"{folder} already holds a session: add bags with posegen session add, or choose another -o")
+        raise InputError(
+            f"{folder} already holds a session: add bags with posegen session add, or choose another output",
+            parameter="output",
+        )
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, None)
     scene.check_made_for(pool.provenance, pool_path)
@@ -99,7 +102,7 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
     names = [c.name for c in scene.calibration.candidates]
     for name in settings.candidates:
         if name not in names:
-            raise ArgumentError(f"--candidates: {unknown_name('candidate model', name, names)}")
+            raise ArgumentError(f"candidates: {unknown_name('candidate model', name, names)}", parameter="candidates")
     pool_abs = str(Path(pool_path).resolve())
     with claim_output(folder, OutputKind.FOLDER):
         try:
@@ -270,7 +273,7 @@ def _plan_next(folder: Path, index: SessionIndex, batch: Batch, backend: Backend
     predicted = batch.assessment.predicted_z_mm
     weakest = max(sorted(predicted), key=lambda c: predicted[c]) if predicted else None
     missing = batch.recording.missing
-    plan = Plan(
+    sources = BatchSources(
         given=tuple(_measurement_files(folder, index)),
         calibration=str(folder / batch.folder / CALIBRATION_FOLDER / "calibration.yaml") if calibrated else None,
         weakest=weakest,
@@ -281,5 +284,5 @@ def _plan_next(folder: Path, index: SessionIndex, batch: Batch, backend: Backend
     pool = load_pool(index.pool)
     sub = folder / batch_folder(number)
     sub.mkdir(exist_ok=True)
-    select_next(index.pool, pool, sub, plan, index.settings)
+    select_next(index.pool, pool, sub, sources, index.settings)
     return route_batch(folder, number, index.pool, index.settings, backend)

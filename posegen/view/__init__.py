@@ -15,12 +15,12 @@ from posegen.view.artefact import (
     Artefact,
     ArtefactKind,
     CalibrationArtefact,
-    PlanArtefact,
+    PosturesArtefact,
     RouteArtefact,
     RouteSegment,
     open_artefact,
 )
-from posegen.view.report import REPORT_FILE, report_html, write_report, write_report_into
+from posegen.view.report_page import REPORT_FILE, report_html, write_report, write_report_into
 from posegen.view.robot_figure import MeshSource, RobotFigure, RobotMeshes, robot_meshes
 from posegen.view.scenery import ROBOT_RGB, Camera, framing
 from posegen.view.viewer import DEFAULT_HOST, DEFAULT_PORT, Page, html_page, serve, write_html, write_html_file
@@ -36,7 +36,7 @@ __all__ = [
     "Camera",
     "MeshSource",
     "Page",
-    "PlanArtefact",
+    "PosturesArtefact",
     "RobotFigure",
     "RobotMeshes",
     "RouteArtefact",

@@ -29,8 +29,8 @@ from posegen.robot import (
     SegmentType,
     is_route_file,
     load_config,
-    plan_entries,
     pool_from_dict,
+    posture_entries,
     read_route,
     route_arrays,
     scene_for,
@@ -49,13 +49,13 @@ class ArtefactKind(str, enum.Enum):
 
 
 @dataclass(frozen=True)
-class PlanArtefact:
+class PosturesArtefact:
     """A pool or a selection: postures to step through."""
 
     kind: ArtefactKind
     path: Path
     scene: Scene
-    plan: Pool
+    postures: Pool
     entries: tuple[dict[str, Any], ...]  # the postures' plain data (a selection's rank, weight, pool_id)
     pool: Pool | None  # a selection's pool, when its file is still there unchanged
 
@@ -81,7 +81,7 @@ class RouteArtefact:
     times: FloatArray  # (m,) s
     positions: FloatArray  # (m, nj) rad, in the scene's joint order
     segments: tuple[RouteSegment, ...]
-    plan: Pool | None  # the selection it routes, when its file is still there unchanged
+    selection: Pool | None  # the selection it routes, when its file is still there unchanged
     skipped: tuple[dict[str, Any], ...]  # {posture, pool_id, reason}
 
 
@@ -95,7 +95,7 @@ class CalibrationArtefact:
     record: CalibrationRecord
 
 
-Artefact = PlanArtefact | RouteArtefact | CalibrationArtefact
+Artefact = PosturesArtefact | RouteArtefact | CalibrationArtefact
 
 
 def _linked_file(recorded: Any, sha256: Any, beside: Path) -> Path | None:
@@ -111,28 +111,28 @@ def _linked_file(recorded: Any, sha256: Any, beside: Path) -> Path | None:
     return None
 
 
-def _plan(path: Path, data: dict[str, Any], config_path: str | None) -> PlanArtefact:
-    plan = pool_from_dict(data, str(path))
-    if not plan.postures:
+def _postures(path: Path, data: dict[str, Any], config_path: str | None) -> PosturesArtefact:
+    chosen = pool_from_dict(data, str(path))
+    if not chosen.postures:
         raise InputError(f"{path}: no postures")
-    scene = scene_for(plan.provenance, config_path)
-    scene.check_made_for(plan.provenance, str(path))
-    plan.check_joints(scene.joint_names, str(path))
+    scene = scene_for(chosen.provenance, config_path)
+    scene.check_made_for(chosen.provenance, str(path))
+    chosen.check_joints(scene.joint_names, str(path))
     chains = sorted(c.name for c in scene.config.chains)
-    for k, posture in enumerate(plan.postures):
+    for k, posture in enumerate(chosen.postures):
         if posture.chain not in chains:
             raise InputError(f"{path}: posture {k} names chain '{posture.chain}'; valid chains: {', '.join(chains)}")
     selection = data["format"] == SELECTION_FORMAT
     pool = None
     if selection:
-        pool_path = _linked_file(plan.provenance.get("pool"), plan.provenance.get("pool_sha256"), path)
+        pool_path = _linked_file(chosen.provenance.get("pool"), chosen.provenance.get("pool_sha256"), path)
         pool = pool_from_dict(read_yaml(pool_path, POOL_FORMAT), str(pool_path)) if pool_path else None
-    return PlanArtefact(
+    return PosturesArtefact(
         kind=ArtefactKind.SELECTION if selection else ArtefactKind.POOL,
         path=path,
         scene=scene,
-        plan=plan,
-        entries=tuple(plan_entries(data, plan)),
+        postures=chosen,
+        entries=tuple(posture_entries(data, chosen)),
         pool=pool,
     )
 
@@ -159,17 +159,17 @@ def _route(path: Path, config_path: str | None) -> RouteArtefact:
         )
         for s in data["segments"]
     )
-    plan_path = _linked_file(recorded.get("selection"), recorded.get("selection_sha256"), path)
-    plan = None
-    if plan_path is not None:
-        plan = pool_from_dict(read_yaml(plan_path, (POOL_FORMAT, SELECTION_FORMAT)), str(plan_path))
+    selection_path = _linked_file(recorded.get("selection"), recorded.get("selection_sha256"), path)
+    selection = None
+    if selection_path is not None:
+        selection = pool_from_dict(read_yaml(selection_path, (POOL_FORMAT, SELECTION_FORMAT)), str(selection_path))
     return RouteArtefact(
         path=path,
         scene=scene,
         times=times,
         positions=np.ascontiguousarray(positions[:, order]),
         segments=segments,
-        plan=plan,
+        selection=selection,
         skipped=tuple(data.get("skipped") or ()),
     )
 
@@ -209,4 +209,4 @@ def open_artefact(path: str | Path, config_path: str | None = None) -> Artefact:
         return _calibration(path.parent, config_path)
     if found not in (POOL_FORMAT, SELECTION_FORMAT):
         raise InputError(f"{path}: not a pool, selection or route file, nor a calibration folder (format: {found!r})")
-    return _plan(path, data, config_path)
+    return _postures(path, data, config_path)

@@ -20,7 +20,7 @@ import viser
 
 from posegen.robot import FloatArray, SegmentType
 from posegen.view.artefact import RouteArtefact, RouteSegment
-from posegen.view.plan_view import contact_points
+from posegen.view.postures_view import contact_points
 from posegen.view.robot_figure import RobotFigure, robot_meshes
 from posegen.view.scenery import ROBOT_RGB, chain_colours, info_label, set_scenery
 
@@ -122,9 +122,9 @@ class RouteView:
 
     def _skipped(self, server: viser.ViserServer) -> None:
         route = self._artefact
-        if route.plan is None or not route.skipped:
+        if route.selection is None or not route.skipped:
             return
-        points = contact_points(route.scene, route.plan)
+        points = contact_points(route.scene, route.selection)
         for i, entry in enumerate(route.skipped):
             k = entry.get("posture")
             if not isinstance(k, int) or not 0 <= k < len(points):

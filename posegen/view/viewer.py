@@ -20,9 +20,9 @@ from typing import Protocol
 import viser
 
 from posegen.io import check_apart, check_writable, claim_output, write_atomic
-from posegen.view.artefact import Artefact, CalibrationArtefact, PlanArtefact, RouteArtefact, open_artefact
+from posegen.view.artefact import Artefact, CalibrationArtefact, PosturesArtefact, RouteArtefact, open_artefact
 from posegen.view.calibration_view import CalibrationView
-from posegen.view.plan_view import PlanView
+from posegen.view.postures_view import PosturesView
 from posegen.view.route_view import RouteView
 
 DEFAULT_HOST = "127.0.0.1"
@@ -62,8 +62,8 @@ class Page:
 
 
 def _view(server: viser.ViserServer, artefact: Artefact) -> View:
-    if isinstance(artefact, PlanArtefact):
-        return PlanView(server, artefact)
+    if isinstance(artefact, PosturesArtefact):
+        return PosturesView(server, artefact)
     if isinstance(artefact, RouteArtefact):
         return RouteView(server, artefact)
     assert isinstance(artefact, CalibrationArtefact)

@@ -7,8 +7,8 @@ import pytest
 
 from posegen.calibrate import Noise, Perturbation, calibrate, estimate, held_out_residuals, simulate
 from posegen.calibrate.calibration import check_enough
+from posegen.calibrate.calibration_file import residual_tables
 from posegen.calibrate.estimation import held_at_urdf
-from posegen.calibrate.report import residual_tables
 from posegen.calibrate.scoring import column_stats, fold_loss
 from posegen.calibrate.screening import chi_thresholds, row_dof
 from posegen.calibrate.simulation import settle_true, true_parameters

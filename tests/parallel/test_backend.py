@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from posegen.errors import BackendError
-from posegen.parallel import Job, ProcessBackend
+from posegen.parallel import Job, ProcessBackend, as_backend, open_backend
 from posegen.pool import generate_pool, verify_postures
 
 
@@ -32,6 +32,18 @@ def test_process_backend_keeps_item_order_and_one_state_per_worker():
         assert len(states) <= workers
     [(square, pid, _)] = list(ProcessBackend(2).map(job, [3]))
     assert (square, pid) == (9, os.getpid())  # one item: no processes started
+
+
+def test_a_stage_runs_on_the_backend_it_is_given_or_on_that_many_local_processes():
+    job = Job(name="squares", setup=_setup, run=_run)
+    with ProcessBackend(1) as given:
+        assert as_backend(given) is given
+        [(square, _, _)] = list(as_backend(given).map(job, [2]))
+        assert square == 4
+        assert job.name in given._states  # the given backend keeps its state: as_backend did not close it
+    made = as_backend(3)
+    assert isinstance(made, ProcessBackend) and made.slots == 3
+    assert isinstance(open_backend(2), ProcessBackend) and open_backend(2).slots == 2
 
 
 def test_closing_the_results_early_stops_the_work():

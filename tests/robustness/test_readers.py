@@ -35,8 +35,8 @@ from posegen.robot import (
     Scene,
     is_route_file,
     load_config,
-    load_plan,
     load_pool,
+    load_postures,
     parse_config,
     pool_from_dict,
     read_route,
@@ -250,7 +250,7 @@ def test_pool_reader_on_damaged_headers_and_sidecars(files):
 @given(document=mutated(selection_data()))
 def test_selection_reader_on_mutated_selections(document):
     with written(dump(document), "selected.yaml") as path:
-        found = read_or_refuse(load_plan, path)
+        found = read_or_refuse(load_postures, path)
     if found is not None:
         plan, entries = found
         assert_valid_plan(plan)
@@ -399,7 +399,7 @@ def test_view_reader_on_mutated_selections(document):
     with written(dump(document), "selected.yaml") as path:
         artefact = read_or_refuse(open_artefact, path)
     if artefact is not None:
-        assert_valid_plan(artefact.plan)
+        assert_valid_plan(artefact.postures)
 
 
 # --- recorded rosbag2 sessions -------------------------------------------------------------------

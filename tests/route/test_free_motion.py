@@ -9,6 +9,7 @@ from posegen.robot import CollisionChecker, Projector, StanceSpace
 from posegen.route import (
     Method,
     Planner,
+    Unplanned,
     free_motions,
     plan_free,
     plan_stop,
@@ -66,7 +67,7 @@ def test_every_waypoint_is_valid_and_steps_are_small(scene, ends):
     assert straight(space, a.approach[0], b.approach[0]) is None
     vias = via_sequences(a.clearance, b.clearance, start_posture(scene))
     found = plan_free(space, a.approach[0], b.approach[0], vias, stream=0)
-    assert not isinstance(found, str)
+    assert not isinstance(found, Unplanned)
     path = np.array(found.waypoints)
     assert np.array_equal(path[0], a.approach[0]) and np.array_equal(path[-1], b.approach[0])
     assert all(space.is_valid(q, None) for q in path)
@@ -88,7 +89,7 @@ def detour(scene, example_pool):
     stops = [
         plan_stop(planner, (i, tuple(example_pool.postures[i].joints), example_pool.postures[i].chain)) for i in (9, 10)
     ]
-    assert not any(isinstance(s, str) for s in stops)
+    assert not any(isinstance(s, Unplanned) for s in stops)
     return planner, stops
 
 
@@ -113,14 +114,14 @@ def test_free_motions_returns_the_first_via_paths_each_checked(detour):
     vias = [[m] for m in raised_midpoints(space, start, goal, a.lift, b.lift)]
     vias += via_sequences(a.lift, b.lift, planner.start)
     found = free_motions(space, start, goal, vias, stream=0, via_candidates=2)
-    assert not isinstance(found, str) and len(found) == 2
+    assert not isinstance(found, Unplanned) and len(found) == 2
     for motion in found:
         assert motion.method == Method.VIA
         path = np.array(motion.waypoints)
         assert np.array_equal(path[0], start) and np.array_equal(path[-1], goal)
         assert all(space.is_valid(q, None) for q in path)
     first = plan_free(space, start, goal, vias, stream=0)
-    assert not isinstance(first, str)
+    assert not isinstance(first, Unplanned)
     assert all(np.array_equal(x, y) for x, y in zip(first.waypoints, found[0].waypoints, strict=True))
 
 
@@ -130,11 +131,11 @@ def test_a_transfer_keeps_its_fastest_via_path(detour):
     vias = [[m] for m in raised_midpoints(space, start, goal, a.lift, b.lift)]
     vias += via_sequences(a.lift, b.lift, planner.start)
     found = free_motions(space, start, goal, vias, stream=stream_of(planner.seed, a.node, b.node))
-    assert not isinstance(found, str) and len(found) == VIA_CANDIDATES
+    assert not isinstance(found, Unplanned) and len(found) == VIA_CANDIDATES
     durations = [_timed_transfer(planner, m, a, b, (a.node, b.node)).timed.times[-1] for m in found]
     assert durations[0] > min(durations)  # here the first via path found is not the fastest
     transfer = plan_transfer(planner, (a, b))
-    assert not isinstance(transfer, str)
+    assert not isinstance(transfer, Unplanned)
     assert transfer.timed.times[-1] == min(durations)
 
 
@@ -147,7 +148,7 @@ def test_a_via_state_equal_to_an_end_is_dropped_not_repeated(detour):
     # each of these is the path start -> via -> goal once a via state equal to an end is dropped
     vias = [via, [start, *via], [*via, goal], [start, start, *via, goal]]
     found = free_motions(space, start, goal, vias, stream=0, via_candidates=len(vias))
-    assert not isinstance(found, str) and len(found) == 1 and found[0].method == Method.VIA
+    assert not isinstance(found, Unplanned) and len(found) == 1 and found[0].method == Method.VIA
     steps = np.abs(np.diff(np.array(found[0].waypoints), axis=0)).max(axis=1)
     assert steps.min() > 0.0  # no waypoint repeated
     assert free_motions(space, start, goal, [[start], [goal]], stream=0, via_candidates=2)[0].method != Method.VIA

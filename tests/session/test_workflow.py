@@ -18,7 +18,7 @@ from posegen.errors import InfeasibleError, InputError
 from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
 from posegen.parallel import open_backend
 from posegen.robot import load_pool, read_route, route_arrays
-from posegen.route import route_plan_file
+from posegen.route import route_postures_file
 from posegen.session import (
     INDEX_FILE,
     REHEARSAL_BAG,
@@ -32,7 +32,7 @@ from posegen.session import (
     start_session,
     write_index,
 )
-from posegen.session.batch import ROUTE_FILE, Plan, route_batch, select_next, standing_posture
+from posegen.session.batch import ROUTE_FILE, BatchSources, route_batch, select_next, standing_posture
 from tests.cli.test_cli import assert_one_line_error
 from tests.conftest import EXAMPLE_POOL
 
@@ -107,18 +107,18 @@ def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
     follow_up = yaml.safe_load((folder / "batch_003" / "followup.yaml").read_text())["figures"]
     assert follow_up["excluded_postures"] == len(index.batches[0].pool_rows) + len(index.batches[1].pool_rows)
     pool = load_pool(index.pool)
-    plan = Plan(
+    sources = BatchSources(
         given=tuple(str(folder / b.folder / "measurements.yaml") for b in index.batches[:2]),
         calibration=str(folder / "batch_002" / "calibration" / "calibration.yaml"),
         weakest=CHAIN,
         planned=tuple(range(2, len(pool.postures))),
     )
-    select_next(index.pool, pool, tmp_path, plan, SETTINGS)  # two postures left: the batch takes both
+    select_next(index.pool, pool, tmp_path, sources, SETTINGS)  # two postures left: the batch takes both
     selection = yaml.safe_load((tmp_path / "selection.yaml").read_text())
     assert sorted(p["pool_id"] for p in selection["postures"]) == [0, 1]
     with pytest.raises(InfeasibleError, match="every posture of the pool is in the session already"):
         select_next(
-            index.pool, pool, tmp_path, dataclasses.replace(plan, planned=tuple(range(len(pool.postures)))), SETTINGS
+            index.pool, pool, tmp_path, dataclasses.replace(sources, planned=tuple(range(len(pool.postures)))), SETTINGS
         )
 
 
@@ -135,7 +135,7 @@ def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, 
         (tmp_path / "session" / f"batch_00{number}").mkdir(parents=True)
     shutil.copy(two, tmp_path / "session" / "batch_002" / "selection.yaml")
     before = tmp_path / "session" / "batch_001" / ROUTE_FILE  # a batch that left the robot above a contact
-    route_plan_file(str(two), str(before), 0, None, workers=backend, from_posture=standoff)
+    route_postures_file(str(two), str(before), 0, None, workers=backend, from_posture=standoff)
     assert np.array_equal(standing_posture(before), standoff)
     batch = route_batch(tmp_path / "session", 2, str(two), SETTINGS, backend)
     after = route_arrays(read_route(str(tmp_path / "session" / "batch_002" / ROUTE_FILE)), "route")[1]

@@ -7,18 +7,18 @@ import yaml
 from posegen.errors import InputError
 from posegen.io import write_with_arrays
 from posegen.robot import read_route
-from posegen.view import ArtefactKind, CalibrationArtefact, PlanArtefact, RouteArtefact, open_artefact
+from posegen.view import ArtefactKind, CalibrationArtefact, PosturesArtefact, RouteArtefact, open_artefact
 from tests.conftest import EXAMPLE_POOL
 
 
 def test_each_kind_is_recognised(selection_file, route_file, calibration_folder):
     pool = open_artefact(EXAMPLE_POOL)
-    assert isinstance(pool, PlanArtefact) and pool.kind == ArtefactKind.POOL and pool.pool is None
+    assert isinstance(pool, PosturesArtefact) and pool.kind == ArtefactKind.POOL and pool.pool is None
     selection = open_artefact(selection_file)
-    assert isinstance(selection, PlanArtefact) and selection.kind == ArtefactKind.SELECTION
-    assert selection.pool is not None and len(selection.pool.postures) == len(pool.plan.postures)  # its pool, linked
+    assert isinstance(selection, PosturesArtefact) and selection.kind == ArtefactKind.SELECTION
+    assert selection.pool is not None and len(selection.pool.postures) == len(pool.postures.postures)  # linked
     route = open_artefact(route_file)
-    assert isinstance(route, RouteArtefact) and route.plan is not None and len(route.plan.postures) == 2
+    assert isinstance(route, RouteArtefact) and route.selection is not None and len(route.selection.postures) == 2
     calibration = open_artefact(calibration_folder.path)
     assert isinstance(calibration, CalibrationArtefact)
     assert open_artefact(calibration_folder.path / "calibration.yaml").path == calibration.path

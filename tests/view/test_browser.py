@@ -61,7 +61,7 @@ def test_selection_page_shows_the_robot_and_steps_through_postures(selection_fil
     write_html(open_artefact(selection_file), page)
     offline.open(page.as_uri())
     assert_robot_drawn(offline.wait_for_robot())
-    n = len(open_artefact(selection_file).plan.postures)
+    n = len(open_artefact(selection_file).postures.postures)
     first, other = step_through(offline, 0.5, n - 0.5)
     assert_robot_drawn(first)
     assert_robot_drawn(other)

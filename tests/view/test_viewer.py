@@ -35,13 +35,13 @@ def mesh_error(page, at_s, scene, joints):
 def test_each_second_of_a_selection_page_is_a_posture_drawn_where_pinocchio_puts_it(selection_file, selection_page):
     artefact = open_artefact(selection_file)
     page = recording(selection_page.html)
-    n = len(artefact.plan.postures)
+    n = len(artefact.postures.postures)
     assert selection_page.steps == n and page["durationSeconds"] == pytest.approx(n)
     texts = labels(page)
     for k in (0, n // 2, n - 1):
         label = [text for t, text in texts if t <= k + 0.5][-1]
         assert label.startswith(f"selection posture {k + 1}/{n} | id {artefact.entries[k]['pool_id']} |")
-        assert mesh_error(page, k + 0.5, artefact.scene, np.array(artefact.plan.postures[k].joints)) < 2e-3
+        assert mesh_error(page, k + 0.5, artefact.scene, np.array(artefact.postures.postures[k].joints)) < 2e-3
 
 
 def test_a_route_page_plays_the_trajectory_in_real_time(route_file, route_page):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from posegen.calibrate import Perturbation, simulate
-from posegen.calibrate.session import ContactPhase, Motion, SessionSettings, hermite, simulate_session
+from posegen.calibrate.simulated_recording import ContactPhase, Motion, SensorSettings, hermite, simulate_recording
 from posegen.calibrate.simulation import contact_offsets
 from posegen.model import Contacts
 
@@ -35,55 +35,55 @@ def two_contacts(example_pool):
 
 def test_each_hold_is_flush_on_the_true_robot(scene, two_contacts):
     motion, (a, b) = two_contacts
-    settings = SessionSettings(rate_hz=100.0, force_noise_n=0.0, force_offset_n=0.0)
-    session = simulate_session(scene, motion, "sim", Perturbation(), settings, seed=4)
-    times = session.times_s - session.route_start_s
+    settings = SensorSettings(rate_hz=100.0, force_noise_n=0.0, force_offset_n=0.0)
+    recording = simulate_recording(scene, motion, "sim", Perturbation(), settings, seed=4)
+    times = recording.times_s - recording.route_start_s
     for k, (chain, planned) in enumerate((("left", a), ("right", b))):
         hold = (times >= motion.contacts[k].hold_s) & (times <= motion.contacts[k].lift_s)
-        held = session.positions[hold]
+        held = recording.positions[hold]
         assert np.ptp(held, axis=0).max() < 1e-12  # still
         contact = Contacts(held[:1], (chain,), ("sim",), ("",))
-        model = session.model
-        flush = model.evaluate(session.theta, model.observations(contact)).contact
+        model = recording.model
+        flush = model.evaluate(recording.theta, model.observations(contact)).contact
         assert np.abs(flush).max() < 1e-9  # flush on the true robot
         assert np.abs(held[0] - planned).max() > 1e-4  # ... which the planned posture is not
-        assert np.allclose(session.forces[chain][hold, 2], -settings.contact_force_n)
+        assert np.allclose(recording.forces[chain][hold, 2], -settings.contact_force_n)
         other = "right" if chain == "left" else "left"
-        assert np.allclose(session.forces[other][hold], 0.0)
+        assert np.allclose(recording.forces[other][hold], 0.0)
     free = (times > 3.2) & (times < 4.8)
-    assert np.allclose(session.forces["left"][free], 0.0) and np.allclose(session.forces["right"][free], 0.0)
+    assert np.allclose(recording.forces["left"][free], 0.0) and np.allclose(recording.forces["right"][free], 0.0)
     at_rest = times < 0
-    assert np.allclose(session.positions[at_rest], a)
+    assert np.allclose(recording.positions[at_rest], a)
 
 
 def test_the_true_robot_is_the_one_simulate_makes(scene, two_contacts):
     motion, (a, b) = two_contacts
     perturbation = Perturbation(encoder_noise_rad=1e-4)
-    session = simulate_session(scene, motion, "sim", perturbation, SessionSettings(rate_hz=50.0), seed=9)
-    again = simulate_session(scene, motion, "sim", perturbation, SessionSettings(rate_hz=50.0), seed=9)
+    recording = simulate_recording(scene, motion, "sim", perturbation, SensorSettings(rate_hz=50.0), seed=9)
+    again = simulate_recording(scene, motion, "sim", perturbation, SensorSettings(rate_hz=50.0), seed=9)
     planned = Contacts(np.array([a, b]), ("left", "right"), ("sim", "sim"), ("", ""))
     _, _, theta = simulate(scene, planned, perturbation, seed=9)
-    assert np.array_equal(session.theta, theta)
-    assert np.array_equal(session.positions, again.positions)
-    assert all(np.array_equal(session.forces[c], again.forces[c]) for c in session.forces)
-    noise = session.positions[session.times_s < 0.9] - a
+    assert np.array_equal(recording.theta, theta)
+    assert np.array_equal(recording.positions, again.positions)
+    assert all(np.array_equal(recording.forces[c], again.forces[c]) for c in recording.forces)
+    noise = recording.positions[recording.times_s < 0.9] - a
     assert 0.5e-4 < noise.std() < 2e-4
 
 
 def test_with_contact_noise_each_hold_is_flush_on_its_local_plane(scene, two_contacts):
     motion, (a, b) = two_contacts
     perturbation = Perturbation(contact_noise_m=3e-3, contact_noise_rad=float(np.deg2rad(0.3)))
-    settings = SessionSettings(rate_hz=100.0, force_noise_n=0.0, force_offset_n=0.0)
-    session = simulate_session(scene, motion, "sim", perturbation, settings, seed=4)
-    clean = simulate_session(scene, motion, "sim", Perturbation(), settings, seed=4)
-    assert np.array_equal(session.theta, clean.theta)  # the same robot and table
+    settings = SensorSettings(rate_hz=100.0, force_noise_n=0.0, force_offset_n=0.0)
+    recording = simulate_recording(scene, motion, "sim", perturbation, settings, seed=4)
+    clean = simulate_recording(scene, motion, "sim", Perturbation(), settings, seed=4)
+    assert np.array_equal(recording.theta, clean.theta)  # the same robot and table
     planned = Contacts(np.array([a, b]), ("left", "right"), ("sim", "sim"), ("", ""))
     offsets = contact_offsets(planned, perturbation, seed=4)  # as simulate draws them at these postures
-    times = session.times_s - session.route_start_s
-    model = session.model
+    times = recording.times_s - recording.route_start_s
+    model = recording.model
     for k, chain in enumerate(("left", "right")):
         hold = np.flatnonzero((times >= motion.contacts[k].hold_s) & (times <= motion.contacts[k].lift_s))[0]
-        contact = Contacts(session.positions[hold : hold + 1], (chain,), ("sim",), ("",))
-        flush = model.evaluate(session.theta, model.observations(contact)).contact[0]
+        contact = Contacts(recording.positions[hold : hold + 1], (chain,), ("sim",), ("",))
+        flush = model.evaluate(recording.theta, model.observations(contact)).contact[0]
         assert np.abs(flush - offsets[k]).max() < 1e-9 and np.abs(offsets[k]).min() > 1e-6
-        assert np.abs(session.positions[hold] - clean.positions[hold]).max() > 1e-5  # the joints carry it
+        assert np.abs(recording.positions[hold] - clean.positions[hold]).max() > 1e-5  # the joints carry it

@@ -1,4 +1,4 @@
-"""A rehearsal of a recorded session: a perturbed robot executes a route (``posegen simulate --bag``).
+"""A simulated recording: a perturbed robot executes a route, as its sensors record it (``posegen simulate --bag``).
 
 The true robot is the one ``posegen simulate`` makes from the same seed (same
 perturbation model, same chains and session). It follows the route's trajectory,
@@ -31,7 +31,7 @@ TORQUE_ARM_M = 0.1  # torque noise = force noise x this lever
 
 
 @dataclass(frozen=True)
-class SessionSettings:
+class SensorSettings:
     """What the simulated sensors read."""
 
     rate_hz: float = 500.0  # joint states and wrenches
@@ -77,7 +77,7 @@ class Motion:
 
 
 @dataclass(frozen=True)
-class Session:
+class SimulatedRecording:
     """What the robot's sensors recorded, and the robot that made it."""
 
     times_s: FloatArray  # (n,) s from the recording's start
@@ -153,15 +153,15 @@ def contact_weight(phase: ContactPhase, at: FloatArray) -> FloatArray:
     return np.where(at < phase.lift_s, rise, fall)
 
 
-def simulate_session(
+def simulate_recording(
     scene: Scene,
     motion: Motion,
     session: str,
     perturbation: Perturbation,
-    settings: SessionSettings,
+    settings: SensorSettings,
     seed: int,
     every_chain: bool = False,
-) -> Session:
+) -> SimulatedRecording:
     """Record a perturbed robot executing a route.
 
     Args:
@@ -218,4 +218,4 @@ def simulate_session(
         wrench = offset + rng.normal(0.0, settings.force_noise_n, (len(times), 6))
         wrench[:, 2] -= settings.contact_force_n * weight  # the table pushes the gripper along the sensor's -z
         forces[name], torques[name] = wrench[:, :3], wrench[:, 3:] * TORQUE_ARM_M
-    return Session(times, readings, forces, torques, settings.rest_s, model, theta)
+    return SimulatedRecording(times, readings, forces, torques, settings.rest_s, model, theta)

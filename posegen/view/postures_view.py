@@ -14,7 +14,7 @@ import numpy as np
 import viser
 
 from posegen.robot import FloatArray, Pool, Scene
-from posegen.view.artefact import ArtefactKind, PlanArtefact
+from posegen.view.artefact import ArtefactKind, PosturesArtefact
 from posegen.view.robot_figure import RobotFigure, robot_meshes
 from posegen.view.scenery import ROBOT_RGB, chain_colours, info_label, set_scenery
 from posegen.view.stepped_view import SteppedView
@@ -23,24 +23,24 @@ CURRENT_RGB = (225, 30, 30)
 POOL_POINT_M, PLAN_POINT_M = 0.008, 0.02  # contact marker sizes: a selection's pool, the postures shown
 
 
-def contact_points(scene: Scene, plan: Pool, lift_m: float = 0.0) -> FloatArray:
+def contact_points(scene: Scene, chosen: Pool, lift_m: float = 0.0) -> FloatArray:
     """World positions (m) of the postures' contact points, ``lift_m`` above the table top. Shape (n, 3)."""
-    xy = np.array([p.contact_xy_m for p in plan.postures], dtype=float).reshape(-1, 2)
+    xy = np.array([p.contact_xy_m for p in chosen.postures], dtype=float).reshape(-1, 2)
     local = np.column_stack([xy, np.full(len(xy), lift_m), np.ones(len(xy))])
     return (scene.table_pose @ local.T).T[:, :3]
 
 
-def _chain_rgb(scene: Scene, plan: Pool) -> np.ndarray:
+def _chain_rgb(scene: Scene, chosen: Pool) -> np.ndarray:
     colours = chain_colours(scene)
-    return np.array([colours[p.chain] for p in plan.postures], dtype=np.uint8).reshape(-1, 3)
+    return np.array([colours[p.chain] for p in chosen.postures], dtype=np.uint8).reshape(-1, 3)
 
 
-def describe(artefact: PlanArtefact, k: int) -> str:
+def describe(artefact: PosturesArtefact, k: int) -> str:
     """One line about posture ``k`` of a pool or selection."""
-    posture: Any = artefact.plan.postures[k]
+    posture: Any = artefact.postures.postures[k]
     entry = artefact.entries[k]
     parts = [
-        f"{artefact.kind.value} posture {k + 1}/{len(artefact.plan.postures)}",
+        f"{artefact.kind.value} posture {k + 1}/{len(artefact.postures.postures)}",
         f"id {entry.get('pool_id', entry.get('id', k))}",
         posture.chain,
         posture.spot,
@@ -52,12 +52,12 @@ def describe(artefact: PlanArtefact, k: int) -> str:
     return " | ".join(parts[:4]) + "\n" + " | ".join(parts[4:])
 
 
-class PlanView(SteppedView):
+class PosturesView(SteppedView):
     """A pool or a selection drawn in a viser scene, one posture at a time."""
 
     STEP_NAME = "posture"
 
-    def __init__(self, server: viser.ViserServer, artefact: PlanArtefact) -> None:
+    def __init__(self, server: viser.ViserServer, artefact: PosturesArtefact) -> None:
         super().__init__(server)
         self._artefact = artefact
         scene = artefact.scene
@@ -65,7 +65,7 @@ class PlanView(SteppedView):
         self._robot = RobotFigure(server, scene.model, robot_meshes(scene), "robot", ROBOT_RGB)
         big = artefact.kind == ArtefactKind.SELECTION
         size = PLAN_POINT_M if big else POOL_POINT_M
-        points = contact_points(scene, artefact.plan, size)  # a marker is a disc: lift it out of the table
+        points = contact_points(scene, artefact.postures, size)  # a marker is a disc: lift it out of the table
         background = artefact.pool if artefact.kind == ArtefactKind.SELECTION else None
         if background is not None:
             server.scene.add_point_cloud(
@@ -78,7 +78,7 @@ class PlanView(SteppedView):
         server.scene.add_point_cloud(
             "/contacts/postures",
             points,
-            _chain_rgb(scene, artefact.plan),
+            _chain_rgb(scene, artefact.postures),
             point_size=size,
             point_shape="circle",
         )
@@ -89,11 +89,11 @@ class PlanView(SteppedView):
     @property
     def steps(self) -> int:
         """Number of postures."""
-        return len(self._artefact.plan.postures)
+        return len(self._artefact.postures.postures)
 
     def show(self, k: int) -> None:
         """Pose the robot at posture ``k`` and describe it."""
-        posture = self._artefact.plan.postures[k]
+        posture = self._artefact.postures.postures[k]
         self._robot.pose(self._artefact.scene.configuration(np.array(posture.joints)))
         self._current.position = self._points[k] + np.array([0.0, 0.0, 0.01])
         self._label.text = self.describe(k)
