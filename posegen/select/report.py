@@ -1,92 +1,66 @@
-"""The selection file (``format: posegen-selection``) and its plots.
-
-The file reads like a pool (the same posture fields, so ``simulate`` and ``route`` take
-either) plus, per posture, ``pool_id``, ``rank`` (IROC rank) and ``weight`` (IROC
-weight), and the figures of the selection::
-
-    format: posegen-selection
-    format_version: 1
-    provenance: {posegen_version, robot_model_sha256, seed, config, pool, pool_sha256}
-    method: iroc | k
-    joint_names: [...]
-    postures: [{pool_id, rank, weight, id, sample, chain, spot, joints, ...}, ...]
-    figures: {base_parameters, selected, rank, o1, o1_star, certificate, iroc, detmax, ...}
-"""
+"""The figures of a design chosen from a pool, as a :class:`~posegen.select.selection_file.Selection`, and its plots."""
 
 from __future__ import annotations
 
 import hashlib
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from posegen.io import atomic_path
 from posegen.model import Design
-from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool
+from posegen.robot import Pool
 from posegen.select.selection import Iroc
+from posegen.select.selection_file import (
+    Certificate,
+    DesignFigures,
+    DetmaxFigures,
+    IrocFigures,
+    Selection,
+    SelectionMethod,
+    chosen_from_pool,
+)
 from posegen.select.subset_selection import Subset
 
 
-def selection_to_dict(
+def design_selection(
     pool: Pool,
     pool_path: str,
     design: Design,
     result: Iroc,
     chosen: Subset,
-    method: str,
+    method: SelectionMethod,
     detmax: tuple[Subset, ...],
     seed: int,
-) -> dict[str, Any]:
-    """Plain data of a selection file."""
+) -> Selection[DesignFigures]:
+    """The selection of ``chosen`` from a pool, with its provenance and figures."""
     provenance = dict(pool.provenance)
     provenance["seed"] = seed
     provenance["pool"] = pool_path
     provenance["pool_sha256"] = hashlib.sha256(Path(pool_path).read_bytes()).hexdigest()
     rank_of = {row: r + 1 for r, row in enumerate(result.ranking)}
-    postures = []
-    for row in chosen.rows:
-        entry = {"pool_id": int(row), "rank": rank_of[row], "weight": float(result.weights.weights[row])}
-        entry.update(pool.entry(row))
-        postures.append(entry)
     weights = result.weights
-    return {
-        "format": SELECTION_FORMAT,
-        "format_version": POOL_VERSION,
-        "provenance": provenance,
-        "method": method,
-        "joint_names": list(pool.joint_names),
-        "figures": {
-            "base_parameters": design.n_params,
-            "pool_postures": design.size,
-            "selected": len(chosen.rows),
-            "rank": chosen.rank,
-            "o1": chosen.o1,
-            "o1_star": result.o1_star,
-            "o1_over_o1_star": chosen.o1 / result.o1_star if result.o1_star > 0 else 0.0,
-            "certificate": {
-                "kiefer_wolfowitz_gap": weights.gap,
-                "d_efficiency_at_least": weights.efficiency_bound,
-                "o1_ratio_at_least": weights.o1_ratio_bound,
-                "iterations": weights.iterations,
-            },
-            "iroc": {
-                "selected_k": len(result.selected.rows),
-                "selected_o1": result.selected.o1,
-                "k_reaching_fraction_of_o1_star": {str(f): k for f, k in result.fractions.items()},
-                "support": result.support,
-                "weight_drop_after_rank": result.weight_drop_k,
-                "o1_curve": [[k, v] for k, v in result.curve],
-            },
-            "detmax": {
-                "runs": len(detmax),
-                "o1": [s.o1 for s in detmax],
-                "rank": [s.rank for s in detmax],
-                "best_o1": max((s.o1 for s in detmax), default=None),
-            },
-        },
-        "postures": postures,
-    }
+    postures = tuple(chosen_from_pool(pool, row, rank_of[row], float(weights.weights[row])) for row in chosen.rows)
+    figures = DesignFigures(
+        base_parameters=design.n_params,
+        pool_postures=design.size,
+        selected=len(chosen.rows),
+        rank=chosen.rank,
+        o1=chosen.o1,
+        o1_star=result.o1_star,
+        o1_over_o1_star=chosen.o1 / result.o1_star if result.o1_star > 0 else 0.0,
+        certificate=Certificate(weights.gap, weights.efficiency_bound, weights.o1_ratio_bound, weights.iterations),
+        iroc=IrocFigures(
+            selected_k=len(result.selected.rows),
+            selected_o1=result.selected.o1,
+            k_reaching_fraction_of_o1_star={str(f): k for f, k in result.fractions.items()},
+            support=result.support,
+            weight_drop_after_rank=result.weight_drop_k,
+            o1_curve=tuple(result.curve),
+        ),
+        detmax=DetmaxFigures(tuple(s.o1 for s in detmax), tuple(s.rank for s in detmax)),
+    )
+    return Selection(provenance, method, pool.joint_names, figures, postures)
 
 
 def plot_o1(result: Iroc, path: Path) -> None:
