@@ -22,8 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from posegen.errors import InfeasibleError
-from posegen.io import read_yaml
-from posegen.model import MEASUREMENT_FORMAT, build_design
+from posegen.model import build_design
 from posegen.parallel import Backend
 from posegen.robot import (
     Pool,
@@ -199,8 +198,13 @@ def route_pool_rows(route: str) -> tuple[int, ...]:
     return tuple(int(s["pool_id"]) for s in data["segments"] if s["type"] == SegmentType.HOLD.value)
 
 
-def missing_rows(planned: Sequence[int], measurements: Path) -> tuple[int, ...]:
-    """The planned pool rows that no measured contact names (a batch played in part), in planned order."""
-    data = read_yaml(measurements, MEASUREMENT_FORMAT)
-    found = {int(m.group(1)) for c in data["contacts"] if (m := _POOL_ROW.search(str(c.get("label", ""))))}
+def missing_rows(planned: Sequence[int], labels: Sequence[str]) -> tuple[int, ...]:
+    """The planned pool rows that no measured contact's label names (a batch played in part), in planned order.
+
+    Args:
+        planned: Pool rows of the batch's route, in its order.
+        labels: The measured contacts' labels (their route contact's, "... (pool N)").
+
+    """
+    found = {int(m.group(1)) for label in labels if (m := _POOL_ROW.search(label))}
     return tuple(row for row in planned if row not in found)
