@@ -60,8 +60,8 @@ def main(data: Path, output: Path, candidates: tuple[str, ...]) -> None:
     settings = Settings(candidates=candidates, fold_seeds=1)
     train = [str(data / "left_train.csv"), str(data / "right_train.csv")]
     calibrated = calibrate_files(train, [str(data / "left_validation.csv")], str(output), settings, config)
-    print(format_table(calibrated.report))
-    print(load_line(calibrated.report))
+    print(format_table(calibrated.summary))
+    print(load_line(calibrated.summary))
     print(f"calibrate: {time.perf_counter() - start:.0f} s -> {output}/")
 
     # 1. The URDF alone: any stack loads it. Here pinocchio, beside the nominal URDF.

@@ -36,13 +36,12 @@ def main(output: Path) -> None:
 
     following = follow_up_pool_file(
         pool, str(output / "next.yaml"), [str(measured)], str(output / "calibration" / "calibration.yaml"), k=10
-    )
-    figures = following["figures"]
-    chain = figures["weakest_chain"]
-    sigma = figures["predicted_height_sigma_mm"][chain]
+    ).figures
+    chain = following.weakest_chain
+    before, after = following.predicted_height_sigma_mm[chain]
     print(
-        f"follow-up: {figures['selected']} postures for the {chain} chain, the weakest "
-        f"(predicted height sigma {sigma['before']:.2f} -> {sigma['after']:.2f} mm) -> {output / 'next.yaml'}"
+        f"follow-up: {following.selected} postures for the {chain} chain, the weakest "
+        f"(predicted height sigma {before:.2f} -> {after:.2f} mm) -> {output / 'next.yaml'}"
     )
     print(f"follow_up: {time.perf_counter() - start:.0f} s")
 

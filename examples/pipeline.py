@@ -45,7 +45,7 @@ def main(output: Path, workers: int) -> None:
     print(f"pool: {len(pool.postures)} feasible postures ({lap()})")
 
     selected = select_pool_file(str(output / "pool.yaml"), str(output / "selected.yaml"), SelectionSettings(k=38))
-    print(f"select: {len(selected['postures'])} postures ({lap()})")
+    print(f"select: {len(selected.postures)} postures ({lap()})")
 
     route_postures_file(str(output / "selected.yaml"), str(output / "route.yaml"), seed=0, workers=workers)
     checked = check_route_file(str(output / "route.yaml"), None)
@@ -73,8 +73,8 @@ def main(output: Path, workers: int) -> None:
     simulate_postures_file(pool_file, str(held_out), config_path=None, session="check", **SIMULATED_ROBOT)
     settings = Settings(candidates=("offsets",), prior_scale=5.0, fold_seeds=1)
     calibrated = calibrate_files([str(measured)], [str(held_out)], str(output / "calibration"), settings, None)
-    print(format_table(calibrated.report))
-    print(load_line(calibrated.report))
+    print(format_table(calibrated.summary))
+    print(load_line(calibrated.summary))
     print(f"pipeline: {lap()} -> {output}/")
 
 

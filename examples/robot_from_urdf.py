@@ -32,7 +32,7 @@ def main(output: Path, robot: str) -> None:
     print(f"URDF: {scene.files.urdf}")
     print(f"SRDF: {scene.files.srdf}")
     left, right = draft.chains
-    soles = ', '.join(sole.frame for sole in draft.soles)
+    soles = ", ".join(sole.frame for sole in draft.soles)
     print(f"draft: soles {soles}; hands {left.hand}, {right.hand}; table at {draft.table_center_m} m")
 
     # What a person tunes next: compare with the shipped, hand-tuned config of the same robot.

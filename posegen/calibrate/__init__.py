@@ -4,8 +4,8 @@ Measurements (posegen YAML and recorded CSV), maximum a posteriori estimation un
 physical prior per parameter kind, grouped cross-validation folds, the choice of the
 model by repeated CV and the one-standard-error rule, robust screening of bad rows,
 the whole calibration (before/after, held-out protocols), simulated contacts of a
-perturbed robot, the calibrated URDF, the report and the folder read back
-(:func:`read_calibration`).
+perturbed robot, the calibrated URDF, the report (``calibration.yaml`` as a
+:class:`CalibrationSummary`) and the folder read back (:func:`read_calibration`).
 """
 
 from posegen.calibrate.bag_workflow import Measured, SimulatedBag, measure_bag, simulate_route_bag
@@ -35,6 +35,19 @@ from posegen.calibrate.record import (
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
+from posegen.calibrate.summary import (
+    CalibrationSummary,
+    ChosenModel,
+    Components,
+    CvFigures,
+    DeliverableSummary,
+    ErrorFigures,
+    LeftOutRow,
+    ResidualTable,
+    read_summary,
+    summary_from_dict,
+    write_summary,
+)
 from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
 from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_postures_file
 
@@ -47,23 +60,31 @@ __all__ = [
     "Calibrated",
     "Calibration",
     "CalibrationRecord",
+    "CalibrationSummary",
+    "ChosenModel",
     "Compliance",
     "ComplianceGroup",
+    "Components",
     "ContactResidual",
     "ContactSet",
+    "CvFigures",
     "CvResult",
     "Deliverable",
     "DeliverableKind",
+    "DeliverableSummary",
     "Deliverables",
+    "ErrorFigures",
     "Estimate",
     "Flag",
     "Fold",
     "JointOffset",
+    "LeftOutRow",
     "Measured",
     "ModelSelection",
     "Noise",
     "Perturbation",
     "Posterior",
+    "ResidualTable",
     "ScaleSearch",
     "Settings",
     "Simulated",
@@ -90,6 +111,7 @@ __all__ = [
     "read_compliance",
     "read_contacts",
     "read_offsets",
+    "read_summary",
     "repeated_folds",
     "residual_stats",
     "select_model",
@@ -97,8 +119,10 @@ __all__ = [
     "simulate_postures_file",
     "simulate_route_bag",
     "spot_of",
+    "summary_from_dict",
     "true_parameters",
     "uncompensate",
     "write_calibration",
     "write_record",
+    "write_summary",
 ]

@@ -27,9 +27,9 @@ import numpy as np
 from posegen.calibrate.calibration import Calibration, held_out_residuals
 from posegen.calibrate.deliverable_files import deliverables_report, write_deliverable
 from posegen.calibrate.plots import plot_cross_validation, plot_parameters, plot_residuals
-from posegen.calibrate.record import CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
+from posegen.calibrate.record import CALIBRATION_FILE, CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
 from posegen.calibrate.scoring import RULE, CvResult, column_stats
-from posegen.io import dump_yaml, write_atomic
+from posegen.calibrate.summary import CalibrationSummary, summary_from_dict, write_summary
 from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas, masked
 from posegen.robot import ContactKind, FloatArray
 
@@ -261,8 +261,8 @@ def write_calibration(
     out_dir: Path,
     seed: int | None,
     rejected_rows: Sequence[str] = (),
-) -> dict[str, Any]:
-    """Write every output of a calibration into ``out_dir`` and return the report.
+) -> CalibrationSummary:
+    """Write every output of a calibration into ``out_dir`` and return its ``calibration.yaml``.
 
     Args:
         calibration: The calibration.
@@ -274,6 +274,7 @@ def write_calibration(
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     report = calibration_report(calibration, held_out, seed, rejected_rows)
+    summary = summary_from_dict(report, str(out_dir / CALIBRATION_FILE))
     for deliverable in calibration.deliverables.all():
         write_deliverable(calibration, deliverable, out_dir, seed)
     plot_parameters([r for r in report["parameters"] if r["unit"] in ("mm", "deg")], out_dir / "parameters.png")
@@ -297,25 +298,24 @@ def write_calibration(
             out_dir / "residuals.png",
         )
     write_record(calibration, held_out, out_dir)
-    write_atomic(out_dir / "calibration.yaml", dump_yaml(report))
-    return report
+    write_summary(out_dir / CALIBRATION_FILE, summary)
+    return summary
 
 
 def _cell(value: float | None) -> str:
     return f"{value:>7.2f}" if value is not None else f"{'-':>7}"
 
 
-def format_table(report: dict[str, Any]) -> str:
+def format_table(summary: CalibrationSummary) -> str:
     """The before/after table printed by ``posegen calibrate`` (mean absolute; RMS)."""
     lines = [
         "set                         contacts  model    z (mm)        roll (deg)    pitch (deg)",
         "                                              mean   rms    mean   rms    mean   rms",
     ]
-    for key, table in report["residuals"].items():
-        for model in ("before", "after"):
-            m, r = table[model]["mean_abs"], table[model]["rms"]
+    for key, table in summary.residuals.items():
+        for model, errors in (("before", table.before), ("after", table.after)):
+            cells = zip(errors.mean_abs.values(), errors.rms.values(), strict=True)
             lines.append(
-                f"{key:<28}{table['contacts']:>6}  {model:<7}"
-                + "".join(f"{_cell(m[c])}{_cell(r[c])}" for c in COMPONENTS)
+                f"{key:<28}{table.contacts:>6}  {model:<7}" + "".join(f"{_cell(m)}{_cell(r)}" for m, r in cells)
             )
     return "\n".join(lines)

@@ -25,6 +25,7 @@ from posegen.calibrate.compliance import COMPLIANCE_FILE, Compliance, Compliance
 from posegen.calibrate.deliverables import Deliverable, DeliverableKind
 from posegen.calibrate.offsets import OFFSETS_FILE, joint_offsets, write_offsets
 from posegen.calibrate.scoring import DELIVERABLE_RULE, CvResult, column_stats
+from posegen.calibrate.summary import CalibrationSummary
 from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
 from posegen.model import Contacts, Kind, masked
@@ -151,17 +152,14 @@ def deliverables_report(calibration: Calibration, held_out: Contacts | None) -> 
     return section
 
 
-def load_line(report: dict[str, Any]) -> str:
+def load_line(summary: CalibrationSummary) -> str:
     """One line: which file to load for which stack, with each one's predicted held-out height error."""
     parts = []
-    for kind in DeliverableKind:
-        entry = report["deliverables"].get(kind.value)
-        if entry is None:
-            continue
+    for kind, deliverable in summary.deliverables.items():
         errors = ", ".join(
-            f"{chain} {e['mean_abs']['z_mm']:.2f} mm" for chain, e in sorted(entry["predicted_error"].items())
+            f"{chain} {e.mean_abs.z_mm:.2f} mm" for chain, e in sorted(deliverable.predicted_error.items())
         )
-        what = entry["files"][0] if kind == DeliverableKind.URDF else f"{COMPLIANT_DIR}/ (URDF + {COMPLIANCE_FILE})"
+        what = deliverable.files[0] if kind == DeliverableKind.URDF else f"{COMPLIANT_DIR}/ (URDF + {COMPLIANCE_FILE})"
         who = "any stack" if kind == DeliverableKind.URDF else "stacks that compensate compliance"
         parts.append(f"{what} for {who} (predicted held-out z {errors})")
     return "load: " + "; or ".join(parts)

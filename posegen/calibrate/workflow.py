@@ -15,6 +15,7 @@ from posegen.calibrate.calibration import Settings, calibrate, check_candidates,
 from posegen.calibrate.calibration_file import write_calibration
 from posegen.calibrate.record import CALIBRATION_FILE
 from posegen.calibrate.simulation import Perturbation, simulate
+from posegen.calibrate.summary import CalibrationSummary
 from posegen.errors import ArgumentError, InputError
 from posegen.io import (
     OutputKind,
@@ -23,14 +24,13 @@ from posegen.io import (
     check_replaceable,
     check_writable,
     claim_output,
-    read_yaml,
     write_yaml,
 )
 from posegen.model import (
-    MEASUREMENT_FORMAT,
     CalibrationModel,
     Contacts,
     measurement_item,
+    measurement_provenance,
     planned_kinds,
     read_measurements,
     write_measurements,
@@ -55,7 +55,7 @@ class Simulated:
 class Calibrated:
     """What ``posegen calibrate`` found and wrote."""
 
-    report: dict[str, Any]  # the content of calibration.yaml
+    summary: CalibrationSummary  # calibration.yaml
     training_contacts: int  # read from the training files (outliers included)
 
 
@@ -268,10 +268,10 @@ def calibrate_files(
     sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
     with claim_output(out_dir, OutputKind.FOLDER), atomic_folder(out_dir) as staging:
         calibration = calibrate(scene, train, sessions, settings, progress, backend)
-        report = write_calibration(calibration, validation, staging, settings.seed, rejected)
+        summary = write_calibration(calibration, validation, staging, settings.seed, rejected)
         if finish is not None:
             finish(staging)
-    return Calibrated(report=report, training_contacts=len(train))
+    return Calibrated(summary=summary, training_contacts=len(train))
 
 
 def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> None:
@@ -318,8 +318,7 @@ def _saved_scene(items: Sequence[str]) -> Scene:
     for item in items:
         path = measurement_item(item)[0]
         if Path(path).suffix.lower() in (".yaml", ".yml"):
-            data = read_yaml(path, MEASUREMENT_FORMAT)
-            return scene_for(data.get("provenance", {}), None)
+            return scene_for(measurement_provenance(path), None)
     raise InputError(
         "the measurement files carry no scene config (recorded CSV files do not): give config_path",
         parameter="config_path",

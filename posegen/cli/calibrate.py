@@ -52,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Calibrate, write the calibration folder and its HTML report, and print the before/after table."""
-    from posegen.calibrate import Settings, calibrate_files, format_table, load_line
+    from posegen.calibrate import DeliverableKind, Settings, calibrate_files, format_table, load_line
     from posegen.errors import ExtraError
     from posegen.parallel import open_backend
 
@@ -80,37 +80,32 @@ def run(args: argparse.Namespace) -> int:
         calibrated = calibrate_files(
             args.measurements, args.validate, args.output, settings, config, bar, backend, finish
         )
-    report = calibrated.report
-    model = report["model"]
-    chosen = report["model_selection"]["chosen"]
-    stability = report["model_selection"]["stability"]["share_of_seeds"]
+    summary = calibrated.summary
+    chosen = summary.chosen
     print(
-        f"calibrate: {calibrated.training_contacts} training contacts; model {model['candidate']} at prior "
-        f"x{model['prior_scale']:g} ({chosen['free_parameters']} free parameters, CV score {chosen['score']} "
-        f"+- {chosen['se']}; picked by {stability:.0%} of the fold seeds)"
+        f"calibrate: {calibrated.training_contacts} training contacts; model {summary.model.candidate} at prior "
+        f"x{summary.model.prior_scale:g} ({chosen.free_parameters} free parameters, CV score {chosen.score} "
+        f"+- {chosen.se}; picked by {summary.stability:.0%} of the fold seeds)"
     )
-    for chain, error in report["predicted_error"].items():
-        m = {k: "-" if v is None else f"{v:.2f}" for k, v in error["mean_abs"].items()}  # None: not measured (point)
-        print(
-            f"  predicted held-out error, {chain}: {m['z_mm']} mm, {m['roll_deg']} deg, "
-            f"{m['pitch_deg']} deg (mean absolute, grouped CV)"
-        )
-    for message in report["rejected_rows"]:
+    for chain, error in summary.predicted_error.items():
+        z, roll, pitch = ("-" if v is None else f"{v:.2f}" for v in error.mean_abs.values())  # None: not measured
+        print(f"  predicted held-out error, {chain}: {z} mm, {roll} deg, {pitch} deg (mean absolute, grouped CV)")
+    for message in summary.rejected_rows:
         print(f"  row left out: {message}")
-    for row in report["left_out"]:
-        action = "flagged, kept" if row["kept"] else "left out"
-        print(f"  row {action}: {row['file']}:{row['line']} ({row['spot']}): {row['reason']} {row['value']}")
-    for warning in report["warnings"]:
+    for row in summary.left_out:
+        action = "flagged, kept" if row.kept else "left out"
+        print(f"  row {action}: {row.file}:{row.line} ({row.spot}): {row.reason} {row.value}")
+    for warning in summary.warnings:
         print(f"  warning: {warning}")
-    print(format_table(report))
+    print(format_table(summary))
     report_name = "no report.html" if missing else REPORT_FILE
     print(
         f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, offsets.yaml, residuals.csv, "
         f"posterior.npz, parameters.png, residuals.png, cross_validation.png, {report_name}"
-        + (", with_compliance/" if "compensated" in report["deliverables"] else "")
+        + (", with_compliance/" if DeliverableKind.COMPENSATED in summary.deliverables else "")
         + ")"
     )
-    print(load_line(report))
+    print(load_line(summary))
     if missing:
         print(f"posegen: report.html not written: {missing}", file=sys.stderr)
     return 0

@@ -48,39 +48,41 @@ def run(args: argparse.Namespace) -> int:
     from posegen.select import SelectionSettings, follow_up_pool_file, select_pool_file
 
     if args.given:
-        data = follow_up_pool_file(args.pool, args.output, args.given, args.calibration, args.k or 10, args.config)
-        fig = data["figures"]
+        following = follow_up_pool_file(
+            args.pool, args.output, args.given, args.calibration, args.k or 10, args.config
+        ).figures
         print(
-            f"select: {fig['selected']} of {fig['pool_postures']} postures to follow up {fig['given_contacts']} "
-            f"measured contacts, for chain '{fig['weakest_chain']}' ({fig['weakest_from']}) -> {args.output}"
+            f"select: {following.selected} of {following.pool_postures} postures to follow up "
+            f"{following.given_contacts} measured contacts, for chain '{following.weakest_chain}' "
+            f"({following.weakest_from}) -> {args.output}"
         )
-        for chain, sigma in fig["predicted_height_sigma_mm"].items():
-            print(f"  predicted height sigma (model), {chain}: {sigma['before']:.2f} -> {sigma['after']:.2f} mm")
+        for chain, (before, after) in following.predicted_height_sigma_mm.items():
+            print(f"  predicted height sigma (model), {chain}: {before:.2f} -> {after:.2f} mm")
         return 0
     if args.calibration:
         raise InputError("--calibration goes with --given (the measurements it calibrated)")
     settings = SelectionSettings(k=args.k, runs=args.runs, seed=args.seed, fractions=tuple(args.fraction))
     with ProgressBar(args.quiet) as bar:
-        data = select_pool_file(args.pool, args.output, settings, args.config, bar)
-    fig = data["figures"]
+        selection = select_pool_file(args.pool, args.output, settings, args.config, bar)
+    fig = selection.figures
     print(
-        f"select: {fig['selected']} of {fig['pool_postures']} postures ({data['method']}), O1 {fig['o1']:.2f} = "
-        f"{100 * fig['o1_over_o1_star']:.1f}% of O1* {fig['o1_star']:.2f}; identifies {fig['rank']} of "
-        f"{fig['base_parameters']} base parameters -> {args.output}"
+        f"select: {fig.selected} of {fig.pool_postures} postures ({selection.method.value}), O1 {fig.o1:.2f} = "
+        f"{100 * fig.o1_over_o1_star:.1f}% of O1* {fig.o1_star:.2f}; identifies {fig.rank} of "
+        f"{fig.base_parameters} base parameters -> {args.output}"
     )
-    cert = fig["certificate"]
+    cert = fig.certificate
     print(
-        f"  weights: Kiefer-Wolfowitz gap {cert['kiefer_wolfowitz_gap']:.1e} (D-efficiency >= "
-        f"{cert['d_efficiency_at_least']:.5f}); IROC stops at k = {fig['iroc']['selected_k']}; "
+        f"  weights: Kiefer-Wolfowitz gap {cert.kiefer_wolfowitz_gap:.1e} (D-efficiency >= "
+        f"{cert.d_efficiency_at_least:.5f}); IROC stops at k = {fig.iroc.selected_k}; "
         + "; ".join(
-            f"{100 * float(f):g}% of O1* at k = {k}" for f, k in fig["iroc"]["k_reaching_fraction_of_o1_star"].items()
+            f"{100 * float(f):g}% of O1* at k = {k}" for f, k in fig.iroc.k_reaching_fraction_of_o1_star.items()
         )
     )
-    if fig["detmax"]["runs"]:
-        print(f"  DETMAX best of {fig['detmax']['runs']} (k = {fig['selected']}): O1 {fig['detmax']['best_o1']:.2f}")
-    if fig["rank"] < fig["base_parameters"]:
+    if fig.detmax.runs:
+        print(f"  DETMAX best of {fig.detmax.runs} (k = {fig.selected}): O1 {fig.detmax.best_o1:.2f}")
+    if fig.rank < fig.base_parameters:
         print(
-            f"  warning: {fig['selected']} postures identify only {fig['rank']} of {fig['base_parameters']} base "
+            f"  warning: {fig.selected} postures identify only {fig.rank} of {fig.base_parameters} base "
             "parameters; translation parameters are seen through heights only (one per posture): choose a larger k"
         )
     return 0

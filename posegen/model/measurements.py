@@ -117,11 +117,12 @@ def _full_joints(scene: Scene, names: Sequence[str], values: np.ndarray) -> np.n
 
 
 @dataclass(frozen=True)
-class Recording:
-    """Contacts read from a file, and the rows that were not usable."""
+class Measurements:
+    """A measurement file read: its contacts, its provenance, and the rows that were not usable."""
 
     contacts: Contacts
     rejected: tuple[str, ...]  # one line per rejected row: "file:line: reason"
+    provenance: dict[str, Any]  # what made the file (posegen's format: config, model hash, seed...); CSV: empty
 
 
 def _parse_row(
@@ -152,7 +153,7 @@ def _parse_row(
     return _full_joints(scene, names, values), by_recording[gripper], spot
 
 
-def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TOLERANCE_RAD) -> Recording:
+def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TOLERANCE_RAD) -> Measurements:
     """Read a recorded CSV file (layout in the module docstring).
 
     A data row that is not usable (text or out-of-range angles, as a shifted column
@@ -191,7 +192,7 @@ def read_csv(path: Path, scene: Scene, session: str, tolerance: float = LIMIT_TO
         LOG.warning("row left out: %s", message)
     made = tuple(chains)
     contacts = Contacts(np.array(joints), made, (session,) * len(chains), tuple(labels), planned_kinds(scene, made))
-    return Recording(contacts, tuple(rejected))
+    return Measurements(contacts, tuple(rejected), {})
 
 
 def _is_float(text: str) -> bool:
@@ -202,7 +203,7 @@ def _is_float(text: str) -> bool:
     return True
 
 
-def read_measurements(path: str | Path, scene: Scene, session: str | None = None) -> Recording:
+def read_measurements(path: str | Path, scene: Scene, session: str | None = None) -> Measurements:
     """Read contacts from posegen's format (strict) or a recorded CSV file.
 
     Args:
@@ -221,6 +222,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
     if path.suffix.lower() == ".csv":
         return read_csv(path, scene, session or path.stem)
     data = read_yaml(path, MEASUREMENT_FORMAT)
+    provenance = _provenance(data, path)
     names = data.get("joint_names")
     raw = data.get("contacts")
     if not isinstance(names, list) or not isinstance(raw, list) or not raw:
@@ -256,7 +258,25 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         sessions.append(session or str(item.get("session", path.stem)))
         labels.append(f"{path.name}:{i}:{item.get('label', 'row')}")
         kinds.append(kind)
-    return Recording(Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels), tuple(kinds)), ())
+    contacts = Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels), tuple(kinds))
+    return Measurements(contacts, (), provenance)
+
+
+def _provenance(data: dict[str, Any], path: Path) -> dict[str, Any]:
+    provenance = data.get("provenance") or {}
+    if not isinstance(provenance, dict):
+        raise InputError(f"{path}: 'provenance' must be a mapping")
+    return dict(provenance)
+
+
+def measurement_provenance(path: str | Path) -> dict[str, Any]:
+    """The provenance of a file in posegen's measurement format, read before any scene (its config makes one).
+
+    Raises:
+        InputError: The file is missing or not in posegen's measurement format.
+
+    """
+    return _provenance(read_yaml(path, MEASUREMENT_FORMAT), Path(path))
 
 
 def measurements_to_dict(scene: Scene, contacts: Contacts, provenance: dict[str, Any]) -> dict[str, Any]:

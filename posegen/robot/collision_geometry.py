@@ -115,9 +115,7 @@ def link_of(model: pin.Model, geom: pin.GeometryModel) -> list[str]:
     return [str(model.frames[o.parentFrame].name) for o in geom.geometryObjects]
 
 
-def add_self_pairs(
-    model: pin.Model, geom: pin.GeometryModel, srdf: str | None, collision: CollisionConfig
-) -> None:
+def add_self_pairs(model: pin.Model, geom: pin.GeometryModel, srdf: str | None, collision: CollisionConfig) -> None:
     """Add every pair of links except those the SRDF (if any) or the config disables."""
     geom.addAllCollisionPairs()
     if srdf is not None:
@@ -153,4 +151,3 @@ def carrying_links(model: pin.Model, frames: tuple[str, ...], geometry_links: se
                 break  # past a moving joint: nothing rigidly attached carries geometry
             frame_id = frame.parentFrame
     return out
-

@@ -85,9 +85,7 @@ class Reader:
     def angles(self, key: str) -> dict[str, float]:
         """A mapping name -> number (e.g. joint -> rad); empty if the key is absent."""
         value = self.raw(key, {})
-        if not isinstance(value, dict) or not all(
-            isinstance(k, str) and is_finite_number(v) for k, v in value.items()
-        ):
+        if not isinstance(value, dict) or not all(isinstance(k, str) and is_finite_number(v) for k, v in value.items()):
             raise ConfigError(f"{self._path(key)}: expected a mapping name -> number, got {value!r}")
         return {k: float(v) for k, v in value.items()}
 

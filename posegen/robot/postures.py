@@ -41,7 +41,7 @@ from posegen.io import read_arrays, read_yaml, write_with_arrays
 from posegen.robot.geometry import FloatArray
 
 POOL_FORMAT = "posegen-pool"
-SELECTION_FORMAT = "posegen-selection"  # a pool's fields plus the selection's (posegen.select.selection_file)
+SELECTION_FORMAT = "posegen-selection"  # read here as postures; whole by posegen.select.read_selection
 POOL_VERSION = 1  # postures inline
 POOL_ARRAYS_VERSION = 2  # postures in a .npz sidecar
 _SCALARS = ("contact_yaw_rad", "min_distance_m", "com_margin_m")  # float fields, one value per posture

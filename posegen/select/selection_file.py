@@ -1,142 +1,321 @@
-"""The selection file (``format: posegen-selection``) and its plots.
+"""The selection file (``format: posegen-selection``) as an object: :class:`Selection`, its reader and writer.
 
 The file reads like a pool (the same posture fields, so ``simulate`` and ``route`` take
-either) plus, per posture, ``pool_id``, ``rank`` (IROC rank) and ``weight`` (IROC
-weight), and the figures of the selection::
+either) plus, per posture, ``pool_id``, ``rank`` (IROC rank; 0 for a posture planned
+again) and ``weight`` (IROC weight, or the follow-up's gain), and the figures of the
+selection, whose fields depend on its method::
 
     format: posegen-selection
     format_version: 1
-    provenance: {posegen_version, robot_model_sha256, seed, config, pool, pool_sha256}
-    method: iroc | k
+    provenance: {posegen_version, robot_model_sha256, seed, config, pool, pool_sha256, ...}
+    method: iroc | k | followup | session
     joint_names: [...]
+    figures: {...}              # DesignFigures (iroc, k), FollowUpFigures, SessionFigures
     postures: [{pool_id, rank, weight, id, sample, chain, spot, joints, ...}, ...]
-    figures: {base_parameters, selected, rank, o1, o1_star, certificate, iroc, detmax, ...}
+
+The stages read a selection's postures through the pool reader (:func:`posegen.robot.load_postures`);
+:func:`read_selection` reads the whole file.
 """
 
 from __future__ import annotations
 
-import hashlib
+import enum
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
-import numpy as np
-
-from posegen.io import atomic_path
-from posegen.model import Design
-from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool
-from posegen.select.selection import Iroc
-from posegen.select.subset_selection import Subset
+from posegen.errors import InputError, reason
+from posegen.io import read_yaml, write_yaml
+from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool, Posture, posture_from_dict
 
 
-def selection_to_dict(
-    pool: Pool,
-    pool_path: str,
-    design: Design,
-    result: Iroc,
-    chosen: Subset,
-    method: str,
-    detmax: tuple[Subset, ...],
-    seed: int,
-) -> dict[str, Any]:
-    """Plain data of a selection file."""
-    provenance = dict(pool.provenance)
-    provenance["seed"] = seed
-    provenance["pool"] = pool_path
-    provenance["pool_sha256"] = hashlib.sha256(Path(pool_path).read_bytes()).hexdigest()
-    rank_of = {row: r + 1 for r, row in enumerate(result.ranking)}
-    postures = []
-    for row in chosen.rows:
-        entry = {"pool_id": int(row), "rank": rank_of[row], "weight": float(result.weights.weights[row])}
-        entry.update(pool.entry(row))
-        postures.append(entry)
-    weights = result.weights
+class SelectionMethod(str, enum.Enum):
+    """How a selection's postures were chosen."""
+
+    IROC = "iroc"  # the IROC top k, where O1 stops rising
+    K = "k"  # an exact design of k postures
+    FOLLOWUP = "followup"  # select --given: for the weakest chain of a calibration
+    SESSION = "session"  # a session's batch: the missing postures, then a follow-up
+
+
+@dataclass(frozen=True)
+class ChosenPosture:
+    """A pool posture in a selection."""
+
+    pool_id: int  # its row in the pool
+    rank: int  # IROC rank (1 first), the follow-up's order, 0 for a posture planned again
+    weight: float  # IROC weight, the follow-up's gain, 0.0 for a posture planned again
+    posture: Posture
+
+    def to_dict(self) -> dict[str, Any]:
+        """The posture's entry in the file."""
+        p = self.posture
+        return {
+            "pool_id": self.pool_id,
+            "rank": self.rank,
+            "weight": self.weight,
+            "id": self.pool_id,
+            "sample": p.sample,
+            "chain": p.chain,
+            "spot": p.spot,
+            "joints": list(p.joints),
+            "contact_xy_m": list(p.contact_xy_m),
+            "contact_yaw_rad": p.contact_yaw_rad,
+            "min_distance_m": p.min_distance_m,
+            "com_margin_m": p.com_margin_m,
+        }
+
+
+def chosen_from_pool(pool: Pool, row: int, rank: int, weight: float) -> ChosenPosture:
+    """Row ``row`` of a pool, chosen."""
+    return ChosenPosture(pool_id=int(row), rank=rank, weight=weight, posture=pool.postures[row])
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """How close the continuous weights are to D-optimal."""
+
+    kiefer_wolfowitz_gap: float
+    d_efficiency_at_least: float
+    o1_ratio_at_least: float
+    iterations: int
+
+
+@dataclass(frozen=True)
+class IrocFigures:
+    """IROC's ranking, where it stops, and the k reaching fractions of O1*."""
+
+    selected_k: int
+    selected_o1: float
+    k_reaching_fraction_of_o1_star: dict[str, int | None]  # fraction (as written) -> smallest k; None: never
+    support: int  # postures with a non-negligible weight
+    weight_drop_after_rank: int
+    o1_curve: tuple[tuple[int, float], ...]  # (k, O1 of the top k)
+
+
+@dataclass(frozen=True)
+class DetmaxFigures:
+    """The DETMAX runs from seeded random starts."""
+
+    o1: tuple[float, ...]
+    rank: tuple[int, ...]
+
+    @property
+    def runs(self) -> int:
+        """Number of runs."""
+        return len(self.o1)
+
+    @property
+    def best_o1(self) -> float | None:
+        """The best run's O1; None without runs."""
+        return max(self.o1, default=None)
+
+
+@dataclass(frozen=True)
+class DesignFigures:
+    """What a design from a pool (method ``iroc`` or ``k``) achieves."""
+
+    base_parameters: int
+    pool_postures: int
+    selected: int
+    rank: int  # base parameters the selection identifies
+    o1: float
+    o1_star: float  # O1 of the optimal continuous design
+    o1_over_o1_star: float
+    certificate: Certificate
+    iroc: IrocFigures
+    detmax: DetmaxFigures
+
+
+@dataclass(frozen=True)
+class FollowUpFigures:
+    """What a follow-up (method ``followup``) is for and what it predicts."""
+
+    selected: int
+    pool_postures: int
+    given_contacts: int
+    excluded_postures: int | None  # pool postures never chosen (a session's); None: none given
+    candidate: str  # the calibration model designed with
+    prior_scale: float
+    weakest_chain: str
+    weakest_from: str  # where the weakest chain came from
+    predicted_height_sigma_mm: dict[str, tuple[float, float]]  # chain -> (before, after), mm
+
+
+@dataclass(frozen=True)
+class SessionFigures:
+    """A session's batch (method ``session``): the postures planned again, and the follow-up's figures."""
+
+    missing_postures: tuple[int, ...]  # pool rows planned again, first
+    follow_up: FollowUpFigures | None  # None: only the missing postures
+
+
+Figures = DesignFigures | FollowUpFigures | SessionFigures
+F = TypeVar("F", bound=Figures)
+
+
+@dataclass(frozen=True)
+class Selection(Generic[F]):
+    """A selection file: the chosen postures, their provenance and the figures of their choice."""
+
+    provenance: dict[str, Any]  # the pool's, with the seed, the pool's path and SHA-256 (and a follow-up's inputs)
+    method: SelectionMethod
+    joint_names: tuple[str, ...]
+    figures: F
+    postures: tuple[ChosenPosture, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The file's content."""
+        head = {
+            "format": SELECTION_FORMAT,
+            "format_version": POOL_VERSION,
+            "provenance": self.provenance,
+            "method": self.method.value,
+            "joint_names": list(self.joint_names),
+        }
+        return {**head, "figures": figures_to_dict(self.figures), "postures": [p.to_dict() for p in self.postures]}
+
+
+def figures_to_dict(figures: Figures) -> dict[str, Any]:
+    """The ``figures`` section of a selection file."""
+    if isinstance(figures, SessionFigures):
+        out: dict[str, Any] = {"missing_postures": list(figures.missing_postures)}
+        if figures.follow_up is not None:
+            out["follow_up"] = figures_to_dict(figures.follow_up)
+        return out
+    if isinstance(figures, FollowUpFigures):
+        return {
+            "selected": figures.selected,
+            "pool_postures": figures.pool_postures,
+            "given_contacts": figures.given_contacts,
+            **({} if figures.excluded_postures is None else {"excluded_postures": figures.excluded_postures}),
+            "model": {"candidate": figures.candidate, "prior_scale": figures.prior_scale},
+            "weakest_chain": figures.weakest_chain,
+            "weakest_from": figures.weakest_from,
+            "predicted_height_sigma_mm": {
+                c: {"before": b, "after": a} for c, (b, a) in figures.predicted_height_sigma_mm.items()
+            },
+        }
+    c, i, d = figures.certificate, figures.iroc, figures.detmax
     return {
-        "format": SELECTION_FORMAT,
-        "format_version": POOL_VERSION,
-        "provenance": provenance,
-        "method": method,
-        "joint_names": list(pool.joint_names),
-        "figures": {
-            "base_parameters": design.n_params,
-            "pool_postures": design.size,
-            "selected": len(chosen.rows),
-            "rank": chosen.rank,
-            "o1": chosen.o1,
-            "o1_star": result.o1_star,
-            "o1_over_o1_star": chosen.o1 / result.o1_star if result.o1_star > 0 else 0.0,
-            "certificate": {
-                "kiefer_wolfowitz_gap": weights.gap,
-                "d_efficiency_at_least": weights.efficiency_bound,
-                "o1_ratio_at_least": weights.o1_ratio_bound,
-                "iterations": weights.iterations,
-            },
-            "iroc": {
-                "selected_k": len(result.selected.rows),
-                "selected_o1": result.selected.o1,
-                "k_reaching_fraction_of_o1_star": {str(f): k for f, k in result.fractions.items()},
-                "support": result.support,
-                "weight_drop_after_rank": result.weight_drop_k,
-                "o1_curve": [[k, v] for k, v in result.curve],
-            },
-            "detmax": {
-                "runs": len(detmax),
-                "o1": [s.o1 for s in detmax],
-                "rank": [s.rank for s in detmax],
-                "best_o1": max((s.o1 for s in detmax), default=None),
-            },
+        "base_parameters": figures.base_parameters,
+        "pool_postures": figures.pool_postures,
+        "selected": figures.selected,
+        "rank": figures.rank,
+        "o1": figures.o1,
+        "o1_star": figures.o1_star,
+        "o1_over_o1_star": figures.o1_over_o1_star,
+        "certificate": {
+            "kiefer_wolfowitz_gap": c.kiefer_wolfowitz_gap,
+            "d_efficiency_at_least": c.d_efficiency_at_least,
+            "o1_ratio_at_least": c.o1_ratio_at_least,
+            "iterations": c.iterations,
         },
-        "postures": postures,
+        "iroc": {
+            "selected_k": i.selected_k,
+            "selected_o1": i.selected_o1,
+            "k_reaching_fraction_of_o1_star": dict(i.k_reaching_fraction_of_o1_star),
+            "support": i.support,
+            "weight_drop_after_rank": i.weight_drop_after_rank,
+            "o1_curve": [[k, v] for k, v in i.o1_curve],
+        },
+        "detmax": {"runs": d.runs, "o1": list(d.o1), "rank": list(d.rank), "best_o1": d.best_o1},
     }
 
 
-def plot_o1(result: Iroc, path: Path) -> None:
-    """O1(k) of the IROC ranking over the sorted weights (the paper's Fig. 3)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(10, 4.5))
-    k_max = max(k for k, _ in result.curve)
-    ranks = np.arange(1, k_max + 1)
-    sorted_w = result.weights.weights[list(result.ranking[:k_max])]
-    ax.bar(ranks, sorted_w, color="tab:gray", alpha=0.6, label="IROC weight")
-    ax.set_xlabel("postures stacked, by decreasing weight (k)")
-    ax.set_ylabel("weight")
-    twin = ax.twinx()
-    ks = [k for k, _ in result.curve]
-    twin.plot(ks, [v for _, v in result.curve], color="tab:blue", label="O1(k)")
-    twin.axhline(result.o1_star, color="tab:blue", ls=":", label="O1* (optimal weights)")
-    selected = len(result.selected.rows)
-    twin.axvline(selected, color="tab:red", ls="--", label=f"selected k = {selected}")
-    twin.set_ylabel("O1")
-    lines = ax.get_legend_handles_labels()
-    more = twin.get_legend_handles_labels()
-    twin.legend(lines[0] + more[0], lines[1] + more[1], loc="lower right")
-    ax.set_title(f"IROC: O1 of the top-k postures (gap {result.weights.gap:.1e})")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
+def write_selection(path: str | Path, selection: Selection[Any]) -> None:
+    """Write a selection file, atomically."""
+    write_yaml(path, selection.to_dict())
 
 
-def plot_detmax(iroc_subset: Subset, chosen: Subset, detmax: tuple[Subset, ...], path: Path) -> None:
-    """O1 of IROC, of the final selection and of every DETMAX run (the paper's Fig. 4)."""
-    import matplotlib
+def read_selection(path: str | Path) -> Selection[Figures]:
+    """Read a selection file: its postures, provenance and figures.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Raises:
+        InputError: The file is missing, not a selection, or malformed.
 
-    fig, ax = plt.subplots(figsize=(8, 4))
-    runs = np.arange(1, len(detmax) + 1)
-    ax.plot(runs, [s.o1 for s in detmax], "o", color="tab:orange", label=f"DETMAX runs (k = {len(detmax[0].rows)})")
-    ax.axhline(iroc_subset.o1, color="tab:blue", label=f"IROC top-k (k = {len(iroc_subset.rows)})")
-    ax.axhline(chosen.o1, color="tab:green", ls="--", label=f"selection (k = {len(chosen.rows)})")
-    ax.set_xlabel("DETMAX run (seeded random start)")
-    ax.set_ylabel("O1")
-    ax.legend()
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
+    """
+    return selection_from_dict(read_yaml(path, SELECTION_FORMAT), str(path))
+
+
+def selection_from_dict(data: dict[str, Any], where: str = "selection") -> Selection[Figures]:
+    """Parse and validate plain data in the selection file format.
+
+    Raises:
+        InputError: The data is not a valid selection.
+
+    """
+    if data.get("format_version") != POOL_VERSION or isinstance(data.get("format_version"), bool):
+        raise InputError(f"{where}: unsupported format_version {data.get('format_version')!r} (this posegen reads 1)")
+    try:
+        method = SelectionMethod(data["method"])
+        names = tuple(data["joint_names"])
+        if not all(isinstance(n, str) for n in names) or not isinstance(data["provenance"], dict):
+            raise TypeError("joint_names must be names and provenance a mapping")
+        figures = _figures(method, data["figures"])
+        raw_postures = list(data["postures"])
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"{where}: not a posegen selection ({reason(exc)})") from exc
+    postures = []
+    for i, raw in enumerate(raw_postures):
+        posture = posture_from_dict(raw, len(names), f"{where}: posture {i}")
+        try:
+            postures.append(ChosenPosture(int(raw["pool_id"]), int(raw["rank"]), float(raw["weight"]), posture))
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
+            raise InputError(f"{where}: posture {i}: malformed ({reason(exc)})") from exc
+    return Selection(dict(data["provenance"]), method, names, figures, tuple(postures))
+
+
+def _figures(method: SelectionMethod, raw: dict[str, Any]) -> Figures:
+    """The figures of a selection made by ``method`` (KeyError, TypeError, ValueError when malformed)."""
+    if method == SelectionMethod.SESSION:
+        follow = raw.get("follow_up")
+        return SessionFigures(
+            tuple(int(r) for r in raw["missing_postures"]), None if follow is None else _follow_up(follow)
+        )
+    if method == SelectionMethod.FOLLOWUP:
+        return _follow_up(raw)
+    c, i, d = raw["certificate"], raw["iroc"], raw["detmax"]
+    return DesignFigures(
+        base_parameters=int(raw["base_parameters"]),
+        pool_postures=int(raw["pool_postures"]),
+        selected=int(raw["selected"]),
+        rank=int(raw["rank"]),
+        o1=float(raw["o1"]),
+        o1_star=float(raw["o1_star"]),
+        o1_over_o1_star=float(raw["o1_over_o1_star"]),
+        certificate=Certificate(
+            float(c["kiefer_wolfowitz_gap"]),
+            float(c["d_efficiency_at_least"]),
+            float(c["o1_ratio_at_least"]),
+            int(c["iterations"]),
+        ),
+        iroc=IrocFigures(
+            selected_k=int(i["selected_k"]),
+            selected_o1=float(i["selected_o1"]),
+            k_reaching_fraction_of_o1_star={
+                str(f): None if k is None else int(k) for f, k in dict(i["k_reaching_fraction_of_o1_star"]).items()
+            },
+            support=int(i["support"]),
+            weight_drop_after_rank=int(i["weight_drop_after_rank"]),
+            o1_curve=tuple((int(k), float(v)) for k, v in i["o1_curve"]),
+        ),
+        detmax=DetmaxFigures(tuple(float(v) for v in d["o1"]), tuple(int(r) for r in d["rank"])),
+    )
+
+
+def _follow_up(raw: dict[str, Any]) -> FollowUpFigures:
+    excluded = raw.get("excluded_postures")
+    return FollowUpFigures(
+        selected=int(raw["selected"]),
+        pool_postures=int(raw["pool_postures"]),
+        given_contacts=int(raw["given_contacts"]),
+        excluded_postures=None if excluded is None else int(excluded),
+        candidate=str(raw["model"]["candidate"]),
+        prior_scale=float(raw["model"]["prior_scale"]),
+        weakest_chain=str(raw["weakest_chain"]),
+        weakest_from=str(raw["weakest_from"]),
+        predicted_height_sigma_mm={
+            str(c): (float(s["before"]), float(s["after"])) for c, s in dict(raw["predicted_height_sigma_mm"]).items()
+        },
+    )

@@ -8,22 +8,24 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import check_apart, check_writable, claim_output, write_yaml
+from posegen.io import check_apart, check_writable, claim_output
 from posegen.model import DEFAULT_NOISE, Contacts, build_design, measurement_item, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
-from posegen.robot import (
-    POOL_VERSION,
-    SELECTION_FORMAT,
-    load_pool,
-    scene_for,
-)
+from posegen.robot import load_pool, scene_for
+from posegen.select.figures import design_selection, plot_detmax, plot_o1
 from posegen.select.followup import follow_up, read_calibration_model
 from posegen.select.selection import detmax_runs, iroc, select_k
-from posegen.select.selection_file import plot_detmax, plot_o1, selection_to_dict
+from posegen.select.selection_file import (
+    DesignFigures,
+    FollowUpFigures,
+    Selection,
+    SelectionMethod,
+    chosen_from_pool,
+    write_selection,
+)
 from posegen.select.subset_selection import Subset, subset_of
 
 LOG = logging.getLogger(__name__)
@@ -45,7 +47,7 @@ def select_pool_file(
     settings: SelectionSettings | None = None,
     config_path: str | None = None,
     progress: ProgressCallback = ignore_progress,
-) -> dict[str, Any]:
+) -> Selection[DesignFigures]:
     """Select postures from a pool file; write the selection file and its plots.
 
     Args:
@@ -57,7 +59,7 @@ def select_pool_file(
         progress: Told when each step starts.
 
     Returns:
-        The selection file's content.
+        The selection, as written.
 
     The arguments, the pool (its robot model included) and the output's place are
     checked before any work; the output is locked while it is made. Wall times of the
@@ -113,14 +115,14 @@ def select_pool_file(
         chosen = select_k(design, size, result.ranking, tuple(detmax)) if k else result.selected
         timings["k_selection"] = time.perf_counter() - start
         LOG.info("timings (s): %s", ", ".join(f"{step} {t:.3f}" for step, t in timings.items()))
-        method = "k" if k else "iroc"
-        data = selection_to_dict(pool, pool_path, design, result, chosen, method, tuple(detmax), seed)
-        write_yaml(path, data)
+        method = SelectionMethod.K if k else SelectionMethod.IROC
+        selection = design_selection(pool, pool_path, design, result, chosen, method, tuple(detmax), seed)
+        write_selection(path, selection)
         plot_o1(result, plots[0])
         if detmax:
             top_k = subset_of(design, result.ranking[:size]) if k else result.selected
             plot_detmax(top_k, chosen, tuple(detmax), plots[1])
-    return data
+    return selection
 
 
 def follow_up_pool_file(
@@ -132,7 +134,7 @@ def follow_up_pool_file(
     config_path: str | None = None,
     weakest: str | None = None,
     exclude: Sequence[int] = (),
-) -> dict[str, Any]:
+) -> Selection[FollowUpFigures]:
     """Choose the next ``k`` postures of a pool for the weakest chain of a calibration; write a selection file.
 
     Args:
@@ -205,31 +207,21 @@ def follow_up_pool_file(
         provenance["pool_sha256"] = hashlib.sha256(Path(pool_path).read_bytes()).hexdigest()
         provenance["given"] = list(given)
         provenance["calibration"] = calibration_path
-        pool_data = pool.to_dict()
-        postures = []
-        for rank, (row, gain) in enumerate(zip(result.rows, result.gains, strict=True), start=1):
-            entry: dict[str, Any] = {"pool_id": int(row), "rank": rank, "weight": round(gain, 6)}
-            entry.update(pool_data["postures"][row])
-            postures.append(entry)
-        data = {
-            "format": SELECTION_FORMAT,
-            "format_version": POOL_VERSION,
-            "provenance": provenance,
-            "method": "followup",
-            "joint_names": list(pool.joint_names),
-            "figures": {
-                "selected": len(result.rows),
-                "pool_postures": len(pool.postures),
-                "given_contacts": len(contacts),
-                **({"excluded_postures": len(set(exclude))} if exclude else {}),
-                "model": {"candidate": candidate.name, "prior_scale": scale},
-                "weakest_chain": result.chain,
-                "weakest_from": source,
-                "predicted_height_sigma_mm": {
-                    c: {"before": round(b, 4), "after": round(a, 4)} for c, (b, a) in result.height_std_mm.items()
-                },
-            },
-            "postures": postures,
-        }
-        write_yaml(path, data)
-    return data
+        figures = FollowUpFigures(
+            selected=len(result.rows),
+            pool_postures=len(pool.postures),
+            given_contacts=len(contacts),
+            excluded_postures=len(set(exclude)) if exclude else None,
+            candidate=candidate.name,
+            prior_scale=scale,
+            weakest_chain=result.chain,
+            weakest_from=source,
+            predicted_height_sigma_mm={c: (round(b, 4), round(a, 4)) for c, (b, a) in result.height_std_mm.items()},
+        )
+        postures = tuple(
+            chosen_from_pool(pool, row, rank, round(gain, 6))
+            for rank, (row, gain) in enumerate(zip(result.rows, result.gains, strict=True), start=1)
+        )
+        selection = Selection(provenance, SelectionMethod.FOLLOWUP, pool.joint_names, figures, postures)
+        write_selection(path, selection)
+    return selection

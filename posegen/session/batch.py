@@ -18,17 +18,13 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from posegen.errors import InfeasibleError
-from posegen.io import read_yaml, write_yaml
-from posegen.model import MEASUREMENT_FORMAT, build_design
+from posegen.model import build_design
 from posegen.parallel import Backend
 from posegen.robot import (
-    POOL_VERSION,
-    SELECTION_FORMAT,
     Pool,
     SegmentType,
     read_route,
@@ -36,7 +32,19 @@ from posegen.robot import (
     scene_for,
 )
 from posegen.route import check_route_file, export_route_bag, route_postures_file, start_posture
-from posegen.select import SelectionSettings, follow_up_pool_file, iroc, select_pool_file
+from posegen.select import (
+    ChosenPosture,
+    DesignFigures,
+    Selection,
+    SelectionMethod,
+    SelectionSettings,
+    SessionFigures,
+    chosen_from_pool,
+    follow_up_pool_file,
+    iroc,
+    select_pool_file,
+    write_selection,
+)
 from posegen.session.index import Batch, SessionSettings, batch_folder, sha256_of
 
 SELECTION_FILE = "selection.yaml"
@@ -71,7 +79,7 @@ def first_batch_size(pool: Pool, margin: float) -> tuple[int, int]:
     return min(len(pool.postures), math.ceil(fewest * (1.0 + margin))), design.n_params
 
 
-def select_first(pool_path: str, pool: Pool, output: Path, settings: SessionSettings) -> dict[str, Any]:
+def select_first(pool_path: str, pool: Pool, output: Path, settings: SessionSettings) -> Selection[DesignFigures]:
     """The first batch's selection: exact k, grown until it identifies every base parameter.
 
     Raises:
@@ -80,11 +88,11 @@ def select_first(pool_path: str, pool: Pool, output: Path, settings: SessionSett
     """
     k, base = first_batch_size(pool, settings.margin)
     while True:
-        data = select_pool_file(pool_path, str(output), SelectionSettings(k=k, seed=settings.seed))
-        if data["figures"]["rank"] >= base:
-            return data
+        selection = select_pool_file(pool_path, str(output), SelectionSettings(k=k, seed=settings.seed))
+        if selection.figures.rank >= base:
+            return selection
         if k >= len(pool.postures):
-            raise InfeasibleError(f"{pool_path}: the whole pool identifies only {data['figures']['rank']} of {base}")
+            raise InfeasibleError(f"{pool_path}: the whole pool identifies only {selection.figures.rank} of {base}")
         k = min(len(pool.postures), k + max(1, k // 10))
 
 
@@ -98,9 +106,8 @@ def select_next(pool_path: str, pool: Pool, folder: Path, sources: BatchSources,
         InfeasibleError: Nothing left to plan: no missing posture, and every pool posture planned already.
 
     """
-    followed: list[dict[str, Any]] = []
+    followed: tuple[ChosenPosture, ...] = ()
     provenance = {**pool.provenance, "pool": pool_path, "pool_sha256": sha256_of(Path(pool_path))}
-    figures: dict[str, Any] = {"missing_postures": list(sources.missing)}
     excluded = sorted(set(sources.planned) | set(sources.missing))
     k = min(settings.batch_postures, len(pool.postures) - len(excluded))
     if k <= 0 and not sources.missing:
@@ -108,8 +115,9 @@ def select_next(pool_path: str, pool: Pool, folder: Path, sources: BatchSources,
             f"{pool_path}: every posture of the pool is in the session already and the target is not met: "
             "generate a larger pool (posegen pool) and start a new session"
         )
+    following = None
     if sources.follow and k > 0:
-        data = follow_up_pool_file(
+        selection = follow_up_pool_file(
             pool_path,
             str(folder / FOLLOW_UP_FILE),
             list(sources.given),
@@ -118,20 +126,17 @@ def select_next(pool_path: str, pool: Pool, folder: Path, sources: BatchSources,
             weakest=sources.weakest,
             exclude=excluded,
         )
-        followed, provenance = data["postures"], data["provenance"]
-        figures["follow_up"] = data["figures"]
-    again = [{"pool_id": row, "rank": 0, "weight": 0.0, **pool.entry(row)} for row in sources.missing]
-    write_yaml(
+        followed, provenance, following = selection.postures, selection.provenance, selection.figures
+    again = tuple(chosen_from_pool(pool, row, 0, 0.0) for row in sources.missing)
+    write_selection(
         folder / SELECTION_FILE,
-        {
-            "format": SELECTION_FORMAT,
-            "format_version": POOL_VERSION,
-            "provenance": provenance,
-            "method": "session",
-            "joint_names": list(pool.joint_names),
-            "figures": figures,
-            "postures": [*again, *followed],
-        },
+        Selection(
+            provenance,
+            SelectionMethod.SESSION,
+            pool.joint_names,
+            SessionFigures(sources.missing, following),
+            (*again, *followed),
+        ),
     )
 
 
@@ -193,8 +198,13 @@ def route_pool_rows(route: str) -> tuple[int, ...]:
     return tuple(int(s["pool_id"]) for s in data["segments"] if s["type"] == SegmentType.HOLD.value)
 
 
-def missing_rows(planned: Sequence[int], measurements: Path) -> tuple[int, ...]:
-    """The planned pool rows that no measured contact names (a batch played in part), in planned order."""
-    data = read_yaml(measurements, MEASUREMENT_FORMAT)
-    found = {int(m.group(1)) for c in data["contacts"] if (m := _POOL_ROW.search(str(c.get("label", ""))))}
+def missing_rows(planned: Sequence[int], labels: Sequence[str]) -> tuple[int, ...]:
+    """The planned pool rows that no measured contact's label names (a batch played in part), in planned order.
+
+    Args:
+        planned: Pool rows of the batch's route, in its order.
+        labels: The measured contacts' labels (their route contact's, "... (pool N)").
+
+    """
+    found = {int(m.group(1)) for label in labels if (m := _POOL_ROW.search(label))}
     return tuple(row for row in planned if row not in found)

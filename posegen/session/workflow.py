@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from posegen.arguments import check_count, check_seed, check_size
-from posegen.calibrate import Settings, calibrate_files, measure_bag
+from posegen.calibrate import DeliverableKind, Settings, calibrate_files, measure_bag
 from posegen.errors import ArgumentError, InfeasibleError, InputError, unknown_name
 from posegen.io import OutputKind, RecordedBag, check_writable, claim_output, write_yaml
 from posegen.parallel import Backend
@@ -226,7 +226,7 @@ def _record(folder: Path, index: SessionIndex, batch: Batch, bag: str, digest: s
         table=table,
         contacts=len(measured.windows),
         duration_s=round(measured.duration_s, 3),
-        missing=missing_rows(batch.pool_rows, measurements),
+        missing=missing_rows(batch.pool_rows, [w.label for w in measured.windows]),
     )
     files = {**batch.files, f"{batch.folder}/{MEASUREMENTS_FILE}": sha256_of(measurements)}
     return replace(batch, recording=recording, files=files)
@@ -252,12 +252,12 @@ def _assess(folder: Path, index: SessionIndex, batch: Batch, backend: Backend) -
     except InputError as exc:  # too few usable contacts yet (a batch played in part): plan the missing ones
         contacts = sum(b.recording.contacts for b in index.batches if b.recording is not None)
         return replace(batch, assessment=Assessment(contacts, "", "", {}, False, error=str(exc)))
-    deliverables = calibrated.report["deliverables"]
-    kind = settings.deliverable.value if settings.deliverable.value in deliverables else "urdf"
-    entry = deliverables[kind]
-    predicted = {str(c): float(e["mean_abs"]["z_mm"]) for c, e in sorted(entry["predicted_error"].items())}
+    deliverables = calibrated.summary.deliverables
+    kind = DeliverableKind(settings.deliverable.value)
+    entry = deliverables.get(kind) or deliverables[DeliverableKind.URDF]
+    predicted = {c: e.mean_abs.z_mm for c, e in sorted(entry.predicted_error.items())}
     done = all(v <= settings.target_mm for v in predicted.values())
-    assessment = Assessment(calibrated.training_contacts, kind, str(entry["candidate"]), predicted, done)
+    assessment = Assessment(calibrated.training_contacts, entry.kind.value, entry.candidate, predicted, done)
     files = {
         **batch.files,
         f"{batch.folder}/{CALIBRATION_FOLDER}/calibration.yaml": sha256_of(output / "calibration.yaml"),

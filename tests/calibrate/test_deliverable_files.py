@@ -43,8 +43,8 @@ def compliant(lean_scene, example_pool, tmp_path_factory):
     recorded, _, _ = simulate(lean_scene, plan, perturbation, seed=9)
     calibration = calibrate(lean_scene, recorded, ["sim"], Settings(fold_seeds=1))
     out = tmp_path_factory.mktemp("deliverables")
-    report = write_calibration(calibration, None, out, seed=9)
-    return calibration, recorded, out, report
+    summary = write_calibration(calibration, None, out, seed=9)
+    return calibration, recorded, out, summary
 
 
 def scene_of(scene, urdf, tmp_path, name):
@@ -61,12 +61,12 @@ def scene_of(scene, urdf, tmp_path, name):
 
 
 def test_both_deliverables_are_chosen_for_a_compliant_robot(compliant):
-    calibration, _, out, report = compliant
+    calibration, _, out, summary = compliant
     urdf, compensated = calibration.deliverables.urdf, calibration.deliverables.compensated
     assert not urdf.candidate.compliance and compensated is not None and compensated.candidate.compliance
     assert compensated.result.score < urdf.result.score < calibration.selection.nominal.score
-    assert report["deliverables"]["urdf"]["files"] == ["calibrated.urdf", "calibrated.yaml", "offsets.yaml"]
-    for name in report["deliverables"]["compensated"]["files"]:
+    assert summary.deliverables[DeliverableKind.URDF].files == ("calibrated.urdf", "calibrated.yaml", "offsets.yaml")
+    for name in summary.deliverables[DeliverableKind.COMPENSATED].files:
         assert (out / name).stat().st_size > 0
     # the URDF alone holds its own fit: no compliance, fitted without it
     model = calibration.model

@@ -95,6 +95,7 @@ def test_the_same_bytes_for_any_number_of_workers(lean_scene, example_pool, tmp_
     names += [f"with_compliance/{n}" for n in ("calibrated.urdf", "compliance.yaml")]
     for name in names:
         assert (folders[0] / name).read_bytes() == (folders[1] / name).read_bytes(), name
-    assert np.load(folders[0] / "posterior.npz")["covariance"].tobytes() == np.load(
-        folders[1] / "posterior.npz"
-    )["covariance"].tobytes()
+    assert (
+        np.load(folders[0] / "posterior.npz")["covariance"].tobytes()
+        == np.load(folders[1] / "posterior.npz")["covariance"].tobytes()
+    )

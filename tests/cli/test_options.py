@@ -22,10 +22,16 @@ CHECKS = {"check_seed", "check_count", "check_size"}
         ("seed must be an integer from 0 to 9, got -1", "seed", "--seed must be an integer from 0 to 9, got -1"),
         ("output=r.txt: a route file ends in .yaml", "output", "-o r.txt: a route file ends in .yaml"),
         ("no topic (or measure with use_wrench=False)", "use_wrench=False", "no topic (or measure with --no-wrench)"),
-        ("/data/held_out.yaml is a training file and a held-out one (held_out): give it once", "held_out",
-         "/data/held_out.yaml is a training file and a held-out one (--validate): give it once"),
-        ("output already holds a session: add bags, or choose another output", "output",
-         "output already holds a session: add bags, or choose another -o"),  # advice: the last mention
+        (
+            "/data/held_out.yaml is a training file and a held-out one (held_out): give it once",
+            "held_out",
+            "/data/held_out.yaml is a training file and a held-out one (--validate): give it once",
+        ),
+        (
+            "output already holds a session: add bags, or choose another output",
+            "output",
+            "output already holds a session: add bags, or choose another -o",
+        ),  # advice: the last mention
         ("session: give a session name", "session", "--session: give a session name"),  # the subject: the first
         ("k must be an integer", None, "k must be an integer"),  # about no parameter: as it is
         ("tilt must be small", "tilt", "tilt must be small"),  # a parameter no flag sets: as it is

@@ -77,6 +77,28 @@ def test_posegen_format_round_trip(scene, real_data, tmp_path):
     assert again.chains == contacts.chains and again.sessions == contacts.sessions
 
 
+def test_a_measurement_file_is_read_with_its_provenance(scene, tmp_path):
+    from posegen.io import write_yaml
+    from posegen.model import Contacts, measurement_provenance, measurements_to_dict
+
+    chain = scene.chains[0].name
+    contacts = Contacts(scene.reference[None, :].copy(), (chain,), ("day",), ("c0",))
+    provenance = scene.provenance(5)
+    write_measurements(tmp_path / "m.yaml", scene, contacts, provenance)
+    read = read_measurements(tmp_path / "m.yaml", scene)
+    assert read.provenance == provenance == measurement_provenance(tmp_path / "m.yaml")
+    assert read.rejected == () and read.contacts.chains == (chain,)
+    csv = _one_row_csv(tmp_path / "m.csv", scene.joint_names, scene.reference)
+    assert read_measurements(csv, scene).provenance == {}  # a recorded table says nothing of what made it
+    write_yaml(tmp_path / "bad.yaml", measurements_to_dict(scene, contacts, provenance) | {"provenance": [1]})
+    for reader in (
+        lambda: read_measurements(tmp_path / "bad.yaml", scene),
+        lambda: measurement_provenance(tmp_path / "bad.yaml"),
+    ):
+        with pytest.raises(InputError, match="'provenance' must be a mapping"):
+            reader()
+
+
 def test_missing_file(scene, tmp_path):
     with pytest.raises(InputError, match="not found"):
         read_measurements(tmp_path / "nothing.csv", scene)
