@@ -336,8 +336,6 @@ LONG_FUNCTIONS = {  # module:qualified name -> why it is still one piece (the li
     "the given contacts, design, write): not split yet",
     "posegen.calibrate.simulation:settle_true": "the settle step's Gauss-Newton loop with its stance and contact "
     "closures inline: not split yet",
-    "posegen.cli.calibrate:run": "the calibrate command: settings, run, report and the printed table; shrinks as "
-    "the Calibration object renders itself (issue 23 item 1)",
 }
 
 
@@ -405,27 +403,24 @@ DICT_READERS = {
     "posegen.model.measurements": "reader: the measurement format",
     "posegen.calibrate.record": "reader: the calibration folder (CalibrationRecord)",
     "posegen.calibrate.compliance": "reader: compliance.yaml",
+    "posegen.calibrate.summary": "reader: calibration.yaml (CalibrationSummary)",
+    "posegen.select.selection_file": "reader: the selection format (Selection)",
     "posegen.calibrate.offsets": "reader: offsets.yaml",
     "posegen.session.index": "reader: session.yaml (SessionIndex)",
     "posegen.parallel.cluster": "not an artefact: a worker plugin's pickled state (__setstate__)",
     "posegen.robot.scene": "Provenance: an artefact's provenance as a dict (scene_for, check_made_for)",
     "posegen.calibrate.bag_workflow": "Route: the route file's provenance",
     "posegen.calibrate.simulated_recording": "Route: segments as dicts (route_motion)",
-    "posegen.calibrate.workflow": "Measurements: the provenance of a measurement file (_saved_scene)",
     "posegen.route.check": "Route: segments and summary as dicts",
     "posegen.route.export": "Route: the header's segments as dicts",
     "posegen.route.pose_check": "Route: segments as dicts",
     "posegen.route.workflow": "Route and Selection: segments, entries and provenance as dicts",
     "posegen.view.artefact": "Route and Selection: segments and provenance as dicts",
     "posegen.session.batch": "Route and Selection: segments and provenance as dicts",
-    "posegen.calibrate.calibration_file": "Calibration: the report dict it writes, read back for the plots",
-    "posegen.calibrate.deliverable_files": "Calibration: the report's deliverables",
     "posegen.calibrate.plots": "Calibration: the report's cross-validation rows",
     "posegen.select.followup": "Calibration: calibration.yaml read for the follow-up's model",
-    "posegen.session.workflow": "Calibration: the report's deliverables",
     "posegen.view.calibration_view": "Calibration: the report's noise and parameters",
     "posegen.view.report_page": "Calibration: every section of the report",
-    "posegen.cli.calibrate": "Calibration: the report, printed",
 }
 
 
