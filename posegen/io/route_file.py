@@ -205,7 +205,15 @@ def read_route(path: str | Path) -> Route:
         for kind, chain, posture, pool_id, first, last in rows
     )
     return Route(
-        names, times, positions, velocities, accelerations, segments, provenance, **extras, summary=summary,
+        names,
+        times,
+        positions,
+        velocities,
+        accelerations,
+        segments,
+        provenance,
+        **extras,
+        summary=summary,
         format_version=version,
     )
 
@@ -236,8 +244,13 @@ def _segment_row(seg: Any) -> tuple[SegmentType, str | None, int | None, int | N
         raise TypeError(f"a segment's chain must be a name, not {chain!r}")
     if not all(np.isfinite(float(seg[k])) for k in ("start_s", "end_s")):
         raise ValueError(f"segment times must be finite numbers, not {seg['start_s']}, {seg['end_s']}")
-    return kind, chain, _count(seg.get("posture")), _count(seg.get("pool_id")), int(seg["first_point"]), int(
-        seg["last_point"]
+    return (
+        kind,
+        chain,
+        _count(seg.get("posture")),
+        _count(seg.get("pool_id")),
+        int(seg["first_point"]),
+        int(seg["last_point"]),
     )
 
 
