@@ -235,3 +235,33 @@ def test_no_module_is_long():
     for source in read_tree(PACKAGE).values():
         lines = source.text.count("\n")
         assert lines <= MAX_LINES, f"{source.name}: {lines} lines (split it by concept)"
+
+
+ROUTE_KEYS = ("segments", "first_point", "last_point", "point_arrays", "trajectory")  # a route header's own keys
+ROUTE_FORMAT = ("posegen.io.route_file", "posegen.io.route_writer")  # the route's reader and writer
+
+
+def header_keys(source: Source, keys: tuple[str, ...]) -> list[str]:
+    """Where a module indexes a mapping by one of ``keys`` (``x["k"]`` or ``x.get("k")``), as ``module:line``."""
+    found = []
+    for node in ast.walk(ast.parse(source.text)):
+        key = None
+        if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+            key = node.slice.value
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get":
+            key = node.args[0].value if node.args and isinstance(node.args[0], ast.Constant) else None
+        if key in keys:
+            found.append(f"{source.name}:{node.lineno} [{key!r}]")
+    return found
+
+
+def test_a_route_is_read_as_its_typed_object_outside_its_reader():
+    """Stages, the viewer and the CLI take ``posegen.io.Route``: none digs through a route header's keys."""
+    assert header_keys(tree(posegen__x='def f(d):\n    return d["segments"][0].get("first_point")\n')["posegen.x"], ROUTE_KEYS)
+    found = [
+        hit
+        for source in read_tree(PACKAGE).values()
+        if source.name not in ROUTE_FORMAT
+        for hit in header_keys(source, ROUTE_KEYS)
+    ]
+    assert found == []
