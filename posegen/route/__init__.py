@@ -17,6 +17,7 @@ from posegen.route.pose_check import PoseInvariant, check_poses
 from posegen.route.repair import Substitutes, Substitution, insertion_places, ranked_substitutes
 from posegen.route.route import PlannedRoute, plan_route
 from posegen.route.smoothing import blend_corners, corners, path_length, shortcut
+from posegen.route.summary import RouteSummary, summarize
 from posegen.route.timing import SAFETY, Timed, hold, parameterize
 from posegen.route.workflow import Exported, Routed, check_route_file, export_route_bag, route_plan_file
 
@@ -32,6 +33,7 @@ __all__ = [
     "Planner",
     "PoseInvariant",
     "RouteInvariant",
+    "RouteSummary",
     "Routed",
     "Stop",
     "Substitutes",
@@ -64,6 +66,7 @@ __all__ = [
     "shortcut",
     "start_posture",
     "straight",
+    "summarize",
     "through",
     "transfer_times",
     "verify_route",

@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
-import statistics
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -16,7 +15,6 @@ from posegen.arguments import check_seed, check_size
 from posegen.errors import ArgumentError, InputError
 from posegen.io import (
     OutputKind,
-    SegmentType,
     check_apart,
     check_bag_destination,
     check_writable,
@@ -34,6 +32,7 @@ from posegen.route.check import MIN_DT_S, verify_route
 from posegen.route.export import route_artefact
 from posegen.route.repair import Substitutes, o1_figures
 from posegen.route.route import PlannedRoute, plan_route
+from posegen.route.summary import RouteSummary, summarize
 
 LOG = logging.getLogger(__name__)
 
@@ -45,7 +44,7 @@ class Routed:
     """What ``posegen route`` planned and wrote."""
 
     route: PlannedRoute
-    summary: dict[str, Any]  # the figures recorded in the route file
+    summary: RouteSummary  # the figures recorded in the route file
     written: tuple[Path, ...]  # the route file, its arrays (and the CSV if asked)
     planning_s: float  # wall time of the planning
     repair: str  # how a lost posture would be repaired: from which pool, or why not
@@ -110,15 +109,11 @@ def route_plan_file(
         n = len(entries)
         nodes = {i: entries[i] for i in range(n)}
         nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
-        summary = _summary(scene, route, len(plan.postures))
-        summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
-        if from_posture is not None:
-            summary["start_posture_rad"] = [float(v) for v in from_posture]
-        if repeated:
-            summary["repeated"] = repeated  # postures of the input given twice: routed once
+        information = None
         if substitutes is not None and route.substitutions:
             rows = [r for v in route.visited if (r := substitutes.row(v, n)) is not None]
-            summary["information"] = o1_figures(substitutes, rows)
+            information = o1_figures(substitutes, rows)
+        summary = summarize(route, len(plan.postures), repair, from_posture, repeated, information)
         provenance = dict(plan.provenance)
         provenance.update(
             {
@@ -127,7 +122,7 @@ def route_plan_file(
                 "selection_sha256": hashlib.sha256(Path(plan_path).read_bytes()).hexdigest(),
             }
         )
-        written = write_route(path, route_artefact(route, nodes, provenance, summary), csv)
+        written = write_route(path, route_artefact(route, nodes, provenance, summary.to_dict()), csv)
     return Routed(route=route, summary=summary, written=tuple(written), planning_s=elapsed, repair=repair)
 
 
@@ -181,41 +176,6 @@ def _substitutes(
 
     rows = tuple(int(e["pool_id"]) if 0 <= int(e["pool_id"]) < len(pool.postures) else None for e in entries)
     return Substitutes(pool.postures, rows, design), pool_entries, f"repair from {path}"
-
-
-def _summary(scene: Scene, route: PlannedRoute, postures: int) -> dict[str, Any]:
-    """The figures a route file records (no wall time: the same seed gives the same file)."""
-    per_contact = []  # from leaving the previous contact (or the start) to leaving this one
-    previous_end = 0.0
-    for seg in route.segments:
-        if seg.type == SegmentType.HOLD:
-            end = seg.end_s
-            per_contact.append(end - previous_end)
-            previous_end = end
-    by_type: dict[str, float] = {}
-    for seg in route.segments:
-        by_type[seg.type.value] = by_type.get(seg.type.value, 0.0) + float(
-            route.times[seg.last_point] - route.times[seg.first_point]
-        )
-    visited = len(route.visited)
-    methods: dict[str, int] = {}
-    for method in route.methods:
-        methods[method] = methods.get(method, 0) + 1
-    return {
-        "postures": postures,
-        "routed": visited,
-        "substituted": len(route.substitutions),
-        "skipped": len(route.skipped),
-        "points": len(route.times),
-        "duration_s": float(route.times[-1]),
-        "robot_time_per_contact_s": float(route.times[-1]) / max(visited, 1),
-        "robot_time_per_contact_median_s": statistics.median(per_contact) if per_contact else 0.0,
-        "robot_time_by_segment_s": by_type,
-        "returns_to_start": route.returns,
-        "free_motions": methods,
-        "tsp_length_s": route.order.length_s,
-        "nearest_neighbour_length_s": route.order.nearest_neighbour_s,
-    }
 
 
 def check_route_file(

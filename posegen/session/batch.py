@@ -172,7 +172,7 @@ def route_batch(session: Path, number: int, pool_path: str, settings: SessionSet
     return Batch(
         number=number,
         pool_rows=route_pool_rows(str(route)),
-        planned_s=round(float(routed.summary["duration_s"]), 3),  # as the index records it
+        planned_s=round(routed.summary.duration_s, 3),  # as the index records it
         files={str(p.relative_to(session)): sha256_of(p) for p in files},
     )
 
