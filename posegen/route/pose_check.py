@@ -102,8 +102,8 @@ def check_poses(
         segments: The route's segment table.
         times: (m,) s.
         positions: (m, nj) rad.
-        finite: (m,) whether a point's angles are all finite (the others are skipped:
-            they already fail the ``finite`` check).
+        finite: (m,) whether a point's angles are all finite (the others are skipped;
+            every point of a route the reader accepted is).
         workers: Local processes for the collision checks, or the backend to run them on.
         progress: Told as points are checked for collisions.
 
