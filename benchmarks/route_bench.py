@@ -28,22 +28,21 @@ def _run(posegen: str, root: Path, *args: str) -> tuple[float, subprocess.Comple
 
 
 def _route_row(posegen: str, root: Path, selection: Path, out: Path, label: str) -> tuple[str, dict[str, float]]:
-    from posegen.io import sidecars_of
-    from posegen.robot import read_route
+    from posegen.io import read_route, sidecars_of
 
     wall, done = _run(posegen, root, "route", str(selection), "--workers", str(WORKERS), "-q", "-o", str(out))
     if done.returncode != 0:
         return f"| {label} | route failed: {done.stderr.strip()} |||||||", {}
     start = time.perf_counter()
-    data = read_route(out)
+    route = read_route(out)
     load = time.perf_counter() - start
-    summary = data["summary"]
+    summary = route.summary or {}
     t_check, check = _run(posegen, root, "check", str(out), "--workers", str(WORKERS), "-q")
     verdict = "ok" if check.returncode == 0 else "VIOLATIONS"
     size = (out.stat().st_size + sum(p.stat().st_size for p in sidecars_of(out))) / 1e6
     swaps = "; ".join(
         f"{s['pool_id']} -> {s['substitute_pool_id']} (O1 {s['o1_before']:.2f} -> {s['o1_after']:.2f})"
-        for s in data["substitutions"]
+        for s in route.substitutions
     )
     routed = f"{summary['routed']}/{summary['postures']}"
     if swaps:

@@ -191,7 +191,7 @@ def _ten_minutes(bag: Path, out: Path, minutes: float = 10.0) -> tuple[int, int,
 def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
     from route_bench import route_of
 
-    from posegen.robot import read_route
+    from posegen.io import read_route
 
     route = route_of(POSEGEN, ROOT, pool_path, workdir, k)
 

@@ -568,3 +568,34 @@ def test_the_flag_finder():
 def test_library_errors_name_parameters_not_flags():
     found = {s.name: flags_in_errors(s) for s in read_tree(PACKAGE).values() if component(s.name) != "posegen.cli"}
     assert not {k: v for k, v in found.items() if v}, "name the parameter; posegen.cli.options.FLAGS shows its flag"
+
+
+ROUTE_KEYS = ("segments", "first_point", "last_point", "point_arrays", "trajectory")  # a route header's own keys
+ROUTE_FORMAT = ("posegen.io.route_file", "posegen.io.route_writer")  # the route's reader and writer
+
+
+def header_keys(source: Source, keys: tuple[str, ...]) -> list[str]:
+    """Where a module indexes a mapping by one of ``keys`` (``x["k"]`` or ``x.get("k")``), as ``module:line``."""
+    found = []
+    for node in ast.walk(ast.parse(source.text)):
+        key = None
+        if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+            key = node.slice.value
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get":
+            key = node.args[0].value if node.args and isinstance(node.args[0], ast.Constant) else None
+        if key in keys:
+            found.append(f"{source.name}:{node.lineno} [{key!r}]")
+    return found
+
+
+def test_a_route_is_read_as_its_typed_object_outside_its_reader():
+    """Stages, the viewer and the CLI take ``posegen.io.Route``: none digs through a route header's keys."""
+    digging = tree(posegen__x='def f(d):\n    return d["segments"][0].get("first_point")\n')["posegen.x"]
+    assert sorted(header_keys(digging, ROUTE_KEYS)) == ["posegen.x:2 ['first_point']", "posegen.x:2 ['segments']"]
+    found = [
+        hit
+        for source in read_tree(PACKAGE).values()
+        if source.name not in ROUTE_FORMAT
+        for hit in header_keys(source, ROUTE_KEYS)
+    ]
+    assert found == []

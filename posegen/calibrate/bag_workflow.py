@@ -39,11 +39,12 @@ from posegen.io import (
     check_writable,
     claim_output,
     dump_yaml,
+    read_route,
     write_recording,
     write_yaml,
 )
 from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measurements_to_dict, planned_kinds
-from posegen.robot import FloatArray, Scene, load_config, read_route, scene_for
+from posegen.robot import FloatArray, Scene, load_config, scene_for
 
 TRUTH_FILE = "truth.yaml"  # a simulated session's true parameters, inside its bag folder
 
@@ -92,16 +93,11 @@ def wrench_topics(scene: Scene) -> dict[str, str]:
 
 def _route(route_path: str, scene: Scene | None, config_path: str | None = None) -> tuple[Motion, Scene]:
     """A route's motion, and the scene it runs in (``scene``, or the route's own config or ``config_path``)."""
-    data = read_route(route_path)
-    provenance = dict(data.get("provenance") or {})
-    scene = scene or scene_for(provenance, config_path)
-    scene.check_made_for(provenance, route_path)
-    motion = route_motion(data, route_path)
-    if sorted(motion.joint_names) == sorted(scene.joint_names):  # the robot's joints (each once), reordered
-        motion = motion.in_order(scene.joint_names)  # any order, as posegen check accepts
-    if motion.joint_names != scene.joint_names:
-        raise InputError(f"{route_path}: its joints are not the robot's ({len(motion.joint_names)} names)")
-    return motion, scene
+    route = read_route(route_path)
+    scene = scene or scene_for(route.provenance, config_path)
+    scene.check_made_for(route.provenance, route_path)
+    route.joint_columns(scene.joint_names, route_path)  # the robot's joints, each once, in any order (as check)
+    return route_motion(route).in_order(scene.joint_names), scene
 
 
 def simulate_route_bag(

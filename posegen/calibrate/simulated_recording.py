@@ -24,8 +24,9 @@ import numpy as np
 
 from posegen.calibrate.simulation import Perturbation, contact_offsets, perturbed_robot, settle_true
 from posegen.errors import InfeasibleError
+from posegen.io import Route, Segment, SegmentType
 from posegen.model import CalibrationModel, Contacts, planned_kinds
-from posegen.robot import FloatArray, Scene, SegmentType, route_arrays
+from posegen.robot import FloatArray, Scene
 
 TORQUE_ARM_M = 0.1  # torque noise = force noise x this lever
 
@@ -94,19 +95,13 @@ def contact_label(posture: Any, pool_id: Any) -> str:
     return f"posture {posture}" + ("" if pool_id is None else f" (pool {pool_id})")
 
 
-def route_motion(data: dict[str, Any], where: str = "route") -> Motion:
-    """The trajectory and contacts of a route file's data (as read by ``posegen.robot.read_route``).
-
-    Raises:
-        InputError: Points no reader accepts (:func:`posegen.robot.route_arrays`), named ``where``.
-
-    """
-    times, positions, velocities, _ = route_arrays(data, where)
-    phases: dict[Any, dict[SegmentType, dict[str, Any]]] = {}
-    for segment in data["segments"]:
-        kind = SegmentType(segment["type"])
-        if kind.in_contact:
-            phases.setdefault(segment["posture"], {})[kind] = segment
+def route_motion(route: Route) -> Motion:
+    """The trajectory and contacts of a route (as read, and validated, by :func:`posegen.io.read_route`)."""
+    times, positions, velocities = route.times, route.positions, route.velocities
+    phases: dict[int | None, dict[SegmentType, Segment]] = {}
+    for segment in route.segments:
+        if segment.type.in_contact:
+            phases.setdefault(segment.posture, {})[segment.type] = segment
     contacts = []
     for steps in phases.values():
         go, hold, release = (steps.get(k) for k in (SegmentType.GO_TO_CONTACT, SegmentType.HOLD, SegmentType.RELEASE))
@@ -114,17 +109,17 @@ def route_motion(data: dict[str, Any], where: str = "route") -> Motion:
             continue  # a route always has the three; a hand-edited one may not
         contacts.append(
             ContactPhase(
-                chain=str(hold["chain"]),
-                label=contact_label(hold["posture"], hold.get("pool_id")),
-                posture=positions[int(hold["first_point"])].copy(),
-                press_s=float(times[int(go["first_point"])]),
-                hold_s=float(times[int(hold["first_point"])]),
-                lift_s=float(times[int(release["first_point"])]),
-                free_s=float(times[int(release["last_point"])]),
+                chain=str(hold.chain),
+                label=contact_label(hold.posture, hold.pool_id),
+                posture=positions[hold.first_point].copy(),
+                press_s=float(times[go.first_point]),
+                hold_s=float(times[hold.first_point]),
+                lift_s=float(times[release.first_point]),
+                free_s=float(times[release.last_point]),
             )
         )
     contacts.sort(key=lambda c: c.hold_s)
-    return Motion(tuple(data["trajectory"]["joint_names"]), times, positions, velocities, tuple(contacts))
+    return Motion(route.joint_names, times, positions, velocities, tuple(contacts))
 
 
 def hermite(times: FloatArray, positions: FloatArray, velocities: FloatArray, at: FloatArray) -> FloatArray:

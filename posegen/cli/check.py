@@ -26,9 +26,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Check the file and print the worst case of each invariant (and, for a route, the first violations)."""
+    from posegen.io import is_route_file
     from posegen.parallel import open_backend
     from posegen.pool import check_pool_file
-    from posegen.robot import is_route_file
     from posegen.route import MIN_DT_S, check_route_file
 
     is_route = is_route_file(args.file)

@@ -52,16 +52,16 @@ def run(args: argparse.Namespace) -> int:
     summary, route = routed.summary, routed.route
     files = ", ".join(p.name for p in routed.written[1:])
     print(
-        f"route: {summary['routed']} of {summary['postures']} postures ({summary['substituted']} substituted), "
-        f"{summary['points']} points, {summary['duration_s']:.1f} s of robot time "
-        f"(per contact: median {summary['robot_time_per_contact_median_s']:.2f} s, "
-        f"mean {summary['robot_time_per_contact_s']:.2f} s), planned in {routed.planning_s:.1f} s "
+        f"route: {summary.routed} of {summary.postures} postures ({summary.substituted} substituted), "
+        f"{summary.points} points, {summary.duration_s:.1f} s of robot time "
+        f"(per contact: median {summary.robot_time_per_contact_median_s:.2f} s, "
+        f"mean {summary.robot_time_per_contact_s:.2f} s), planned in {routed.planning_s:.1f} s "
         f"-> {Path(args.output)} (and {files})"
     )
     print(
         f"  order: TSP {route.order.length_s:.1f} s vs nearest neighbour {route.order.nearest_neighbour_s:.1f} s "
         "(rest-to-rest times at the free speed); free motions: "
-        + ", ".join(f"{k} {v}" for k, v in summary["free_motions"].items())
+        + ", ".join(f"{k} {v}" for k, v in summary.free_motions.items())
     )
     for s in route.substitutions:
         print(

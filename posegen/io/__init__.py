@@ -4,7 +4,8 @@ Below every other layer but :mod:`posegen.errors`: nothing here knows the robot.
 rosbag2 modules hold the format concerns of talking to ROS 2: fixed-layout CDR
 (:mod:`~posegen.io.cdr`), indexed MCAP reading (:mod:`~posegen.io.mcap_index`), atomic bag
 writing (:mod:`~posegen.io.bag_writer`), recorded sessions (:mod:`~posegen.io.recorded_bag`)
-and routes as bags (:mod:`~posegen.io.trajectory_bag`).
+and routes as bags (:mod:`~posegen.io.trajectory_bag`). Route files (the typed
+:class:`~posegen.io.route_file.Route`, its reader and writer) live here too, below every stage that reads one.
 """
 
 from posegen.io.arrays import (
@@ -29,19 +30,54 @@ from posegen.io.output import (
     lock_path,
 )
 from posegen.io.recorded_bag import JOINT_STATE, WRENCH_STAMPED, JointStates, RecordedBag, Wrenches, write_recording
-from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, SegmentRow, write_trajectory_bag
+from posegen.io.route_file import (
+    MAX_DURATION_S,
+    MIN_STEP_S,
+    POSITION_DTYPE,
+    ROUTE_ARRAYS,
+    ROUTE_FORMAT,
+    ROUTE_VERSION,
+    TIME_DTYPE,
+    Route,
+    Segment,
+    SegmentType,
+    is_route_file,
+    points_problem,
+    read_route,
+    stamp,
+)
+from posegen.io.route_writer import (
+    ACCELERATION_STEP,
+    VELOCITY_STEP,
+    route_header,
+    route_outputs,
+    stored_arrays,
+    write_route,
+)
+from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, write_trajectory_bag
 
 __all__ = [
+    "ACCELERATION_STEP",
     "JOINT_STATE",
+    "MAX_DURATION_S",
+    "MIN_STEP_S",
+    "POSITION_DTYPE",
+    "ROUTE_ARRAYS",
+    "ROUTE_FORMAT",
+    "ROUTE_VERSION",
     "SEGMENT_FIELDS",
     "SEGMENT_TABLE",
+    "TIME_DTYPE",
     "TRAJECTORY",
+    "VELOCITY_STEP",
     "WRENCH_STAMPED",
     "JointStates",
     "OutputKind",
     "OutputLock",
     "RecordedBag",
-    "SegmentRow",
+    "Route",
+    "Segment",
+    "SegmentType",
     "Wrenches",
     "atomic_folder",
     "atomic_path",
@@ -54,19 +90,27 @@ __all__ = [
     "dump_yaml",
     "encode_arrays",
     "input_files",
+    "is_route_file",
     "load_yaml_file",
     "lock_path",
+    "points_problem",
     "provenance",
     "read_arrays",
+    "read_route",
     "read_text_file",
     "read_yaml",
+    "route_header",
+    "route_outputs",
     "sidecar_path",
     "sidecar_reference",
     "sidecars_of",
     "staging_folder",
+    "stamp",
+    "stored_arrays",
     "swap_folder",
     "write_atomic",
     "write_recording",
+    "write_route",
     "write_trajectory_bag",
     "write_with_arrays",
     "write_yaml",

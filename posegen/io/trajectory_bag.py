@@ -18,7 +18,6 @@ Topics:
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,24 +25,11 @@ import numpy as np
 
 from posegen.io.bag_writer import BagWriter, writing_bag
 from posegen.io.cdr import FloatArray
+from posegen.io.route_file import Segment
 
 TRAJECTORY = "trajectory_msgs/msg/JointTrajectory"
 SEGMENT_TABLE = "diagnostic_msgs/msg/DiagnosticArray"
 SEGMENT_FIELDS = ("posture", "pool_id", "start_s", "end_s", "first_point", "last_point")
-
-
-@dataclass(frozen=True)
-class SegmentRow:
-    """One row of a route's segment table."""
-
-    type: str
-    chain: str | None
-    posture: int | None
-    pool_id: int | None
-    first_point: int
-    last_point: int
-    start_s: float
-    end_s: float
 
 
 def _ns(seconds: float) -> int:
@@ -79,7 +65,7 @@ def _header(writer: BagWriter, time_ns: int) -> Any:
     )
 
 
-def _segment(writer: BagWriter, index: int, row: SegmentRow, time_ns: int) -> Any:
+def _segment(writer: BagWriter, index: int, row: Segment, time_ns: int) -> Any:
     types = writer.typestore.types
     status, key_value = types["diagnostic_msgs/msg/DiagnosticStatus"], types["diagnostic_msgs/msg/KeyValue"]
     values = [
@@ -88,7 +74,7 @@ def _segment(writer: BagWriter, index: int, row: SegmentRow, time_ns: int) -> An
     entry = status(
         level=0,  # DiagnosticStatus.OK
         name=f"posegen/segment/{index}",
-        message=row.type,
+        message=row.type.value,
         hardware_id=row.chain or "",
         values=values,
     )
@@ -100,7 +86,7 @@ def write_trajectory_bag(
     names: Sequence[str],
     times: FloatArray,
     arrays: Sequence[FloatArray],
-    segments: Sequence[SegmentRow],
+    segments: Sequence[Segment],
     topic: str,
     segments_topic: str,
     provenance: dict[str, Any],

@@ -3,8 +3,8 @@
 Typed config, the robot description and scene (model, stance, contact frames, table),
 geometry, collisions (coal), the placo projection onto balanced contact, feasibility
 measured independently of any solver, the stance space a planner moves in, contact
-postures, and the files that carry postures and trajectories between stages (pool,
-selection, route).
+postures, and the files that carry postures between stages (pool, selection; routes are
+in :mod:`posegen.io`).
 """
 
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
@@ -71,23 +71,6 @@ from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for
 from posegen.robot.stance_space import StanceSpace
 from posegen.robot.statics import MOMENT_ARM_M, gravity_torques
-from posegen.robot.trajectory import (
-    ACCELERATION_STEP,
-    MAX_DURATION_S,
-    MIN_STEP_S,
-    POSITION_DTYPE,
-    ROUTE_ARRAYS,
-    ROUTE_FORMAT,
-    ROUTE_VERSION,
-    TIME_DTYPE,
-    VELOCITY_STEP,
-    SegmentType,
-    is_route_file,
-    points_problem,
-    read_route,
-    route_arrays,
-    stamp,
-)
 from posegen.robot.transforms import (
     offset_derivatives,
     offset_matrix,
@@ -103,26 +86,17 @@ from posegen.robot.validation import check_for_planning
 from posegen.robot.verification import EXAMPLES, Verification, Worst, WorstSoFar, summarize, worst_case
 
 __all__ = [
-    "ACCELERATION_STEP",
     "DEFAULT_KIND",
     "EXAMPLES",
     "FLUSH",
-    "MAX_DURATION_S",
-    "MIN_STEP_S",
     "MOMENT_ARM_M",
     "POINT",
     "POOL_FORMAT",
     "POOL_VERSION",
-    "POSITION_DTYPE",
-    "ROUTE_ARRAYS",
-    "ROUTE_FORMAT",
-    "ROUTE_VERSION",
     "SELECTION_FORMAT",
     "SOLE_ANGLE_TOL_RAD",
     "SOLE_POSITION_TOL_M",
     "TABLE",
-    "TIME_DTYPE",
-    "VELOCITY_STEP",
     "Assessment",
     "CalibrationConfig",
     "CandidateConfig",
@@ -149,7 +123,6 @@ __all__ = [
     "RouteConfig",
     "SamplingConfig",
     "Scene",
-    "SegmentType",
     "Spot",
     "StanceConfig",
     "StanceSpace",
@@ -165,7 +138,6 @@ __all__ = [
     "flatten_on_floor",
     "geometry_coverage",
     "gravity_torques",
-    "is_route_file",
     "kind_named",
     "kinematic_urdf",
     "load_config",
@@ -177,19 +149,15 @@ __all__ = [
     "parse_config",
     "placement_derivatives",
     "placement_matrix",
-    "points_problem",
     "polygon_margin",
     "pool_from_dict",
     "posture_entries",
     "posture_from_dict",
-    "read_route",
     "registered_kinds",
     "robot_geometry",
-    "route_arrays",
     "rpy_derivatives",
     "rpy_matrix",
     "scene_for",
-    "stamp",
     "summarize",
     "survey_config_pairs",
     "tilt_angles",

@@ -2,14 +2,15 @@
 
 Nothing the planner computed is trusted: every point of the file is checked from the
 stored arrays, vectorised where it can be, with pinocchio and coal on the original
-meshes (:mod:`posegen.route.pose_check`). In order:
+meshes (:mod:`posegen.route.pose_check`). What every command needs of a route (its
+structure: arrays holding the points the header declares, one column per joint, a segment
+table covering them; finite values; times increasing from 0 by at least 1 us) is the
+reader's (:func:`posegen.io.read_route`): a route it refuses is refused here the same way,
+in one line. Here, on what it accepts, for this robot:
 
-* **structure**: every joint of the model is named once (in any order), every array holds the
-  number of points the header declares with one column per joint, and the segment table
-  covers the points from first to last, consecutive segments sharing their boundary;
-  when this fails nothing else can be checked;
-* **finite**: no NaN or infinite time, position, velocity or acceleration;
-* **times**: strictly increasing from 0, no step below ``min_dt`` (default 1 ms);
+* **names**: every joint of the model is named once (in any order), every contact segment
+  names a chain of the config (:meth:`posegen.io.Route.joint_columns`, ``check_chains``);
+* **times**: no step below ``min_dt`` (default 1 ms, the controller's);
 * **joint limits** (with the configured margin), **velocity** (exported values, and the
   mean velocity between consecutive points, within the URDF limits), **acceleration**
   (within the configured limit);
@@ -28,14 +29,14 @@ Every violation is named: point index, time, joint (or pair), value and limit.
 from __future__ import annotations
 
 import enum
-from typing import Any
 
 import numpy as np
 
+from posegen.io import MAX_DURATION_S, Route, Segment, SegmentType
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import EXAMPLES, MAX_DURATION_S, Scene, SegmentType, Verification, Worst, worst_case
-from posegen.route.pose_check import PoseInvariant, check_poses
+from posegen.robot import Scene, Verification, Worst, worst_case
+from posegen.route.pose_check import check_poses
 
 MIN_DT_S = 1e-3  # default smallest time step between two points
 TOLERANCE = 1e-6  # relative, on velocity and acceleration limits
@@ -46,8 +47,6 @@ LIMIT_TOL_RAD = 5e-7  # on joint-limit margins: twice the float32 rounding of a 
 class RouteInvariant(str, enum.Enum):
     """What every route point must satisfy (those computed from kinematics are in :class:`PoseInvariant`)."""
 
-    STRUCTURE = "structure"
-    FINITE = "finite"
     TIMES = "times"
     JOINT_LIMITS = "joint_limits"
     VELOCITY = "velocity"
@@ -58,106 +57,41 @@ class RouteInvariant(str, enum.Enum):
 
 def verify_route(
     scene: Scene,
-    data: dict[str, Any],
+    route: Route,
     min_dt: float = MIN_DT_S,
     workers: int | Backend = 1,
     progress: ProgressCallback = ignore_progress,
+    where: str = "route",
 ) -> Verification:
-    """Check every point of a read route (see :func:`posegen.robot.read_route`).
+    """Check every point of a read route (see :func:`posegen.io.read_route`) on this robot.
 
     Args:
         scene: The scene the route was made for.
-        data: The route's header, with its arrays under ``point_arrays``.
+        route: The route, as its reader validated it.
         min_dt: Smallest allowed time step, s.
         workers: Local processes checking collisions on the meshes, or the backend to run them on.
         progress: Told as points are checked for collisions.
+        where: The route's name in messages.
+
+    Raises:
+        InputError: The route names a joint or a chain this robot lacks, or lacks one of its joints.
 
     """
-    arrays = {name: np.asarray(value) for name, value in data["point_arrays"].items()}
-    problems = _structure(scene, data, arrays)
-    m = len(arrays["time_from_start"]) if arrays["time_from_start"].ndim == 1 else 0
-    if problems:
-        first = Worst(RouteInvariant.STRUCTURE, 1.0, -1, len(problems), problems[0], tuple(problems[:EXAMPLES]))
-        rest = [
-            Worst(k, 0.0, -1, 0, "not checked: the route's structure is broken", checked=False)
-            for k in [*list(RouteInvariant)[1:], *PoseInvariant]
-        ]
-        return Verification(checked=m, worst=(first, *rest))
-    times = arrays["time_from_start"].astype(float)
-    columns = [list(data["trajectory"]["joint_names"]).index(name) for name in scene.joint_names]  # to model order
-    arrays = {name: value[:, columns] if value.ndim == 2 else value for name, value in arrays.items()}
-    q, v, a = (arrays[name].astype(float) for name in ("positions", "velocities", "accelerations"))
-    worst = [Worst(RouteInvariant.STRUCTURE, 0.0, -1, 0, f"{m} points, {len(scene.joint_names)} joints, segments")]
-    worst.append(_finite(times, arrays))
-    worst.append(_times(times, min_dt))
+    columns = route.joint_columns(scene.joint_names, where)  # to model order
+    route.check_chains([c.name for c in scene.config.chains], where)
+    times = route.times
+    q, v, a = (values[:, columns] for values in (route.positions, route.velocities, route.accelerations))
+    worst = [_times(times, min_dt)]
     worst.extend(_limits(scene, times, q, v, a))
-    worst.append(_consistency(scene, times, arrays, q, v))
-    worst.append(_rest(scene, data["segments"], times, v))
-    finite = np.all(np.isfinite(q), axis=1)
-    worst.extend(check_poses(scene, data["segments"], times, q, finite, workers, progress))
-    return Verification(checked=m, worst=tuple(worst))
-
-
-def _structure(scene: Scene, data: dict[str, Any], arrays: dict[str, np.ndarray]) -> list[str]:
-    """What makes the route unreadable as a trajectory of this robot (empty if nothing)."""
-    problems = []
-    names = [str(n) for n in data["trajectory"]["joint_names"]]
-    valid = scene.joint_names
-    for i, name in enumerate(names):
-        if name not in valid:
-            expected = f"'{valid[i]}' here; " if i < len(valid) and valid[i] not in names else ""
-            problems.append(
-                f"joint {i} '{name}' is not a joint of the robot model ({expected}valid: {', '.join(valid)})"
-            )
-        elif names.index(name) != i:
-            problems.append(f"joint {i} '{name}' is named twice")
-    problems += [f"the robot model's joint '{name}' is missing" for name in valid if name not in names]
-    declared = data["trajectory"].get("points")
-    times = arrays["time_from_start"]
-    m = int(declared) if isinstance(declared, int) else len(times)
-    if times.ndim != 1 or len(times) != m:
-        problems.append(f"time_from_start holds {times.shape} values, the header declares {m} points")
-    for name in ("positions", "velocities", "accelerations"):
-        shape = arrays[name].shape
-        if len(shape) != 2 or shape[0] != m or shape[1] != len(names):
-            problems.append(f"{name} has shape {shape}, expected ({m}, {len(names)}): a point or a joint is missing")
-    chains = {c.name for c in scene.config.chains}
-    expected_first = 0
-    for i, seg in enumerate(data["segments"]):
-        first, last = int(seg["first_point"]), int(seg["last_point"])
-        if first != expected_first or last < first or last >= max(m, 1):
-            problems.append(
-                f"segment {i} ({seg['type']}) covers points {first}..{last}; expected it to start at "
-                f"{expected_first} and end before point {m}"
-            )
-        if SegmentType(seg["type"]).in_contact and seg.get("chain") not in chains:
-            problems.append(f"segment {i} ({seg['type']}) names chain {seg.get('chain')!r}; valid: {sorted(chains)}")
-        expected_first = last
-    if not data["segments"]:
-        problems.append("the segment table is empty: no point says what the robot does")
-    elif expected_first != m - 1:
-        problems.append(f"the segments end at point {expected_first}, the route's last point is {m - 1}")
-    return problems
+    worst.append(_consistency(scene, times, route.stored_dtype, q, v))
+    worst.append(_rest(scene, route.segments, times, v))
+    finite = np.ones(len(times), dtype=bool)  # the reader refuses any other value
+    worst.extend(check_poses(scene, route.segments, times, q, finite, workers, progress))
+    return Verification(checked=len(times), worst=tuple(worst))
 
 
 def _at(times: np.ndarray, k: int) -> str:
     return f"point {k} (t {times[k]:.4f} s)"
-
-
-def _finite(times: np.ndarray, arrays: dict[str, np.ndarray]) -> Worst:
-    bad = ~np.isfinite(times)
-    columns = {}
-    for name in ("positions", "velocities", "accelerations"):
-        columns[name] = ~np.isfinite(arrays[name])
-        bad = bad | columns[name].any(axis=1)
-
-    def describe(k: int) -> str:
-        what = [f"time_from_start {times[k]}"] if not np.isfinite(times[k]) else []
-        for name, mask in columns.items():
-            what += [f"{name}[{j}] = {arrays[name][k, j]}" for j in np.flatnonzero(mask[k])[:3]]
-        return f"point {k}: " + ", ".join(what)
-
-    return worst_case(RouteInvariant.FINITE, bad.astype(float), describe, "every value finite")
 
 
 def _times(times: np.ndarray, min_dt: float) -> Worst:
@@ -227,14 +161,14 @@ def _limits(scene: Scene, times: np.ndarray, q: np.ndarray, v: np.ndarray, a: np
     ]
 
 
-def _consistency(scene: Scene, times: np.ndarray, arrays: dict[str, np.ndarray], q: np.ndarray, v: np.ndarray) -> Worst:
+def _consistency(scene: Scene, times: np.ndarray, stored: np.dtype, q: np.ndarray, v: np.ndarray) -> Worst:
     """Velocities against finite differences of positions (see the module docstring)."""
     m = len(times)
     if m < 2:
         return Worst(RouteInvariant.CONSISTENCY, 0.0, -1, 0, "fewer than two points")
     dt = np.diff(times)[:, None]
     a_limit = scene.route.acceleration_limit_rad_s2
-    stored_q, stored_v = arrays["positions"], arrays["velocities"]
+    stored_q, stored_v = q.astype(stored), v.astype(stored)  # exact: the values are the stored ones
     q_ulp = np.spacing(np.maximum(np.abs(stored_q[:-1]), np.abs(stored_q[1:]))).astype(float)  # (m-1, nj)
     v_ulp = np.spacing(np.maximum(np.abs(stored_v[:-1]), np.abs(stored_v[1:]))).astype(float)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -259,16 +193,15 @@ def _consistency(scene: Scene, times: np.ndarray, arrays: dict[str, np.ndarray],
     )
 
 
-def _rest(scene: Scene, segments: list[dict[str, Any]], times: np.ndarray, v: np.ndarray) -> Worst:
+def _rest(scene: Scene, segments: tuple[Segment, ...], times: np.ndarray, v: np.ndarray) -> Worst:
     """Zero velocity where the robot must stop."""
     must = np.zeros(len(times), dtype=bool)
     must[[0, -1]] = True
     for seg in segments:
-        kind = SegmentType(seg["type"])
-        if kind == SegmentType.HOLD:
-            must[int(seg["first_point"]) : int(seg["last_point"]) + 1] = True
-        if kind == SegmentType.GO_TO_CONTACT:
-            must[int(seg["first_point"])] = True
+        if seg.type == SegmentType.HOLD:
+            must[seg.first_point : seg.last_point + 1] = True
+        if seg.type == SegmentType.GO_TO_CONTACT:
+            must[seg.first_point] = True
     speed = np.where(must, np.abs(v).max(axis=1), 0.0)
     names = scene.joint_names
 

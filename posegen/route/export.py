@@ -1,48 +1,33 @@
-"""Writing a route: the YAML header with segment annotations, its ``.npz`` sidecar, optionally a CSV.
+"""A planned route as the typed route file (:class:`posegen.io.Route`): its points as stored, its segment table.
 
-The file format is described, and read back, in :mod:`posegen.robot.trajectory` (below
-the stages, so that any of them may read a route). The header is YAML, or JSON when the
-file name ends in ``.json``; the points go to ``<name>.npz`` beside it. The CSV, when
-asked for, has one row per point: time (s), segment, chain, posture, then the joint
-positions (rad), as stored.
+The file format, its reader and its writer are in :mod:`posegen.io` (below the stages, so
+that any of them may read a route); here the planner's :class:`~posegen.route.route.PlannedRoute`
+becomes the artefact: pool rows numbered, postures, skips and substitutions as plain data.
 """
 
 from __future__ import annotations
 
-import csv
-import io
-from pathlib import Path
+import dataclasses
 from typing import Any
 
 import numpy as np
 
-from posegen.io import write_atomic, write_with_arrays
-from posegen.robot import ACCELERATION_STEP, POSITION_DTYPE, ROUTE_FORMAT, ROUTE_VERSION, TIME_DTYPE, VELOCITY_STEP
-from posegen.route.route import Route
+from posegen.io import Route, stored_arrays
+from posegen.route.route import PlannedRoute
 
 
-def route_arrays_of(route: Route) -> dict[str, np.ndarray]:
-    """The sidecar's arrays of a route, in their stored types and resolutions (column-major: they compress better)."""
-    return {
-        "time_from_start": np.asarray(route.times, dtype=TIME_DTYPE),
-        "positions": np.asfortranarray(route.positions, dtype=POSITION_DTYPE),
-        "velocities": np.asfortranarray(_toward_zero(route.velocities, VELOCITY_STEP), dtype=POSITION_DTYPE),
-        "accelerations": np.asfortranarray(_toward_zero(route.accelerations, ACCELERATION_STEP), dtype=POSITION_DTYPE),
-    }
+def route_arrays_of(route: PlannedRoute) -> dict[str, np.ndarray]:
+    """The sidecar's arrays of a planned route, in their stored types and resolutions."""
+    return stored_arrays(route.times, route.positions, route.velocities, route.accelerations)
 
 
-def _toward_zero(values: np.ndarray, step: float) -> np.ndarray:
-    """Values on a grid of ``step``, rounded toward zero: never past a limit the exact ones respect."""
-    return np.asarray(np.trunc(np.asarray(values) / step) * step)
-
-
-def route_header(
-    route: Route,
+def route_artefact(
+    route: PlannedRoute,
     entries: dict[int, dict[str, Any]],
     provenance: dict[str, Any],
     summary: dict[str, Any],
-) -> dict[str, Any]:
-    """Plain data of a route file's header (without the sidecar reference).
+) -> Route:
+    """The route file of a planned route: its points as stored (float64 copies), every posture numbered.
 
     Args:
         route: The timed route.
@@ -59,31 +44,19 @@ def route_header(
         entry = entries[node]
         return int(entry.get("pool_id", entry.get("id", node)))
 
-    return {
-        "format": ROUTE_FORMAT,
-        "format_version": ROUTE_VERSION,
-        "provenance": provenance,
-        "trajectory": {
-            "header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
-            "joint_names": list(route.joint_names),
-            "points": len(route.times),
-        },
-        "segments": [
-            {
-                "type": s.type.value,
-                "chain": s.chain,
-                "posture": s.posture,
-                "pool_id": pool_id(s.posture),
-                "first_point": s.first,
-                "last_point": s.last,
-                "start_s": float(route.times[s.first]),
-                "end_s": float(route.times[s.last]),
-            }
-            for s in route.segments
-        ],
-        "postures": [entries[i] for i in route.visited],
-        "skipped": [{"posture": i, "pool_id": pool_id(i), "reason": reason} for i, reason in route.skipped],
-        "substitutions": [
+    stored = route_arrays_of(route)
+    times, positions, velocities, accelerations = (np.array(a, dtype=float, order="C") for a in stored.values())
+    return Route(
+        joint_names=tuple(route.joint_names),
+        times=times,
+        positions=positions,
+        velocities=velocities,
+        accelerations=accelerations,
+        segments=tuple(dataclasses.replace(s, pool_id=pool_id(s.posture)) for s in route.segments),
+        provenance=provenance,
+        postures=tuple(entries[i] for i in route.visited),
+        skipped=tuple({"posture": i, "pool_id": pool_id(i), "reason": reason} for i, reason in route.skipped),
+        substitutions=tuple(
             {
                 "posture": s.lost,
                 "pool_id": pool_id(s.lost),
@@ -96,49 +69,6 @@ def route_header(
                 "rank_after": s.rank_after,
             }
             for s in route.substitutions
-        ],
-        "summary": summary,
-    }
-
-
-def route_outputs(path: Path, csv_too: bool = False) -> list[Path]:
-    """The files :func:`write_route` writes whose names are known before: the header, and the CSV if asked.
-
-    The sidecar's name follows its content (:func:`posegen.io.sidecar_path`), beside the header.
-    """
-    written = [path]
-    if csv_too:
-        written.append(path.with_suffix(".csv"))
-    return written
-
-
-def write_route(path: Path, route: Route, header: dict[str, Any], csv_too: bool = False) -> list[Path]:
-    """Write the route (the deflated sidecar first, the header that names it last; the CSV if asked).
-
-    Returns:
-        The paths written: the header, its sidecar, and the CSV if asked.
-
-    """
-    arrays = route_arrays_of(route)
-    outputs = route_outputs(path, csv_too)
-    if csv_too:
-        write_atomic(outputs[1], _csv(header, arrays))
-    sidecar = write_with_arrays(path, header, arrays, compress=True)
-    return [path, sidecar, *outputs[1:]]
-
-
-def _csv(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> str:
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(["time_s", "segment", "chain", "posture", *header["trajectory"]["joint_names"]])
-    segment_of: dict[int, dict[str, Any]] = {}
-    for seg in header["segments"]:
-        for k in range(seg["first_point"], seg["last_point"] + 1):
-            segment_of[k] = seg  # a shared boundary point belongs to the later segment
-    for k, (time_s, positions) in enumerate(zip(arrays["time_from_start"], arrays["positions"], strict=True)):
-        seg = segment_of[k]
-        posture = seg["posture"] if seg["posture"] is not None else ""
-        writer.writerow(
-            [f"{time_s:.9f}", seg["type"], seg["chain"] or "", posture, *(repr(float(v)) for v in positions)]
-        )
-    return buffer.getvalue()
+        ),
+        summary=summary,
+    )

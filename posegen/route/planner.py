@@ -27,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posegen.robot import CollisionChecker, Config, FloatArray, Projector, Scene, SegmentType, StanceSpace
+from posegen.io import SegmentType
+from posegen.robot import CollisionChecker, Config, FloatArray, Projector, Scene, StanceSpace
 from posegen.route.free_motion import FreeMotion, Method, free_motions, raised_midpoints, stream_of, via_sequences
 from posegen.route.motion import vertical_paths
 from posegen.route.smoothing import blend_corners, shortcut

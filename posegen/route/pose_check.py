@@ -8,7 +8,7 @@ the costly part (about 1 ms a point): points are checked in chunks over worker
 processes, each loading the meshes once; the pair and its distance are measured only
 at the points found colliding.
 
-Angles are stored as float32 (see :mod:`posegen.robot.trajectory`): the CoM and the
+Angles are stored as float32 (see :mod:`posegen.io.route_file`): the CoM and the
 collision distances get 1e-6 m of slack for that rounding (it moves a body by ~1e-7 m).
 """
 
@@ -16,11 +16,12 @@ from __future__ import annotations
 
 import enum
 import functools
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
 
+from posegen.io import Segment
 from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback
 from posegen.robot import (
@@ -30,7 +31,6 @@ from posegen.robot import (
     Config,
     FloatArray,
     Scene,
-    SegmentType,
     Worst,
     worst_case,
 )
@@ -88,7 +88,7 @@ def _collisions(
 
 def check_poses(
     scene: Scene,
-    segments: list[dict[str, Any]],
+    segments: Sequence[Segment],
     times: FloatArray,
     positions: FloatArray,
     finite: np.ndarray,
@@ -99,11 +99,11 @@ def check_poses(
 
     Args:
         scene: The scene.
-        segments: The route's segment table (plain data).
+        segments: The route's segment table.
         times: (m,) s.
         positions: (m, nj) rad.
-        finite: (m,) whether a point's angles are all finite (the others are skipped:
-            they already fail the ``finite`` check).
+        finite: (m,) whether a point's angles are all finite (the others are skipped;
+            every point of a route the reader accepted is).
         workers: Local processes for the collision checks, or the backend to run them on.
         progress: Told as points are checked for collisions.
 
@@ -112,9 +112,9 @@ def check_poses(
     chains: list[str | None] = [None] * m
     margins = np.full(m, scene.margins.collision_m)
     for seg in segments:
-        if SegmentType(seg["type"]).in_contact:
-            for k in range(int(seg["first_point"]), int(seg["last_point"]) + 1):
-                chains[k] = seg["chain"]
+        if seg.type.in_contact:
+            for k in range(seg.first_point, seg.last_point + 1):
+                chains[k] = seg.chain
                 margins[k] = scene.contact_collision_margin_m
     sole, com = np.full(m, -np.inf), np.full(m, -np.inf)
     sole_detail: dict[int, str] = {}

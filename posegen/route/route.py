@@ -36,9 +36,10 @@ from typing import Any
 import numpy as np
 
 from posegen.errors import InfeasibleError, InputError
+from posegen.io import Segment, SegmentType
 from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Posture, Scene, SegmentType, check_for_planning
+from posegen.robot import FloatArray, Posture, Scene, check_for_planning
 from posegen.route.ordering import Order, order_postures, rest_to_rest_time
 from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer
 from posegen.route.repair import (
@@ -55,19 +56,8 @@ LOG = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
-class Segment:
-    """A run of trajectory points with one meaning; consecutive segments share their boundary point."""
-
-    type: SegmentType
-    chain: str | None  # the arm at the table (None for free motions)
-    posture: int | None  # node of the posture (see the module docstring); None: none (the return)
-    first: int  # index of its first point
-    last: int  # index of its last point (inclusive)
-
-
-@dataclass(frozen=True)
-class Route:
-    """The timed trajectory and how it was made."""
+class PlannedRoute:
+    """The timed trajectory and how it was made (written as a :class:`posegen.io.Route` by the route stage)."""
 
     joint_names: tuple[str, ...]
     times: FloatArray  # (m,) s, strictly increasing
@@ -95,7 +85,7 @@ def plan_route(
     substitutes: Substitutes | None = None,
     progress: ProgressCallback = ignore_progress,
     from_posture: Sequence[float] | None = None,
-) -> Route:
+) -> PlannedRoute:
     """Plan and time the visit of every posture.
 
     Args:
@@ -327,7 +317,7 @@ class _Routing:
 
     # -- assembly -----------------------------------------------------------------------
 
-    def assemble(self, order: Order) -> Route:
+    def assemble(self, order: Order) -> PlannedRoute:
         """Concatenate the timed pieces into one trajectory with its segment table."""
         route = self.scene.route
         pieces: list[tuple[Timed, list[tuple[SegmentType, int | None]]]] = []
@@ -357,7 +347,7 @@ class _Routing:
 
     def _concatenate(
         self, pieces: list[tuple[Timed, list[tuple[SegmentType, int | None]]]], order: Order, methods: tuple[str, ...]
-    ) -> Route:
+    ) -> PlannedRoute:
         times: list[FloatArray] = []
         rows: list[FloatArray] = []
         tags: list[tuple[SegmentType, int | None]] = []
@@ -370,7 +360,7 @@ class _Routing:
                 tags[-1] = kinds[0]  # the shared point belongs to the later piece
             tags.extend(kinds[skip:])
             offset = float(times[-1][-1])
-        stacked = np.vstack(rows)
+        stacked, at = np.vstack(rows), np.concatenate(times)
         nj = len(self.scene.joint_names)
         starts = [0] + [k for k in range(1, len(tags)) if tags[k] != tags[k - 1]]
         segments = []
@@ -378,10 +368,10 @@ class _Routing:
             kind, node = tags[first]
             chain = self.posture(node).chain if node is not None and kind != SegmentType.FREE else None
             last = starts[i + 1] if i + 1 < len(starts) else len(tags) - 1  # ends where the next begins
-            segments.append(Segment(kind, chain, node, first, last))
-        return Route(
+            segments.append(Segment(kind, chain, node, None, first, last, float(at[first]), float(at[last])))
+        return PlannedRoute(
             joint_names=self.scene.joint_names,
-            times=np.concatenate(times),
+            times=at,
             positions=stacked[:, :nj],
             velocities=stacked[:, nj : 2 * nj],
             accelerations=stacked[:, 2 * nj :],

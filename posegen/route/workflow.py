@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
-import statistics
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -16,31 +15,24 @@ from posegen.arguments import check_seed, check_size
 from posegen.errors import ArgumentError, InputError
 from posegen.io import (
     OutputKind,
-    SegmentRow,
     check_apart,
     check_bag_destination,
     check_writable,
     claim_output,
+    read_route,
+    route_outputs,
+    write_route,
     write_trajectory_bag,
 )
 from posegen.model import Design, build_design
 from posegen.parallel import Backend
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import (
-    Pool,
-    Scene,
-    SegmentType,
-    Verification,
-    geometry_coverage,
-    load_postures,
-    read_route,
-    route_arrays,
-    scene_for,
-)
+from posegen.robot import Pool, Scene, Verification, geometry_coverage, load_postures, scene_for
 from posegen.route.check import MIN_DT_S, verify_route
-from posegen.route.export import route_header, route_outputs, write_route
+from posegen.route.export import route_artefact
 from posegen.route.repair import Substitutes, o1_figures
-from posegen.route.route import Route, plan_route
+from posegen.route.route import PlannedRoute, plan_route
+from posegen.route.summary import RouteSummary, summarize
 
 LOG = logging.getLogger(__name__)
 
@@ -51,8 +43,8 @@ ROUTE_SUFFIXES = (".yaml", ".yml", ".json")
 class Routed:
     """What ``posegen route`` planned and wrote."""
 
-    route: Route
-    summary: dict[str, Any]  # the figures recorded in the route file
+    route: PlannedRoute
+    summary: RouteSummary  # the figures recorded in the route file
     written: tuple[Path, ...]  # the route file, its arrays (and the CSV if asked)
     planning_s: float  # wall time of the planning
     repair: str  # how a lost posture would be repaired: from which pool, or why not
@@ -117,15 +109,11 @@ def route_postures_file(
         n = len(entries)
         nodes = {i: entries[i] for i in range(n)}
         nodes.update({n + r: {"pool_id": r, **pool_entries[r]} for r in (s.substitute for s in route.substitutions)})
-        summary = _summary(scene, route, len(chosen.postures))
-        summary["repair"] = repair  # where a lost posture's substitute would come from, or why none could
-        if from_posture is not None:
-            summary["start_posture_rad"] = [float(v) for v in from_posture]
-        if repeated:
-            summary["repeated"] = repeated  # postures of the input given twice: routed once
+        information = None
         if substitutes is not None and route.substitutions:
             rows = [r for v in route.visited if (r := substitutes.row(v, n)) is not None]
-            summary["information"] = o1_figures(substitutes, rows)
+            information = o1_figures(substitutes, rows)
+        summary = summarize(route, len(chosen.postures), repair, from_posture, repeated, information)
         provenance = dict(chosen.provenance)
         provenance.update(
             {
@@ -134,7 +122,7 @@ def route_postures_file(
                 "selection_sha256": hashlib.sha256(Path(postures_path).read_bytes()).hexdigest(),
             }
         )
-        written = write_route(path, route, route_header(route, nodes, provenance, summary), csv)
+        written = write_route(path, route_artefact(route, nodes, provenance, summary.to_dict()), csv)
     return Routed(route=route, summary=summary, written=tuple(written), planning_s=elapsed, repair=repair)
 
 
@@ -192,41 +180,6 @@ def _substitutes(
     return Substitutes(pool.postures, rows, design), pool_entries, f"repair from {path}"
 
 
-def _summary(scene: Scene, route: Route, postures: int) -> dict[str, Any]:
-    """The figures a route file records (no wall time: the same seed gives the same file)."""
-    per_contact = []  # from leaving the previous contact (or the start) to leaving this one
-    previous_end = 0.0
-    for seg in route.segments:
-        if seg.type == SegmentType.HOLD:
-            end = float(route.times[seg.last])
-            per_contact.append(end - previous_end)
-            previous_end = end
-    by_type: dict[str, float] = {}
-    for seg in route.segments:
-        by_type[seg.type.value] = by_type.get(seg.type.value, 0.0) + float(
-            route.times[seg.last] - route.times[seg.first]
-        )
-    visited = len(route.visited)
-    methods: dict[str, int] = {}
-    for method in route.methods:
-        methods[method] = methods.get(method, 0) + 1
-    return {
-        "postures": postures,
-        "routed": visited,
-        "substituted": len(route.substitutions),
-        "skipped": len(route.skipped),
-        "points": len(route.times),
-        "duration_s": float(route.times[-1]),
-        "robot_time_per_contact_s": float(route.times[-1]) / max(visited, 1),
-        "robot_time_per_contact_median_s": statistics.median(per_contact) if per_contact else 0.0,
-        "robot_time_by_segment_s": by_type,
-        "returns_to_start": route.returns,
-        "free_motions": methods,
-        "tsp_length_s": route.order.length_s,
-        "nearest_neighbour_length_s": route.order.nearest_neighbour_s,
-    }
-
-
 def check_route_file(
     path: str,
     config_path: str | None,
@@ -249,11 +202,10 @@ def check_route_file(
 
     """
     check_size(min_dt, "min_dt", positive=True)
-    data = read_route(path)
-    recorded = data.get("provenance") or {}
-    scene = scene_for(recorded, config_path)
-    scene.check_made_for(recorded, path)
-    result = verify_route(scene, data, min_dt, workers, progress)
+    route = read_route(path)
+    scene = scene_for(route.provenance, config_path)
+    scene.check_made_for(route.provenance, path)
+    result = verify_route(scene, route, min_dt, workers, progress, where=path)
     return dataclasses.replace(result, geometry=geometry_coverage(scene))
 
 
@@ -283,26 +235,12 @@ def export_route_bag(route_path: str, bag: str, topic: str, segments_topic: str)
     check_writable(bag, OutputKind.FOLDER)
     check_apart([bag], [route_path])
     check_bag_destination(bag)
-    data = read_route(route_path)
-    times, positions, velocities, accelerations = route_arrays(data, route_path)
-    rows = [
-        SegmentRow(
-            type=str(s["type"]),
-            chain=s.get("chain"),
-            posture=s.get("posture"),
-            pool_id=s.get("pool_id"),
-            first_point=int(s["first_point"]),
-            last_point=int(s["last_point"]),
-            start_s=float(times[int(s["first_point"])]),
-            end_s=float(times[int(s["last_point"])]),
-        )
-        for s in data["segments"]
-    ]
-    provenance = dict(data.get("provenance") or {})
+    route = read_route(route_path)
+    provenance = dict(route.provenance)
     provenance.update({"route": route_path, "route_sha256": hashlib.sha256(Path(route_path).read_bytes()).hexdigest()})
-    names = data["trajectory"]["joint_names"]
+    arrays = (route.positions, route.velocities, route.accelerations)
     with claim_output(bag, OutputKind.FOLDER):
         count = write_trajectory_bag(
-            bag, names, times, (positions, velocities, accelerations), rows, topic, segments_topic, provenance
+            bag, route.joint_names, route.times, arrays, route.segments, topic, segments_topic, provenance
         )
-    return Exported(bag=Path(bag), messages=count, segments=len(rows), points=len(times))
+    return Exported(bag=Path(bag), messages=count, segments=len(route.segments), points=len(route.times))

@@ -21,16 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from posegen.errors import InfeasibleError
+from posegen.errors import InfeasibleError, InputError
+from posegen.io import read_route
 from posegen.model import build_design
 from posegen.parallel import Backend
-from posegen.robot import (
-    Pool,
-    SegmentType,
-    read_route,
-    route_arrays,
-    scene_for,
-)
+from posegen.robot import Pool, scene_for
 from posegen.route import check_route_file, export_route_bag, route_postures_file, start_posture
 from posegen.select import (
     ChosenPosture,
@@ -148,11 +143,9 @@ def standing_posture(route: Path) -> list[float] | None:
 
     None when that is the start posture (the reference posture the route stage starts from by default).
     """
-    data = read_route(str(route))
-    scene = scene_for(data.get("provenance") or {}, None)
-    names = list(data["trajectory"]["joint_names"])
-    last = route_arrays(data, str(route))[1][-1]
-    end = np.array([last[names.index(n)] for n in scene.joint_names])
+    read = read_route(route)
+    scene = scene_for(read.provenance, None)
+    end = read.positions[-1, read.joint_columns(scene.joint_names, str(route))]
     reference = start_posture(scene)
     if reference is not None and np.abs(end - reference).max() < STANDING_TOLERANCE_RAD:
         return None
@@ -187,15 +180,17 @@ def route_batch(session: Path, number: int, pool_path: str, settings: SessionSet
     return Batch(
         number=number,
         pool_rows=route_pool_rows(str(route)),
-        planned_s=round(float(routed.summary["duration_s"]), 3),  # as the index records it
+        planned_s=round(routed.summary.duration_s, 3),  # as the index records it
         files={str(p.relative_to(session)): sha256_of(p) for p in files},
     )
 
 
 def route_pool_rows(route: str) -> tuple[int, ...]:
     """The pool rows a route holds a contact at, in its order."""
-    data = read_route(route)
-    return tuple(int(s["pool_id"]) for s in data["segments"] if s["type"] == SegmentType.HOLD.value)
+    rows = read_route(route).hold_pool_rows()
+    if None in rows:
+        raise InputError(f"{route}: a hold names no pool row")
+    return tuple(int(r) for r in rows if r is not None)
 
 
 def missing_rows(planned: Sequence[int], labels: Sequence[str]) -> tuple[int, ...]:

@@ -17,7 +17,6 @@ from posegen.view.artefact import (
     CalibrationArtefact,
     PosturesArtefact,
     RouteArtefact,
-    RouteSegment,
     open_artefact,
 )
 from posegen.view.report_page import REPORT_FILE, report_html, write_report, write_report_into
@@ -40,7 +39,6 @@ __all__ = [
     "RobotFigure",
     "RobotMeshes",
     "RouteArtefact",
-    "RouteSegment",
     "framing",
     "html_page",
     "open_artefact",

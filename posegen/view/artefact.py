@@ -19,20 +19,16 @@ import numpy as np
 
 from posegen.calibrate import CALIBRATION_FORMAT, CalibrationRecord, read_calibration
 from posegen.errors import InputError
-from posegen.io import load_yaml_file, read_yaml
+from posegen.io import Segment, is_route_file, load_yaml_file, read_route, read_yaml
 from posegen.robot import (
     POOL_FORMAT,
     SELECTION_FORMAT,
     FloatArray,
     Pool,
     Scene,
-    SegmentType,
-    is_route_file,
     load_config,
     pool_from_dict,
     posture_entries,
-    read_route,
-    route_arrays,
     scene_for,
 )
 
@@ -61,18 +57,6 @@ class PosturesArtefact:
 
 
 @dataclass(frozen=True)
-class RouteSegment:
-    """One segment of a route, as the viewer shows it."""
-
-    type: SegmentType
-    chain: str | None
-    posture: int | None  # index in the route's selection
-    pool_id: int | None
-    start_s: float
-    end_s: float
-
-
-@dataclass(frozen=True)
 class RouteArtefact:
     """A timed route."""
 
@@ -80,7 +64,7 @@ class RouteArtefact:
     scene: Scene
     times: FloatArray  # (m,) s
     positions: FloatArray  # (m, nj) rad, in the scene's joint order
-    segments: tuple[RouteSegment, ...]
+    segments: tuple[Segment, ...]
     selection: Pool | None  # the selection it routes, when its file is still there unchanged
     skipped: tuple[dict[str, Any], ...]  # {posture, pool_id, reason}
 
@@ -138,27 +122,12 @@ def _postures(path: Path, data: dict[str, Any], config_path: str | None) -> Post
 
 
 def _route(path: Path, config_path: str | None) -> RouteArtefact:
-    data = read_route(path)
-    recorded = data.get("provenance") or {}
-    scene = scene_for(recorded, config_path)
-    scene.check_made_for(recorded, str(path))
-    times, positions, _, _ = route_arrays(data, str(path))
-    names = list(data["trajectory"]["joint_names"])
-    unknown = sorted(set(scene.joint_names) - set(names))
-    if unknown:
-        raise InputError(f"{path}: the route lacks the joints {', '.join(unknown)}")
-    order = [names.index(n) for n in scene.joint_names]
-    segments = tuple(
-        RouteSegment(
-            type=SegmentType(s["type"]),
-            chain=s.get("chain"),
-            posture=s.get("posture"),
-            pool_id=s.get("pool_id"),
-            start_s=float(s["start_s"]),
-            end_s=float(s["end_s"]),
-        )
-        for s in data["segments"]
-    )
+    route = read_route(path)
+    scene = scene_for(route.provenance, config_path)
+    scene.check_made_for(route.provenance, str(path))
+    order = route.joint_columns(scene.joint_names, str(path))
+    route.check_chains([c.name for c in scene.config.chains], str(path))
+    recorded = route.provenance
     selection_path = _linked_file(recorded.get("selection"), recorded.get("selection_sha256"), path)
     selection = None
     if selection_path is not None:
@@ -166,11 +135,11 @@ def _route(path: Path, config_path: str | None) -> RouteArtefact:
     return RouteArtefact(
         path=path,
         scene=scene,
-        times=times,
-        positions=np.ascontiguousarray(positions[:, order]),
-        segments=segments,
+        times=route.times,
+        positions=np.ascontiguousarray(route.positions[:, order]),
+        segments=route.segments,
         selection=selection,
-        skipped=tuple(data.get("skipped") or ()),
+        skipped=route.skipped,
     )
 
 

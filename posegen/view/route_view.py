@@ -18,8 +18,9 @@ import numpy as np
 import pinocchio as pin
 import viser
 
-from posegen.robot import FloatArray, SegmentType
-from posegen.view.artefact import RouteArtefact, RouteSegment
+from posegen.io import Segment, SegmentType
+from posegen.robot import FloatArray
+from posegen.view.artefact import RouteArtefact
 from posegen.view.postures_view import contact_points
 from posegen.view.robot_figure import RobotFigure, robot_meshes
 from posegen.view.scenery import ROBOT_RGB, chain_colours, info_label, set_scenery
@@ -50,7 +51,7 @@ def interpolate(times: FloatArray, positions: FloatArray, at: FloatArray) -> Flo
     return (1.0 - alpha) * positions[k] + alpha * positions[k + 1]
 
 
-def segment_chains(segments: tuple[RouteSegment, ...]) -> list[str | None]:
+def segment_chains(segments: tuple[Segment, ...]) -> list[str | None]:
     """The chain each segment serves: its own, or (free motions) that of the posture it goes to."""
     chains: list[str | None] = []
     for i, seg in enumerate(segments):
@@ -61,7 +62,7 @@ def segment_chains(segments: tuple[RouteSegment, ...]) -> list[str | None]:
     return chains
 
 
-def describe(segment: RouteSegment, chain: str | None) -> str:
+def describe(segment: Segment, chain: str | None) -> str:
     """One line about a route segment."""
     kind = segment.type.value.replace("_", " ")
     if segment.posture is None:

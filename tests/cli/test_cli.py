@@ -320,8 +320,7 @@ def test_route_routes_a_repeated_posture_once_and_says_so(tmp_path, capsys):
 def test_simulate_bag_and_measure_take_a_route_whose_joints_are_in_another_order(route_file, tmp_path, capsys):
     import numpy as np
 
-    from posegen.io import RecordedBag, read_arrays, write_with_arrays
-    from posegen.robot import ROUTE_ARRAYS
+    from posegen.io import ROUTE_ARRAYS, RecordedBag, read_arrays, write_with_arrays
 
     header = yaml.safe_load(route_file.read_text())
     arrays = read_arrays(route_file, header.pop("arrays"), ROUTE_ARRAYS)

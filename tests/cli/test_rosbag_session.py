@@ -10,6 +10,7 @@ held-out residuals, over their predicted sigma, like draws of a unit Gaussian.
 import contextlib
 import io
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,9 +19,8 @@ import yaml
 from posegen.calibrate import Noise, Settings, calibrate, held_out_residuals, posterior_of
 from posegen.calibrate.estimation import frozen_jacobian
 from posegen.cli import main
-from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
+from posegen.io import JointStates, RecordedBag, Wrenches, read_route, write_recording, write_yaml
 from posegen.model import read_measurements
-from posegen.robot import read_route, route_arrays
 from tests.cli.test_cli import assert_fails_cleanly
 
 CHAIN = "left"
@@ -55,7 +55,7 @@ def chain(example_pool, tmp_path_factory):
         ["simulate", str(folder / "others.yaml"), "--seed", str(SEED), "-o", str(folder / "held.yaml")]
     )
     assert code == 0, err
-    short = first_contacts(read_route(route), SHORT)
+    short = first_contacts(route, SHORT)
     write_yaml(folder / "short.yaml", short)
     code, _, err = run_plain(
         ["simulate", str(folder / "short.yaml"), "--bag", str(folder / "short_bag"), "--seed", "3"]
@@ -64,9 +64,11 @@ def chain(example_pool, tmp_path_factory):
     return folder, printed
 
 
-def first_contacts(data, contacts):
+def first_contacts(route, contacts):
     """A route cut after its first contacts (format version 1: points inline)."""
-    times, positions, velocities, accelerations = route_arrays(data)
+    read = read_route(route)
+    times, positions, velocities, accelerations = read.times, read.positions, read.velocities, read.accelerations
+    data = yaml.safe_load(Path(route).read_text())
     last = [i for i, seg in enumerate(data["segments"]) if seg["type"] == "release"][contacts - 1]
     end = data["segments"][last]["last_point"]
     points = [

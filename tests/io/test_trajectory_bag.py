@@ -6,7 +6,7 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
 from posegen.errors import InputError
-from posegen.io import SEGMENT_FIELDS, SegmentRow, write_trajectory_bag
+from posegen.io import SEGMENT_FIELDS, Segment, SegmentType, write_trajectory_bag
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 NAMES = ["a_joint", "b_joint"]
@@ -20,10 +20,10 @@ def route():
     velocities[[0, 2, 3, 4, 5]] = 0.0
     accelerations = np.full_like(positions, 0.25)
     segments = [
-        SegmentRow("free", None, 0, 17, 0, 2, 0.0, 1.25),
-        SegmentRow("go_to_contact", "left", 0, 17, 2, 3, 1.25, 2.0),
-        SegmentRow("hold", "left", 0, 17, 3, 4, 2.0, 3.0),
-        SegmentRow("release", "left", 0, 17, 4, 5, 3.0, 3.5),
+        Segment(SegmentType.FREE, None, 0, 17, 0, 2, 0.0, 1.25),
+        Segment(SegmentType.GO_TO_CONTACT, "left", 0, 17, 2, 3, 1.25, 2.0),
+        Segment(SegmentType.HOLD, "left", 0, 17, 3, 4, 2.0, 3.0),
+        Segment(SegmentType.RELEASE, "left", 0, 17, 4, 5, 3.0, 3.5),
     ]
     return times, (positions, velocities, accelerations), segments
 

@@ -23,9 +23,18 @@ import pytest
 import yaml
 
 from posegen.cli import main
-from posegen.io import JointStates, OutputLock, Wrenches, read_arrays, write_recording, write_with_arrays, write_yaml
+from posegen.io import (
+    ROUTE_ARRAYS,
+    JointStates,
+    OutputLock,
+    Wrenches,
+    read_arrays,
+    write_recording,
+    write_with_arrays,
+    write_yaml,
+)
 from posegen.model import Contacts, measurements_to_dict
-from posegen.robot import ROUTE_ARRAYS, Scene, load_config
+from posegen.robot import Scene, load_config
 from tests.conftest import CONFIG, EXAMPLE_POOL
 
 UNWRITABLE = "/sys/posegen-test"  # no file can be created there, not even by root
@@ -77,7 +86,7 @@ MEASUREMENT_FILES = {  # bad measurement files (posegen YAML or recorded CSV): i
     "no contact": "no_contact_measurements",
     "unknown joint in a CSV": "unknown_joint_csv",
 }
-BAD_ROUTES = {  # routes no reader accepts (posegen check reports each): input name
+BAD_ROUTES = {  # routes no reader accepts (posegen check too, through the same reader): input name
     "a NaN time": "route_nan_time",
     "a last time of 1e39 s": "route_huge_time",
     "a NaN last time": "route_nan_last_time",
@@ -303,6 +312,13 @@ TABLE = [
     F("view", "malformed route", "{malformed_route}", "--html", "{out}/v.html"),
     F("view", "a posture of an unknown chain", "{tail_chain_pool}", "--html", "{out}/v.html", expect="chain 'tail'"),
     *(F("view", f"a route with {what}", f"{{{name}}}", "--html", "{out}/v.html") for what, name in BAD_ROUTES.items()),
+    *(
+        F("check", f"a route with {what}", f"{{{name}}}")
+        for what, name in BAD_ROUTES.items()
+        if name not in ("route_version_3", "route_nan_segment_time", "route_count")  # with their message above
+    ),
+    F("view", "a route with a contact of an unknown chain", "{route_tail_chain}", "--html", "{out}/v.html"),
+    F("check", "a route with a contact of an unknown chain", "{route_tail_chain}", expect="names chain 'tail'"),
     *(F("export", f"a route with {what}", f"{{{name}}}", "--bag", "{out}/b") for what, name in BAD_ROUTES.items()),
     *(
         F("simulate", f"--bag: a route with {what}", f"{{{name}}}", "--bag", "{out}/b")
@@ -567,6 +583,7 @@ def bad_routes(route_file: Path, folder: Path) -> dict[str, str]:
         "route_no_segment": lambda a, h: h.update(segments=[]),
         "route_version_3": lambda a, h: h.update(format_version=3),
         "route_nan_segment_time": lambda a, h: h["segments"][1].update(start_s=float("nan")),
+        "route_tail_chain": lambda a, h: next(s for s in h["segments"] if s["type"] == "hold").update(chain="tail"),
     }
     made = {}
     for name, edit in edits.items():

@@ -9,6 +9,7 @@ the stages rely on: finite numbers of the right shapes, names the model knows.
 from __future__ import annotations
 
 import copy
+import itertools
 import json
 import math
 import tempfile
@@ -25,22 +26,28 @@ from hypothesis import strategies as st
 
 from posegen.calibrate import read_calibration
 from posegen.errors import PosegenError
-from posegen.io import JointStates, RecordedBag, Wrenches, write_recording
+from posegen.io import (
+    ROUTE_FORMAT,
+    JointStates,
+    RecordedBag,
+    Route,
+    SegmentType,
+    Wrenches,
+    is_route_file,
+    read_route,
+    write_recording,
+)
 from posegen.model import Contacts, measurements_to_dict, read_measurements
 from posegen.pool.checkpoint import Checkpoint
 from posegen.robot import (
-    ROUTE_FORMAT,
     SELECTION_FORMAT,
     Config,
     Scene,
-    is_route_file,
     load_config,
     load_pool,
     load_postures,
     parse_config,
     pool_from_dict,
-    read_route,
-    route_arrays,
     write_pool,
 )
 from posegen.select import read_calibration_model
@@ -260,20 +267,21 @@ def test_selection_reader_on_mutated_selections(document):
 # --- routes --------------------------------------------------------------------------------------
 
 
-def assert_valid_route(data: dict[str, Any]) -> None:
-    """What its users get of a read route: its arrays, consistent, or a one-line refusal.
-
-    (``read_route`` leaves inconsistent arrays to ``route_arrays``, so that ``posegen
-    check`` can report them rather than refuse the file.)
-    """
-    arrays = read_or_refuse(route_arrays, data)
-    if arrays is None:
-        return
-    times, positions, velocities, accelerations = arrays
-    n = len(data["trajectory"]["joint_names"])
-    assert positions.shape == velocities.shape == accelerations.shape == (len(times), n)
-    for segment in data["segments"]:
-        assert 0 <= segment["first_point"] < len(times) and 0 <= segment["last_point"] < len(times)
+def assert_valid_route(route: Route) -> None:
+    """What its users get of a read route: finite, consistent arrays and a segment table covering them."""
+    times = route.times
+    n = len(route.joint_names)
+    assert len(set(route.joint_names)) == n and all(isinstance(name, str) for name in route.joint_names)
+    assert route.positions.shape == route.velocities.shape == route.accelerations.shape == (len(times), n)
+    assert times.dtype == route.positions.dtype == np.float64
+    assert all(np.isfinite(a).all() for a in (times, route.positions, route.velocities, route.accelerations))
+    assert times[0] == 0.0 and np.all(np.diff(times) > 0)
+    assert route.segments and route.segments[0].first_point == 0 and route.segments[-1].last_point == len(times) - 1
+    for before, after in itertools.pairwise(route.segments):
+        assert before.last_point == after.first_point
+    for segment in route.segments:
+        assert segment.first_point <= segment.last_point and isinstance(segment.type, SegmentType)
+        assert segment.start_s == times[segment.first_point] and segment.end_s == times[segment.last_point]
 
 
 @pytest.mark.parametrize("suffix", [".yaml", ".json"])

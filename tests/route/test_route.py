@@ -7,19 +7,17 @@ import numpy as np
 import pytest
 
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import sidecars_of
+from posegen.io import SegmentType, read_route, sidecars_of, write_route
 from posegen.model import build_design
-from posegen.robot import SegmentType, read_route, route_arrays
 from posegen.route import (
     Substitutes,
     order_postures,
     plan_route,
     rest_to_rest_time,
-    route_header,
+    route_artefact,
     start_posture,
     transfer_times,
     verify_route,
-    write_route,
 )
 
 ROWS = [0, 1, 2, 3, 4]
@@ -27,7 +25,7 @@ ROWS = [0, 1, 2, 3, 4]
 
 def write(route, pool, rows, path):
     entries = {i: pool.to_dict()["postures"][r] for i, r in enumerate(rows)}
-    write_route(path, route, route_header(route, entries, dict(pool.provenance), {"routed": len(route.visited)}))
+    write_route(path, route_artefact(route, entries, dict(pool.provenance), {"routed": len(route.visited)}))
     return path
 
 
@@ -54,15 +52,15 @@ def test_every_posture_is_visited_once_with_its_segments(example_pool, routed):
     assert kinds[:4] == per_contact and kinds[-1] == SegmentType.FREE  # from the start, and back to it
     assert kinds.count(SegmentType.HOLD) == len(ROWS) == kinds.count(SegmentType.GO_TO_CONTACT)
     for a, b in itertools.pairwise(route.segments):
-        assert a.last == b.first  # consecutive segments share their boundary point
+        assert a.last_point == b.first_point  # consecutive segments share their boundary point
     for seg in route.segments:
         if seg.type == SegmentType.GO_TO_CONTACT:
             contact = np.array(example_pool.postures[ROWS[seg.posture]].joints)
-            points = route.positions[seg.first : seg.last + 1]
+            points = route.positions[seg.first_point : seg.last_point + 1]
             assert np.min(np.max(np.abs(points - contact), axis=1)) == 0.0  # passes through the posture itself
         if seg.type == SegmentType.HOLD:
-            assert route.times[seg.last] - route.times[seg.first] == pytest.approx(1.0)
-            assert np.all(route.positions[seg.first] == route.positions[seg.last])
+            assert route.times[seg.last_point] - route.times[seg.first_point] == pytest.approx(1.0)
+            assert np.all(route.positions[seg.first_point] == route.positions[seg.last_point])
 
 
 def test_the_robot_stops_only_in_contact_and_before_go_to_contact(routed):
@@ -71,17 +69,17 @@ def test_the_robot_stops_only_in_contact_and_before_go_to_contact(routed):
     rest = {0, len(route.times) - 1}
     for seg in route.segments:
         if seg.type == SegmentType.HOLD:
-            rest.update(range(seg.first, seg.last + 1))
+            rest.update(range(seg.first_point, seg.last_point + 1))
         if seg.type == SegmentType.GO_TO_CONTACT:
-            rest.add(seg.first)
-            rest.add(seg.last)  # the hold starts there
+            rest.add(seg.first_point)
+            rest.add(seg.last_point)  # the hold starts there
     speed = np.abs(route.velocities).max(axis=1)
     assert np.all(speed[sorted(rest)] == 0)
     moving = np.ones(len(speed), dtype=bool)
     moving[sorted(rest)] = False
     for seg in route.segments:  # release -> free -> approach without a stop, and go-to-contact's interior
         if seg.type in (SegmentType.FREE, SegmentType.APPROACH, SegmentType.RELEASE):
-            boundary = [k for k in (seg.first, seg.last) if moving[k]]
+            boundary = [k for k in (seg.first_point, seg.last_point) if moving[k]]
             assert np.all(speed[boundary] > 0), seg
     assert np.all(speed[moving] > 0)
 
@@ -93,7 +91,7 @@ def test_times_and_limits(scene, routed):
     assert np.all(np.abs(route.velocities) <= scene.velocity_limit * cfg.velocity_scale_free * (1 + 1e-9))
     assert np.all(np.abs(route.accelerations) <= cfg.acceleration_limit_rad_s2 * (1 + 1e-9))
     for seg in route.segments:  # slower near the table
-        v = np.abs(route.velocities[seg.first : seg.last + 1])
+        v = np.abs(route.velocities[seg.first_point : seg.last_point + 1])
         if seg.type == SegmentType.GO_TO_CONTACT:
             assert np.all(v <= scene.velocity_limit * cfg.velocity_scale_contact * (1 + 1e-9))
         if seg.type in (SegmentType.APPROACH, SegmentType.RELEASE):
@@ -112,7 +110,7 @@ def test_no_joint_jumps_between_waypoints(scene, routed):
     step = scene.route.waypoint_step_rad
     for seg in route.segments:
         if seg.type in (SegmentType.FREE, SegmentType.APPROACH, SegmentType.RELEASE):
-            moves = np.abs(np.diff(route.positions[seg.first : seg.last + 1], axis=0)).max()
+            moves = np.abs(np.diff(route.positions[seg.first_point : seg.last_point + 1], axis=0)).max()
             assert moves <= step * (1 + 1e-6), (seg, moves)
 
 
@@ -186,16 +184,17 @@ def test_without_a_pool_a_lost_posture_is_skipped_with_its_reason(scene, example
 
 
 def test_file_loads_as_a_ros2_joint_trajectory(routed):
+    import yaml
     from rosbags.typesys import Stores, get_typestore
 
-    from posegen.robot import stamp
+    from posegen.io import stamp
 
     _, path = routed
-    data = read_route(path)
-    times, positions, velocities, accelerations = route_arrays(data)
+    read = read_route(path)
+    times, positions, velocities, accelerations = read.times, read.positions, read.velocities, read.accelerations
     store = get_typestore(Stores.ROS2_HUMBLE)
     types = store.types
-    traj = data["trajectory"]
+    traj = yaml.safe_load(path.read_text())["trajectory"]
     header = types["std_msgs/msg/Header"](
         stamp=types["builtin_interfaces/msg/Time"](**traj["header"]["stamp"]), frame_id=traj["header"]["frame_id"]
     )
@@ -212,7 +211,8 @@ def test_file_loads_as_a_ros2_joint_trajectory(routed):
     msg = types["trajectory_msgs/msg/JointTrajectory"](header=header, joint_names=traj["joint_names"], points=points)
     raw = store.serialize_cdr(msg, msg.__msgtype__)
     back = store.deserialize_cdr(raw, "trajectory_msgs/msg/JointTrajectory")
-    assert back.joint_names == traj["joint_names"] and len(back.points) == traj["points"] == len(times)
+    assert back.joint_names == traj["joint_names"] == list(read.joint_names)
+    assert len(back.points) == traj["points"] == len(times)
     stamps = [p.time_from_start.sec + p.time_from_start.nanosec * 1e-9 for p in back.points]
     assert np.all(np.diff(stamps) > 0)
     assert all(0 <= p.time_from_start.nanosec < 1_000_000_000 for p in back.points)
@@ -221,7 +221,8 @@ def test_file_loads_as_a_ros2_joint_trajectory(routed):
 
 def test_stored_points_are_the_planned_ones_to_float32(routed):
     route, path = routed
-    times, positions, velocities, _ = route_arrays(read_route(path))
+    read = read_route(path)
+    times, positions, velocities = read.times, read.positions, read.velocities
     assert np.array_equal(times, route.times)
     assert np.max(np.abs(positions - route.positions)) <= 2.5e-7
     assert np.max(np.abs(velocities - route.velocities)) <= 2e-6  # float32 and the 2^-20 rad/s grid
@@ -231,7 +232,7 @@ def test_a_route_starts_and_ends_where_the_robot_stands(scene, example_pool, rou
     """The next batch of a session starts where the last one left the robot (here: above a contact)."""
     route, _ = routed
     approach = next(s for s in reversed(route.segments) if s.type == SegmentType.APPROACH)
-    standing = route.positions[approach.first]  # the standoff above the last contact: no start posture
+    standing = route.positions[approach.first_point]  # the standoff above the last contact: no start posture
     assert np.abs(standing - start_posture(scene)).max() > 0.05
     postures = [example_pool.postures[i] for i in ROWS[:2]]
     later = plan_route(scene, postures, seed=0, from_posture=standing)

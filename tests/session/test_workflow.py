@@ -15,9 +15,9 @@ import yaml
 
 from posegen.cli import main
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import JointStates, RecordedBag, Wrenches, write_recording, write_yaml
+from posegen.io import JointStates, RecordedBag, SegmentType, Wrenches, read_route, write_recording, write_yaml
 from posegen.parallel import open_backend
-from posegen.robot import load_pool, read_route, route_arrays
+from posegen.robot import load_pool
 from posegen.route import route_postures_file
 from posegen.session import (
     INDEX_FILE,
@@ -124,10 +124,9 @@ def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
 
 def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, tmp_path):
     assert standing_posture(started / "batch_001" / ROUTE_FILE) is None  # back at the start posture
-    data = read_route(str(started / "batch_001" / ROUTE_FILE))
-    positions = route_arrays(data, "route")[1]
-    approach = next(s for s in reversed(data["segments"]) if s["type"] == "approach")
-    standoff = positions[int(approach["first_point"])]  # above the last contact
+    route = read_route(started / "batch_001" / ROUTE_FILE)
+    approach = next(s for s in reversed(route.segments) if s.type == SegmentType.APPROACH)
+    standoff = route.positions[approach.first_point]  # above the last contact
     pool = load_pool(read_index(started).pool).to_dict()
     two = tmp_path / "two.yaml"
     write_yaml(two, {**pool, "postures": pool["postures"][:2]})
@@ -138,7 +137,7 @@ def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, 
     route_postures_file(str(two), str(before), 0, None, workers=backend, from_posture=standoff)
     assert np.array_equal(standing_posture(before), standoff)
     batch = route_batch(tmp_path / "session", 2, str(two), SETTINGS, backend)
-    after = route_arrays(read_route(str(tmp_path / "session" / "batch_002" / ROUTE_FILE)), "route")[1]
+    after = read_route(tmp_path / "session" / "batch_002" / ROUTE_FILE).positions
     assert np.array_equal(after[0], standoff) and sorted(batch.pool_rows) == [0, 1]
 
 

@@ -1,12 +1,13 @@
 """Opening what ``posegen view`` shows: each kind recognised, bad input refused in one line."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 import yaml
 
 from posegen.errors import InputError
-from posegen.io import write_with_arrays
-from posegen.robot import read_route
+from posegen.io import read_route, write_route
 from posegen.view import ArtefactKind, CalibrationArtefact, PosturesArtefact, RouteArtefact, open_artefact
 from tests.conftest import EXAMPLE_POOL
 
@@ -25,16 +26,12 @@ def test_each_kind_is_recognised(selection_file, route_file, calibration_folder)
 
 
 def test_route_joints_are_put_in_the_scene_order(route_file, tmp_path):
-    data = read_route(route_file)
-    arrays = data.pop("point_arrays")
-    names = data["trajectory"]["joint_names"]
-    order = np.arange(len(names))[::-1]
-    data["trajectory"]["joint_names"] = [names[i] for i in order]
-    for key in ("positions", "velocities", "accelerations"):
-        arrays[key] = arrays[key][:, order]
-    del data["arrays"]
+    route = read_route(route_file)
+    order = np.arange(len(route.joint_names))[::-1]
     shuffled = tmp_path / "route.yaml"
-    write_with_arrays(shuffled, data, arrays)
+    reordered = {key: getattr(route, key)[:, order] for key in ("positions", "velocities", "accelerations")}
+    names = tuple(route.joint_names[i] for i in order)
+    write_route(shuffled, dataclasses.replace(route, joint_names=names, **reordered))
     assert np.array_equal(open_artefact(shuffled).positions, open_artefact(route_file).positions)
 
 
