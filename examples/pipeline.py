@@ -1,9 +1,10 @@
 """The whole pipeline in one script, on small sizes: pool -> select -> route -> check -> robot -> calibrate.
 
-The robot is simulated: a TALOS with perturbed kinematics "records" the session. With
-``posegen[ros]`` installed it runs the route as a rosbag2 (export, simulate the recording,
-measure the contacts back); without it, it touches the table at the selected postures
-directly. Everything goes to the folder given (default ``plans/example``).
+Only the public API (``import posegen``). The robot is simulated: a TALOS with perturbed
+kinematics "records" the session. With ``posegen[ros]`` installed it runs the route as a
+rosbag2 (export, simulate the recording, measure the contacts back); without it, it touches
+the table at the selected postures directly. Everything goes to the folder given (default
+``plans/example``).
 
     python examples/pipeline.py [OUTPUT_FOLDER] [--workers N]
 """
@@ -15,66 +16,49 @@ import importlib.util
 import time
 from pathlib import Path
 
-from posegen.calibrate import (
-    Settings,
-    calibrate_files,
-    format_table,
-    load_line,
-    measure_bag,
-    simulate_postures_file,
-    simulate_route_bag,
-)
-from posegen.pool import generate_pool_file
+import posegen
 from posegen.resources import DEFAULT_CONFIG, shipped_path
-from posegen.route import check_route_file, export_route_bag, route_postures_file
-from posegen.select import SelectionSettings, select_pool_file
 
-SIMULATED_ROBOT = {"seed": 7, "error_mm": 2.0, "error_deg": 0.5, "noise_deg": 0.005}  # its errors (sigmas)
+ROBOT = posegen.SimulatedRobot(seed=7, error_mm=2.0, error_deg=0.5, noise_deg=0.005)  # its errors (sigmas)
 
 
 def main(output: Path, workers: int) -> None:
     """Run every stage into ``output``; print what each produced."""
     output.mkdir(parents=True, exist_ok=True)
-    config = str(shipped_path(DEFAULT_CONFIG))  # TALOS at its table (the packaged copy outside the checkout)
+    config = shipped_path(DEFAULT_CONFIG)  # TALOS at its table (the packaged copy outside the checkout)
     start = time.perf_counter()
 
     def lap() -> str:
         return f"{time.perf_counter() - start:.0f} s"
 
-    pool = generate_pool_file(config, str(output / "pool.yaml"), n=100, seed=1, workers=workers)
+    pool = posegen.generate_pool(config, output / "pool.yaml", n=100, seed=1, workers=workers)
     print(f"pool: {len(pool.postures)} feasible postures ({lap()})")
 
-    selected = select_pool_file(str(output / "pool.yaml"), str(output / "selected.yaml"), SelectionSettings(k=38))
+    settings = posegen.SelectionSettings(k=38)
+    selected = posegen.select_postures(output / "pool.yaml", output / "selected.yaml", settings=settings)
     print(f"select: {len(selected.postures)} postures ({lap()})")
 
-    route_postures_file(str(output / "selected.yaml"), str(output / "route.yaml"), seed=0, workers=workers)
-    checked = check_route_file(str(output / "route.yaml"), None)
+    posegen.plan_route(output / "selected.yaml", output / "route.yaml", seed=0, workers=workers)
+    checked = posegen.check_route(output / "route.yaml")
     print(f"route: {checked.checked} points re-checked, {'no violation' if checked.ok else 'VIOLATIONS'} ({lap()})")
 
     measured = output / "measured.yaml"
     if importlib.util.find_spec("rosbags") is not None:  # posegen[ros]: the route as the robot would run it
-        export_route_bag(str(output / "route.yaml"), str(output / "route_bag"), "/trajectory", "/segments")
-        simulate_route_bag(
-            str(output / "route.yaml"), str(output / "session"), config_path=None, session="sim",
-            rate_hz=100.0, joint_topic="/joint_states", **SIMULATED_ROBOT,
-        )  # fmt: skip
-        measure_bag(
-            str(output / "session"), str(measured), config_path=config, route_path=str(output / "route.yaml"),
-            session="sim", joint_topic="/joint_states", use_wrench=True,
-        )  # fmt: skip
+        posegen.export_route(
+            output / "route.yaml", output / "route_bag", topic="/trajectory", segments_topic="/segments"
+        )
+        posegen.simulate_recording(output / "route.yaml", output / "session", robot=ROBOT, rate_hz=100.0)
+        posegen.measure(output / "session", measured, route=output / "route.yaml", config=config, session="sim")
         print(f"robot: route exported as a rosbag2, recorded by a simulated TALOS, contacts measured ({lap()})")
     else:
-        selected_path = str(output / "selected.yaml")
-        simulate_postures_file(selected_path, str(measured), config_path=None, session="sim", **SIMULATED_ROBOT)
+        posegen.simulate(output / "selected.yaml", measured, robot=ROBOT)
         print("robot: contacts of a simulated TALOS at the selected postures (pip install 'posegen[ros]' for bags)")
 
     held_out = output / "held_out.yaml"  # the same robot at the pool's other postures judges the result
-    pool_file = str(output / "pool.yaml")
-    simulate_postures_file(pool_file, str(held_out), config_path=None, session="check", **SIMULATED_ROBOT)
-    settings = Settings(candidates=("offsets",), prior_scale=5.0, fold_seeds=1)
-    calibrated = calibrate_files([str(measured)], [str(held_out)], str(output / "calibration"), settings, None)
-    print(format_table(calibrated.summary))
-    print(load_line(calibrated.summary))
+    posegen.simulate(output / "pool.yaml", held_out, robot=ROBOT, session="check")
+    settings = posegen.CalibrationSettings(candidates=("offsets",), prior_scale=5.0, fold_seeds=1)
+    summary = posegen.calibrate_robot([measured], output / "calibration", held_out=[held_out], settings=settings)
+    print(posegen.describe_calibration(summary))
     print(f"pipeline: {lap()} -> {output}/")
 
 

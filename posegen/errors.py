@@ -17,6 +17,13 @@ class PosegenError(Exception):
     integer from 1 to ...``, ``k=80: the pool has only 50 postures``), never by a
     command-line flag. ``parameter`` is those words, as the message writes them, when the
     error is about one parameter: :mod:`posegen.cli` shows its flag in their place.
+
+    Example:
+        >>> try:
+        ...     posegen.load("not_there.yaml")
+        ... except posegen.PosegenError as error:
+        ...     print(error)  # one line, naming the file
+
     """
 
     def __init__(self, *args: object, parameter: str | None = None, **kwargs: Any) -> None:

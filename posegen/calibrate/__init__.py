@@ -6,6 +6,9 @@ model by repeated CV and the one-standard-error rule, robust screening of bad ro
 the whole calibration (before/after, held-out protocols), simulated contacts of a
 perturbed robot, the calibrated URDF, the report (``calibration.yaml`` as a
 :class:`CalibrationSummary`) and the folder read back (:func:`read_calibration`).
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.calibrate.bag_workflow import Measured, SimulatedBag, measure_bag, simulate_route_bag

@@ -60,7 +60,12 @@ SELECTIONS = 2  # model selections at most: on the screened rows, then again if 
 
 @dataclass(frozen=True)
 class Settings:
-    """How a calibration is run; what is robot-specific comes from the config's ``calibration``."""
+    """How a calibration is run; what is robot-specific comes from the config's ``calibration``.
+
+    Example:
+        >>> settings = posegen.CalibrationSettings(candidates=("offsets",), fold_seeds=3)
+
+    """
 
     prior_scale: float | None = None  # fix the prior scale (candidates are still compared by CV)
     candidates: tuple[str, ...] = ()  # only these of the config's candidates; empty: all

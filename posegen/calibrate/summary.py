@@ -98,7 +98,13 @@ class ResidualTable:
 
 @dataclass(frozen=True)
 class CalibrationSummary:
-    """What ``calibration.yaml`` says: the model, its predicted error, the deliverables and the rows left out."""
+    """What ``calibration.yaml`` says: the model, its predicted error, the deliverables and the rows left out.
+
+    Example:
+        >>> summary = posegen.load("plans/calibration")  # the folder calibrate wrote
+        >>> summary.predicted_error  # per chain, by grouped cross-validation
+
+    """
 
     document: dict[str, Any]  # the file's content, as written
     provenance: dict[str, Any]  # config, robot model hash, seed, posegen version

@@ -6,6 +6,9 @@ rosbag2 modules hold the format concerns of talking to ROS 2: fixed-layout CDR
 writing (:mod:`~posegen.io.bag_writer`), recorded sessions (:mod:`~posegen.io.recorded_bag`)
 and routes as bags (:mod:`~posegen.io.trajectory_bag`). Route files (the typed
 :class:`~posegen.io.route_file.Route`, its reader and writer) live here too, below every stage that reads one.
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.io.arrays import (

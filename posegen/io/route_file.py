@@ -98,6 +98,11 @@ class Route:
     The arrays are float64 copies of the stored values (C-ordered): times strictly
     increasing from 0, every value finite, the segments covering the points from first
     to last (checked by :func:`read_route`).
+
+    Example:
+        >>> route = posegen.load("plans/route.yaml")
+        >>> route.times[-1], [s.type for s in route.segments][:3]
+
     """
 
     joint_names: tuple[str, ...]

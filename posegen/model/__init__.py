@@ -7,6 +7,9 @@ weights, initial plane estimates, the settle step of a force-controlled contact,
 identifiability (base parameters by QR, structural base parameters, O1), and the
 experiment design (one information matrix per candidate posture) that selection solves
 and the route's repair consults.
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.model.calibration_model import CalibrationModel, Evaluation, Observations, body_parts, start_point

@@ -8,6 +8,9 @@ output never depends on the backend or the number of workers.
 
 The backend modules import nothing from here: :func:`open_backend` (which picks one)
 lives in this ``__init__``, above both, so ``backend`` and ``cluster`` form no circle.
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from __future__ import annotations

@@ -3,6 +3,9 @@
 Uniform joint samples projected onto balanced flush contact (placo), checked for
 collisions (coal); generated in chunks over processes and resumable after a kill; and
 re-verified from scratch on the original meshes (``posegen check``).
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.pool.check import verify_postures

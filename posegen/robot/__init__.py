@@ -5,6 +5,9 @@ geometry, collisions (coal), the placo projection onto balanced contact, feasibi
 measured independently of any solver, the stance space a planner moves in, contact
 postures, and the files that carry postures between stages (pool, selection; routes are
 in :mod:`posegen.io`).
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate

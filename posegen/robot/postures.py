@@ -65,7 +65,13 @@ class Posture:
 
 @dataclass(frozen=True)
 class Pool:
-    """Feasible contact postures with their provenance."""
+    """Feasible contact postures with their provenance.
+
+    Example:
+        >>> pool = posegen.load("plans/talos/pool.yaml")
+        >>> pool.postures[0].joints[:3], len(pool.postures)
+
+    """
 
     joint_names: tuple[str, ...]
     postures: tuple[Posture, ...]

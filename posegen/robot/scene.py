@@ -52,6 +52,10 @@ class Scene:
         table_pose: World pose of the table's top face centre, shape (4, 4).
         spots: Contact target spots.
 
+    Example:
+        >>> scene = posegen.load_scene("configs/talos_table.yaml")
+        >>> scene.joint_names[:1], scene.chain("left").contact_frame
+
     """
 
     def __init__(self, config: Config) -> None:

@@ -5,6 +5,9 @@ processes (vertical approach and contact; free motions by straight lines, via st
 OMPL, shortened and blended), one toppra timing per transfer, the repair of a selection
 whose posture cannot be reached, the route file (:class:`posegen.io.Route`, written by
 :mod:`posegen.io`), and the independent check of every exported point.
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.route.check import MIN_DT_S, RouteInvariant, verify_route

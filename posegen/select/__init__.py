@@ -4,6 +4,9 @@ The design problem (one information matrix per posture, in the base parameters o
 calibration model), continuous D-optimal weights with their certificate (Frank-Wolfe),
 exact k-posture designs (greedy, Fedorov exchange, DETMAX), IROC, and the selection
 file (:class:`Selection`, :func:`read_selection`, :func:`write_selection`) with its plots.
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.model import Design, build_design

@@ -156,7 +156,13 @@ F = TypeVar("F", bound=Figures)
 
 @dataclass(frozen=True)
 class Selection(Generic[F]):
-    """A selection file: the chosen postures, their provenance and the figures of their choice."""
+    """A selection file: the chosen postures, their provenance and the figures of their choice.
+
+    Example:
+        >>> chosen = posegen.select_postures("plans/talos/pool.yaml", "plans/selected.yaml")
+        >>> [p.pool_id for p in chosen.postures][:5], chosen.method
+
+    """
 
     provenance: dict[str, Any]  # the pool's, with the seed, the pool's path and SHA-256 (and a follow-up's inputs)
     method: SelectionMethod

@@ -33,7 +33,12 @@ LOG = logging.getLogger(__name__)
 
 @dataclass(frozen=True)
 class SelectionSettings:
-    """How postures are chosen."""
+    """How postures are chosen.
+
+    Example:
+        >>> settings = posegen.SelectionSettings(k=40, runs=4, seed=1)  # exactly 40, DETMAX from 4 starts
+
+    """
 
     k: int | None = None  # exactly k postures (greedy, IROC top-k, DETMAX, exchange); None: where O1 peaks
     runs: int = 0  # DETMAX runs from seeded random starts (run r draws from seed * 1000 + r)

@@ -6,6 +6,9 @@ a recorded batch is measured and calibrated on every contact so far, and the
 calibration's grouped-CV predicted held-out error per chain either meets the target
 (done) or the next batch is chosen for the weakest chain (``select --given``). A
 rehearsal plays the batches on a simulated robot.
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.session.batch import missing_rows, route_pool_rows

@@ -5,6 +5,9 @@ Pools and selections step through their postures, routes play in real time,
 calibrations overlay the nominal and the calibrated robot with the residual at each
 contact. Drawn with viser: its browser client ships in the Python wheel, so a page
 holds the client, the meshes and the animation and opens offline.
+
+Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
+names here are its plumbing and may change between versions.
 """
 
 from posegen.extras import Extra, require
