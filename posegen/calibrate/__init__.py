@@ -36,7 +36,14 @@ from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
 from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
-from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_plan_file
+from posegen.calibrate.workflow import (
+    Calibrated,
+    Simulated,
+    calibrate_files,
+    read_contacts,
+    simulate_plan_file,
+    truth_of,
+)
 
 __all__ = [
     "CALIBRATION_FILE",
@@ -98,6 +105,7 @@ __all__ = [
     "simulate_route_bag",
     "spot_of",
     "true_parameters",
+    "truth_of",
     "uncompensate",
     "write_calibration",
     "write_record",

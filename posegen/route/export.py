@@ -2,9 +2,10 @@
 
 The file format is described, and read back, in :mod:`posegen.robot.trajectory` (below
 the stages, so that any of them may read a route). The header is YAML, or JSON when the
-file name ends in ``.json``; the points go to ``<name>.npz`` beside it. The CSV, when
-asked for, has one row per point: time (s), segment, chain, posture, then the joint
-positions (rad), as stored.
+file name ends in ``.json``; the points go to ``<name>.<sha256 prefix>.npz`` beside it.
+The CSV, when asked for, goes to ``<name>.<sha256 prefix of the header>.csv`` (replaced
+with the header as one); it has one row per point: time (s), segment, chain, posture,
+then the joint positions (rad), as stored.
 """
 
 from __future__ import annotations
@@ -16,9 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from posegen.io import write_atomic, write_with_arrays
+from posegen.io import companion_of, companions_of, write_with_arrays
 from posegen.robot import ACCELERATION_STEP, POSITION_DTYPE, ROUTE_FORMAT, ROUTE_VERSION, TIME_DTYPE, VELOCITY_STEP
 from posegen.route.route import Route
+
+CSV_SUFFIX = ".csv"  # a route's CSV: ``<name>.<sha256 prefix of the header>.csv``
 
 
 def route_arrays_of(route: Route) -> dict[str, np.ndarray]:
@@ -101,30 +104,32 @@ def route_header(
     }
 
 
-def route_outputs(path: Path, csv_too: bool = False) -> list[Path]:
-    """The files :func:`write_route` writes whose names are known before: the header, and the CSV if asked.
+def route_outputs(path: Path) -> list[Path]:
+    """The files :func:`write_route` writes or replaces whose names are known before.
 
-    The sidecar's name follows its content (:func:`posegen.io.sidecar_path`), beside the header.
+    The header, and the companions an older route left there (its CSV, replaced or
+    removed with it). The sidecar's name follows its content
+    (:func:`posegen.io.sidecar_path`), the CSV's the header's
+    (:func:`posegen.io.companion_path`), both beside the header.
     """
-    written = [path]
-    if csv_too:
-        written.append(path.with_suffix(".csv"))
-    return written
+    return [path, *companions_of(path, CSV_SUFFIX)]
 
 
 def write_route(path: Path, route: Route, header: dict[str, Any], csv_too: bool = False) -> list[Path]:
-    """Write the route (the deflated sidecar first, the header that names it last; the CSV if asked).
+    """Write the route (the deflated sidecar and the CSV if asked first, the header that names them last).
+
+    The CSV is the header's companion, ``<name>.<sha256 prefix of the header>.csv``: it
+    is replaced with the header, as one; without ``csv_too`` an older route's CSV is removed.
 
     Returns:
         The paths written: the header, its sidecar, and the CSV if asked.
 
     """
     arrays = route_arrays_of(route)
-    outputs = route_outputs(path, csv_too)
-    if csv_too:
-        write_atomic(outputs[1], _csv(header, arrays))
-    sidecar = write_with_arrays(path, header, arrays, compress=True)
-    return [path, sidecar, *outputs[1:]]
+    csv_bytes = _csv(header, arrays).encode() if csv_too else None
+    sidecar = write_with_arrays(path, header, arrays, compress=True, companions={CSV_SUFFIX: csv_bytes})
+    csv_path = companion_of(path, CSV_SUFFIX) if csv_too else None
+    return [path, sidecar, *([csv_path] if csv_path else [])]
 
 
 def _csv(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> str:
