@@ -1,11 +1,20 @@
-"""Fuzzing the commands that read a route: mutated routes through ``check``, ``export`` and ``simulate --bag``.
+"""Fuzzing the commands through what they read: routes, pools, selections, measurements, recorded sessions.
 
-Each example is a valid route with one mutation (a value made NaN, infinite or huge, a time
-repeated, sent back or pushed to 1e39, a point dropped from the arrays, the declared count
-changed, a header node replaced, the sidecar's bytes damaged). Every command must: raise
-nothing (a traceback fails the example), exit 0, 1 or 2 with one ``posegen: error:`` line
-on 2, leave its input's bytes as they were, and agree with the readers' rules: what the
-route reader or :func:`posegen.robot.route_arrays` refuses, no command runs with (exit 0).
+Routes go through ``check``, ``export`` and ``simulate --bag``; version-2 pools through
+``simulate``, ``check`` and ``select --given``; selections through ``simulate`` and
+``check``; measurements (YAML and recorded CSV) through ``select --given``; recorded
+sessions (rosbag2) through ``measure``. ``view --html``, ``route`` and ``calibrate`` take
+seconds on a valid input: they run on the inputs the readers refuse, which they must
+refuse before any work.
+
+Each example is a valid artefact with one mutation (for a route: a value made NaN,
+infinite or huge, a time repeated, sent back or pushed to 1e39, a point dropped from the
+arrays, the declared count changed, a header node replaced, the sidecar's bytes damaged;
+the others below). Every command must: raise nothing (a traceback fails the example),
+exit 0, 1 or 2 with one ``posegen: error:`` line on 2, leave its inputs' bytes as they
+were, and agree with the readers' rules: what the reader (the route reader and
+:func:`posegen.robot.route_arrays`, ``load_plan``, ``read_measurements``,
+``RecordedBag.read``) refuses, no command runs with (exit 0).
 
 ``make test`` runs a few examples (the ``posegen`` profile); ``make fuzz`` runs many, with
 new random draws (the ``fuzz`` profile). Every failure found is kept below as an
@@ -197,12 +206,12 @@ def test_route_commands_on_mutated_routes(good_route, spec, capsys):
 
 # --- pools, selections, measurements and recorded sessions through the commands that read them ----
 
-FAST = max(settings().max_examples // 4, 10)  # 0.1-3 s an example: 10 in make test
+FAST = max(settings().max_examples // 8, 10)  # 0.1-3 s an example: 10 in make test, 250 in make fuzz
 CAPSYS = [*settings().suppress_health_check, HealthCheck.function_scoped_fixture]  # capsys: read per run
 JOINT_TOPIC = "/joint_states"
 
 
-@dataclass(frozen=True, repr=False)  # a failing example names its mutation, not these
+@dataclass(frozen=True, repr=False)
 class Inputs:
     """Valid artefacts to mutate: a version-2 pool, a selection, measurements (YAML, CSV), a recorded session."""
 
@@ -213,6 +222,9 @@ class Inputs:
     csv: str
     joints: JointStates
     wrenches: dict[str, Wrenches]
+
+    def _repr_pretty_(self, printer: Any, cycle: bool) -> None:
+        printer.text("Inputs(...)")  # a failing example names its mutation, not these 50 kB
 
 
 @pytest.fixture(scope="module")
@@ -316,6 +328,8 @@ POOL_MUTATIONS = st.one_of(
 
 @settings(max_examples=FAST, suppress_health_check=CAPSYS)
 @given(spec=POOL_MUTATIONS)
+@example(spec=("arrays", ("kind", "joints", "complex128")))  # corpus: complex joints (a traceback in simulate)
+@example(spec=("arrays", ("kind", "contact_xy_m", "complex128")))  # corpus: complex (a traceback in select --given)
 def test_plan_commands_on_mutated_pools(inputs, spec, capsys):
     header, arrays = header_copy(inputs.pool[0]), {k: v.copy() for k, v in inputs.pool[1].items()}
     if spec[0] == "arrays":
@@ -397,7 +411,7 @@ def test_measure_on_mutated_sessions(inputs, data, capsys):
         try:
             with np.errstate(all="ignore"):
                 write_recording(bag, joints, JOINT_TOPIC, wrenches, {"seed": 0})
-        except (ValueError, OverflowError, TypeError, PosegenError):
+        except (ValueError, OverflowError, TypeError, IndexError, PosegenError):  # IndexError: no sample left
             event("not written")
             return  # a session the writer cannot encode: nothing to read
         if spec[0] == "file":
