@@ -116,7 +116,7 @@ def route_outputs(path: Path) -> list[Path]:
 
 
 def write_route(path: Path, route: Route, header: dict[str, Any], csv_too: bool = False) -> list[Path]:
-    """Write the route (the deflated sidecar and the CSV if asked first, the header that names them last).
+    """Write the route (the deflated sidecar and the CSV if asked first, the header last).
 
     The CSV is the header's companion, ``<name>.<sha256 prefix of the header>.csv``: it
     is replaced with the header, as one; without ``csv_too`` an older route's CSV is removed.
