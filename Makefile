@@ -62,7 +62,7 @@ test: lint browser
 kill-matrix: $(STAMP)
 	POSEGEN_KILL_MATRIX=full $(PY) -m pytest -q tests/robustness/test_kill_matrix.py
 
-# The fuzz suite with new random draws and many examples (~10 min; make test runs a few, fixed).
+# The fuzz suite with new random draws and many examples (~25 min; make test runs a few, fixed).
 fuzz: $(STAMP)
 	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests/robustness/test_fuzz.py tests/robustness/test_readers.py
 

@@ -52,7 +52,14 @@ from posegen.calibrate.summary import (
     write_summary,
 )
 from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
-from posegen.calibrate.workflow import Calibrated, Simulated, calibrate_files, read_contacts, simulate_postures_file
+from posegen.calibrate.workflow import (
+    Calibrated,
+    Simulated,
+    calibrate_files,
+    read_contacts,
+    simulate_postures_file,
+    truth_of,
+)
 
 __all__ = [
     "CALIBRATION_FILE",
@@ -124,6 +131,7 @@ __all__ = [
     "spot_of",
     "summary_from_dict",
     "true_parameters",
+    "truth_of",
     "uncompensate",
     "write_calibration",
     "write_record",

@@ -24,22 +24,26 @@ from posegen.io import (
     check_replaceable,
     check_writable,
     claim_output,
-    write_yaml,
+    companion_of,
+    companions_of,
+    dump_yaml,
+    write_with_companions,
 )
 from posegen.model import (
     CalibrationModel,
     Contacts,
     measurement_item,
     measurement_provenance,
+    measurements_to_dict,
     planned_kinds,
     read_measurements,
-    write_measurements,
 )
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene, load_config, load_postures, scene_for
 
 TRUTH_FORMAT = "posegen-truth"
+TRUTH_SUFFIX = ".truth.yaml"  # beside a simulation's measurements: ``<name>.<sha256 prefix of it>.truth.yaml``
 
 
 @dataclass(frozen=True)
@@ -77,7 +81,9 @@ def simulate_postures_file(
 
     Args:
         postures_path: Pool or selection file.
-        output: Measurement file to write; the truth goes beside it (``*.truth.yaml``).
+        output: Measurement file to write; the truth goes beside it, named by the
+            measurements' bytes (``<name>.<sha256 prefix>.truth.yaml``, :func:`truth_of`),
+            and the two are replaced as one.
         config_path: Scene config; None: the one saved in the postures file.
         seed: Seed of the robot's errors and of the encoder noise.
         error_mm: Sigma of placement length errors (mm).
@@ -103,10 +109,8 @@ def simulate_postures_file(
     if not session:
         raise ArgumentError("session: give a session name", parameter="session")
     measurements = Path(output)
-    truth = measurements.with_name(measurements.stem + ".truth.yaml")
     check_writable(measurements)
-    check_writable(truth)
-    check_apart([measurements, truth], [postures_path, config_path])
+    check_apart([measurements, *companions_of(measurements, TRUTH_SUFFIX)], [postures_path, config_path])
     chosen, _ = load_postures(postures_path)
     scene = scene_for(chosen.provenance, config_path)  # None: the config saved in the postures file
     check_compliance(scene, compliance_rad_per_knm)
@@ -116,7 +120,7 @@ def simulate_postures_file(
     chains = tuple(p.chain for p in chosen.postures)
     spots = tuple(p.spot for p in chosen.postures)
     planned = Contacts(chosen.joints(), chains, (session,) * len(chains), spots, planned_kinds(scene, chains))
-    with claim_output(measurements, beside=(truth,)):
+    with claim_output(measurements):
         recorded, model, x = simulate(scene, planned, perturbation, seed)
         prov = scene.provenance(seed)
         prov["simulation"] = {
@@ -127,8 +131,9 @@ def simulate_postures_file(
             "compliance_rad_per_knm": compliance_rad_per_knm,
             **contact_noise_record(contact_noise_mm, contact_noise_deg),
         }
-        write_truth(truth, model, x, prov)
-        write_measurements(measurements, scene, recorded, prov)
+        header = dump_yaml(measurements_to_dict(scene, recorded, prov)).encode()
+        true = dump_yaml(truth_record(model, x, prov)).encode()
+        (truth,) = write_with_companions(measurements, header, {TRUTH_SUFFIX: true})
     return Simulated(contacts=len(recorded), measurements=measurements, truth=truth)
 
 
@@ -187,9 +192,17 @@ def check_compliance(scene: Scene, compliance_rad_per_knm: float) -> None:
         )
 
 
-def write_truth(path: Path, model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> None:
-    """Write the true parameters of a simulated robot beside what it recorded (``posegen-truth``)."""
-    write_yaml(path, truth_record(model, x, provenance))
+def truth_of(measurements: str | Path) -> Path:
+    """The true parameters ``posegen simulate`` wrote with a measurement file (named by its bytes).
+
+    Raises:
+        InputError: The file has none: not simulated, or edited since (its bytes changed).
+
+    """
+    found = companion_of(measurements, TRUTH_SUFFIX)
+    if found is None:
+        raise InputError(f"{measurements}: no true parameters written with this file (not simulated, or changed since)")
+    return found
 
 
 def truth_record(model: CalibrationModel, x: FloatArray, provenance: dict[str, Any]) -> dict[str, Any]:

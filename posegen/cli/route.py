@@ -23,7 +23,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the selection's pool, to replace a posture that cannot be reached "
         "(default: the pool the selection records)",
     )
-    parser.add_argument("--csv", action="store_true", help="also write the points as CSV beside the route")
+    parser.add_argument(
+        "--csv",
+        action="store_true",
+        help="also write the points as CSV beside the route (OUTPUT.<hash>.csv, replaced with it as one)",
+    )
     add_backend_arguments(parser)
     parser.add_argument(
         "-o",

@@ -22,6 +22,7 @@ from posegen.io.arrays import (
 from posegen.io.artefact import dump_yaml, load_yaml_file, provenance, read_text_file, read_yaml, write_yaml
 from posegen.io.atomic import atomic_folder, atomic_path, crash_point, staging_folder, swap_folder, write_atomic
 from posegen.io.bag_writer import check_bag_destination
+from posegen.io.companion import companion_of, companion_path, companions_of, write_with_companions
 from posegen.io.output import (
     OutputKind,
     OutputLock,
@@ -89,6 +90,9 @@ __all__ = [
     "check_replaceable",
     "check_writable",
     "claim_output",
+    "companion_of",
+    "companion_path",
+    "companions_of",
     "crash_point",
     "dump_yaml",
     "encode_arrays",
@@ -116,5 +120,6 @@ __all__ = [
     "write_route",
     "write_trajectory_bag",
     "write_with_arrays",
+    "write_with_companions",
     "write_yaml",
 ]

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from posegen.errors import InputError, reason
 from posegen.io.artefact import dump_yaml
 from posegen.io.atomic import crash_point, write_atomic
+from posegen.io.companion import write_with_companions
 
 SIDECAR_SUFFIX = ".npz"
 _EPOCH = (1980, 1, 1, 0, 0, 0)  # the zip format's earliest date: no clock in the bytes
@@ -137,7 +138,11 @@ def _check_rows(file: Path, archive: zipfile.ZipFile, names: tuple[str, ...], ro
 
 
 def write_with_arrays(
-    path: str | Path, header: dict[str, Any], arrays: Mapping[str, NDArray[Any]], compress: bool = False
+    path: str | Path,
+    header: dict[str, Any],
+    arrays: Mapping[str, NDArray[Any]],
+    compress: bool = False,
+    companions: Mapping[str, bytes | None] | None = None,
 ) -> Path:
     """Write an artefact as a header (YAML, or JSON if the name ends in ``.json``) and its ``.npz`` sidecar.
 
@@ -146,6 +151,15 @@ def write_with_arrays(
     Then the sidecars no header names any more (the old one, orphans of killed runs) are
     removed. If writing the header fails, the new sidecar is removed (unless it was
     already there: the same arrays as before).
+
+    Args:
+        path: The header's file.
+        header: The header's data (without the sidecar's reference).
+        arrays: The sidecar's arrays, by name.
+        compress: Deflate the sidecar's entries.
+        companions: Files that go with the header, by suffix (a route's CSV; None: none
+            of that kind, an older one is removed): named by the header's hash, they land
+            before it, replaced with it as one (:func:`posegen.io.companion.write_with_companions`).
 
     Returns:
         The sidecar's path.
@@ -158,7 +172,8 @@ def write_with_arrays(
     write_atomic(sidecar, data)
     full = {**header, "arrays": sidecar_reference(path, data)}
     try:
-        write_atomic(path, json.dumps(full, indent=1) if path.suffix.lower() == ".json" else dump_yaml(full))
+        text = json.dumps(full, indent=1) if path.suffix.lower() == ".json" else dump_yaml(full)
+        write_with_companions(path, text.encode(), companions or {})
     except BaseException:
         if not existed:
             sidecar.unlink(missing_ok=True)

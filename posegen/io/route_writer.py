@@ -3,7 +3,8 @@
 The format is described in :mod:`posegen.io.route_file`, beside its reader. The header
 is YAML, or JSON when the file name ends in ``.json``; the points go to a sidecar beside
 it, in their stored types and resolutions (:func:`stored_arrays`). The CSV, when asked
-for, has one row per point: time (s), segment, chain, posture, then the joint positions
+for, goes to ``<name>.<sha256 prefix of the header>.csv`` (replaced with the header as
+one); it has one row per point: time (s), segment, chain, posture, then the joint positions
 (rad), as stored.
 """
 
@@ -17,9 +18,11 @@ from typing import Any
 import numpy as np
 
 from posegen.io.arrays import write_with_arrays
-from posegen.io.atomic import write_atomic
 from posegen.io.cdr import FloatArray
+from posegen.io.companion import companion_of, companions_of
 from posegen.io.route_file import POSITION_DTYPE, ROUTE_FORMAT, ROUTE_VERSION, TIME_DTYPE, Route, Segment
+
+CSV_SUFFIX = ".csv"  # a route's CSV: ``<name>.<sha256 prefix of the header>.csv``
 
 VELOCITY_STEP = 2.0**-20  # rad/s (~1e-6): stored velocities are multiples of it, rounded toward zero
 ACCELERATION_STEP = 2.0**-16  # rad/s^2 (~1.5e-5): the same for accelerations
@@ -83,30 +86,32 @@ def route_header(route: Route) -> dict[str, Any]:
     }
 
 
-def route_outputs(path: Path, csv_too: bool = False) -> list[Path]:
-    """The files :func:`write_route` writes whose names are known before: the header, and the CSV if asked.
+def route_outputs(path: Path) -> list[Path]:
+    """The files :func:`write_route` writes or replaces whose names are known before.
 
-    The sidecar's name follows its content (:func:`posegen.io.sidecar_path`), beside the header.
+    The header, and the companions an older route left there (its CSV, replaced or
+    removed with it). The sidecar's name follows its content
+    (:func:`posegen.io.sidecar_path`), the CSV's the header's
+    (:func:`posegen.io.companion_path`), both beside the header.
     """
-    written = [path]
-    if csv_too:
-        written.append(path.with_suffix(".csv"))
-    return written
+    return [path, *companions_of(path, CSV_SUFFIX)]
 
 
 def write_route(path: Path, route: Route, csv_too: bool = False) -> list[Path]:
-    """Write the route (the deflated sidecar first, the header that names it last; the CSV if asked).
+    """Write the route (the deflated sidecar and the CSV if asked first, the header last).
+
+    The CSV is the header's companion, ``<name>.<sha256 prefix of the header>.csv``: it
+    is replaced with the header, as one; without ``csv_too`` an older route's CSV is removed.
 
     Returns:
         The paths written: the header, its sidecar, and the CSV if asked.
 
     """
     arrays = stored_arrays(route.times, route.positions, route.velocities, route.accelerations)
-    outputs = route_outputs(path, csv_too)
-    if csv_too:
-        write_atomic(outputs[1], _csv(route, arrays))
-    sidecar = write_with_arrays(path, route_header(route), arrays, compress=True)
-    return [path, sidecar, *outputs[1:]]
+    csv_bytes = _csv(route, arrays).encode() if csv_too else None
+    sidecar = write_with_arrays(path, route_header(route), arrays, compress=True, companions={CSV_SUFFIX: csv_bytes})
+    csv_path = companion_of(path, CSV_SUFFIX) if csv_too else None
+    return [path, sidecar, *([csv_path] if csv_path else [])]
 
 
 def _csv(route: Route, arrays: dict[str, np.ndarray]) -> str:

@@ -215,9 +215,9 @@ def _postures_from_arrays(data: dict[str, Any], n_joints: int, where: str) -> tu
     if shapes != expected:
         raise InputError(f"{where}: arrays of inconsistent shapes {shapes}; expected {expected}")
     integers = all(np.issubdtype(arrays[name].dtype, np.integer) for name in ("sample", "chain", "spot"))
-    numbers = all(np.issubdtype(arrays[name].dtype, np.number) for name in ("joints", "contact_xy_m", *_SCALARS))
+    numbers = all(_is_real(arrays[name].dtype) for name in ("joints", "contact_xy_m", *_SCALARS))  # not complex
     if not integers or not numbers:
-        raise InputError(f"{where}: arrays of the wrong kinds (sample, chain, spot: integers; the rest: numbers)")
+        raise InputError(f"{where}: arrays of the wrong kinds (sample, chain, spot: integers; the rest: real numbers)")
     if not all(isinstance(name, str) for name in (*chains, *spots)):
         raise InputError(f"{where}: 'chains' and 'spots' must be lists of names")
     for name, vocabulary in (("chain", chains), ("spot", spots)):
@@ -290,6 +290,10 @@ def pool_from_dict(data: dict[str, Any], where: str = "pool") -> Pool:
         attempted=attempted,
         rejected={str(k): v for k, v in rejected.items()},
     )
+
+
+def _is_real(dtype: np.dtype[Any]) -> bool:
+    return bool(np.issubdtype(dtype, np.floating) or np.issubdtype(dtype, np.integer))
 
 
 def load_pool(path: str | Path) -> Pool:

@@ -15,6 +15,8 @@ import numpy as np
 from posegen.io import Route, stored_arrays
 from posegen.route.route import PlannedRoute
 
+CSV_SUFFIX = ".csv"  # a route's CSV: ``<name>.<sha256 prefix of the header>.csv``
+
 
 def route_arrays_of(route: PlannedRoute) -> dict[str, np.ndarray]:
     """The sidecar's arrays of a planned route, in their stored types and resolutions."""

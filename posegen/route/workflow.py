@@ -73,7 +73,7 @@ def route_postures_file(
         workers: Local worker processes planning the route's segments, or the backend to run them on.
         pool_path: The pool a selection came from (to substitute a posture that cannot
             be reached); None: the one the selection records, if it is still there.
-        csv: Also write a CSV of the points beside the route.
+        csv: Also write a CSV of the points beside the route (``<name>.<hash>.csv``, replaced with it).
         from_posture: Where the robot stands (nj,) rad, in the scene's joint order: the route
             starts there and returns there (recorded in the summary as
             ``start_posture_rad``). None: the reference posture.
@@ -90,7 +90,7 @@ def route_postures_file(
     path = Path(output)
     if path.suffix.lower() not in ROUTE_SUFFIXES:
         raise ArgumentError(f"output={output}: a route file ends in {' or '.join(ROUTE_SUFFIXES)}", parameter="output")
-    outputs = route_outputs(path, csv)
+    outputs = route_outputs(path)
     for output_path in outputs:
         check_writable(output_path)
     check_apart(outputs, [postures_path, pool_path, config_path])

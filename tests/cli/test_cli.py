@@ -3,8 +3,9 @@
 import numpy as np
 import yaml
 
+from posegen.calibrate import truth_of
 from posegen.cli import main
-from posegen.io import write_yaml
+from posegen.io import companion_of, write_yaml
 from tests.conftest import CONFIG
 
 
@@ -109,7 +110,10 @@ def test_simulate_then_calibrate(tmp_path, capsys):
 
     meas = tmp_path / "meas.yaml"
     code, stdout, _ = run(["simulate", str(EXAMPLE_POOL), "--seed", "2", "-o", str(meas)], capsys)
-    assert code == 0 and meas.exists() and (tmp_path / "meas.truth.yaml").exists()
+    assert code == 0 and meas.exists()
+    truth = truth_of(meas)  # named by the measurements' bytes: edited, the file has no truth any more
+    assert truth.parent == tmp_path and yaml.safe_load(truth.read_text())["format"] == "posegen-truth"
+    assert truth.name in stdout
     out = tmp_path / "cal"
     argv = ["calibrate", f"{meas}@day1", "--prior-scale", "5", "--candidates", "offsets", "offsets_legs"]
     code, stdout, _ = run([*argv, "--fold-seeds", "1", "-q", "-o", str(out)], capsys)
@@ -129,7 +133,7 @@ def test_simulate_contact_noise_is_recorded_and_checked(tmp_path, capsys):
     simulation = yaml.safe_load(noisy.read_text())["provenance"]["simulation"]
     assert simulation["contact_noise_mm"] == 3.0 and simulation["contact_noise_deg"] == 0.3
     assert "contact_noise_mm" not in yaml.safe_load(plain.read_text())["provenance"]["simulation"]
-    truth = {p.name: yaml.safe_load(p.with_name(p.stem + ".truth.yaml").read_text()) for p in (plain, noisy)}
+    truth = {p.name: yaml.safe_load(truth_of(p).read_text()) for p in (plain, noisy)}
     assert truth["plain.yaml"]["parameters"] == truth["noisy.yaml"]["parameters"]  # the same robot and table
     joints = [np.array([c["joints"] for c in yaml.safe_load(p.read_text())["contacts"]]) for p in (plain, noisy)]
     assert 1e-4 < np.abs(joints[0] - joints[1]).max() < 0.1  # the joints carry the local planes
@@ -222,7 +226,9 @@ def test_route_then_check(tmp_path, capsys):
     out = tmp_path / "route.json"
     code, stdout, _ = run(["route", str(two), "--workers", "1", "--csv", "-q", "-o", str(out)], capsys)
     assert code == 0 and "2 of 2 postures" in stdout and out.exists()
-    assert len(list(tmp_path.glob("route.json.*.npz"))) == 1 and (tmp_path / "route.csv").exists()
+    assert len(list(tmp_path.glob("route.json.*.npz"))) == 1
+    csv = companion_of(out, ".csv")  # named by the header's bytes: replaced with it as one
+    assert csv is not None and csv.name in stdout and csv.read_text().startswith("time_s,segment,chain,posture,")
     code, stdout, _ = run(["check", str(out), "--workers", "1", "-q"], capsys)
     assert code == 0 and "FAIL" not in stdout and "points" in stdout
     code, stdout, _ = run(["check", str(out), "--workers", "1", "--min-dt", "5", "-q"], capsys)

@@ -116,6 +116,7 @@ def test_a_failed_header_write_removes_the_new_sidecar(tmp_path, monkeypatch):
     write_with_arrays(path, {"format": "test", "run": 1}, ARRAYS)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     from posegen.io import arrays as arrays_module
+    from posegen.io import companion as companion_module
 
     real = arrays_module.write_atomic
 
@@ -125,6 +126,7 @@ def test_a_failed_header_write_removes_the_new_sidecar(tmp_path, monkeypatch):
         real(target, content)
 
     monkeypatch.setattr(arrays_module, "write_atomic", full_disk)
+    monkeypatch.setattr(companion_module, "write_atomic", full_disk)  # the header lands with its companions
     with pytest.raises(OSError, match="No space"):
         write_with_arrays(path, {"format": "test", "run": 2}, {"a": ARRAYS["a"] + 1})
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

@@ -1,6 +1,7 @@
 """The typed route file: what the route stage writes reads back as the same object, and writes back the same bytes."""
 
 import dataclasses
+import hashlib
 import json
 
 import numpy as np
@@ -26,7 +27,8 @@ def test_a_route_read_and_written_again_is_the_same_file(route_file, tmp_path):
     written = write_route(again, route, csv_too=True)
     assert again.read_bytes() == route_file.read_bytes()  # every field kept, in the header's order
     assert [p.read_bytes() for p in sidecars_of(again)] == [p.read_bytes() for p in sidecars_of(route_file)]
-    assert written[:2] == [again, sidecars_of(again)[0]] and written[2] == again.with_suffix(".csv")
+    csv = again.with_name(f"route.yaml.{hashlib.sha256(again.read_bytes()).hexdigest()[:12]}.csv")  # its companion
+    assert written == [again, sidecars_of(again)[0], csv] and csv.is_file()
     same_route(read_route(again), route)
 
 

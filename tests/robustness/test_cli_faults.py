@@ -210,7 +210,6 @@ TABLE = [
     F("route", "malformed --scheduler", "{pool}", "--scheduler", "nonsense", "-o", "{out}/route.yaml"),
     F("route", "binary --pool", "{selection}", "--pool", "{binary}", "-o", "{out}/route.yaml"),
     F("route", "--pool not the selection's", "{selection}", "--pool", "{other_pool}", "-o", "{out}/route.yaml"),
-    F("route", "--csv beside is a folder", "{pool}", "--csv", "-o", "{csv_folder}/route.yaml"),
     *bad_outputs("route", "{pool}"),
     # simulate
     *bad_inputs("simulate", STAGE_PLANS, *C, "-o", "{out}/m.yaml"),
@@ -533,8 +532,6 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     }
     put("selection.yaml", selection)
     put("other_pool.yaml", pool | {"postures": pool["postures"][:5]})
-    (folder / "csv_folder" / "route.csv").mkdir(parents=True)
-    made["csv_folder"] = str(folder / "csv_folder")
 
     report = yaml.safe_load((calibration_folder.path / "calibration.yaml").read_text())
     put("calibration.yaml", report)

@@ -4,14 +4,15 @@ The command (a real process) kills itself (``SIGKILL``) at its Nth crash point
 (:func:`posegen.io.atomic.crash_point`, ``POSEGEN_CRASH_AT=N``): every rename that puts a
 file or a folder in place has one before and one after it. Each run starts from the
 output of an older run (another seed) and must leave that old output or the whole new
-one, read back as one (a header and the sidecar it names, a folder's files, a bag and
-its truth), plus only what the next run removes (the lock, hidden temporaries, a
-sidecar no header names, the pool's checkpoint). The same command run again then writes
+one, read back as one (a header with the sidecar it names and its companions, a
+simulation's truth or a route's CSV; a folder's files, a bag and its truth), plus only
+what the next run removes (the lock, hidden temporaries, a sidecar or companion no
+header names, the pool's checkpoint). The same command run again then writes
 the bytes of an uninterrupted run.
 
 ``make test`` kills where the output changes: just before the header or the page lands,
-before the old sidecar is removed, before a folder is swapped in and before the old one
-is removed; ``POSEGEN_KILL_MATRIX=full`` (``make kill-matrix``, a step of
+before the old sidecar or companion is removed, before a folder is swapped in and before
+the old one is removed; ``POSEGEN_KILL_MATRIX=full`` (``make kill-matrix``, a step of
 ``.ci/run``) also kills between the files a folder is staged from.
 """
 
@@ -28,13 +29,14 @@ import pytest
 import yaml
 
 from posegen.cli import main
-from posegen.io import sidecars_of, write_yaml
+from posegen.io import companion_of, companions_of, sidecars_of, write_yaml
 from posegen.io.atomic import CRASH_AT, CRASH_LOG, leftover_temporaries
 from tests.conftest import CONFIG, EXAMPLE_POOL
 from tests.robustness.test_kill import files
 
 FULL = os.environ.get("POSEGEN_KILL_MATRIX") == "full"
 ROOT = Path(__file__).resolve().parents[2]
+COMPANIONS = (".truth.yaml", ".csv")  # files named by their header's bytes: a simulation's truth, a route's CSV
 
 
 def run(argv: list[str], env: dict[str, str] | None = None) -> subprocess.CompletedProcess[bytes]:
@@ -68,13 +70,15 @@ def inputs(tmp_path_factory, route_file) -> dict[str, str]:
     shutil.copy(route_file, folder / "route2.yaml")  # its header names its sidecar, copied beside it
     for sidecar in sidecars_of(route_file):
         shutil.copy(sidecar, folder / sidecar.name)
-    return {"one": str(folder / "one.yaml"), "m": str(folder / "m.yaml"), "route": str(route_file), "dir": str(folder)}
+    paths = {"one": folder / "one.yaml", "sixteen": folder / "sixteen.yaml", "m": folder / "m.yaml"}
+    return {**{k: str(v) for k, v in paths.items()}, "route": str(route_file), "dir": str(folder)}
 
 
 CALIBRATE = ["calibrate", "{m}", "--candidates", "offsets", "--prior-scale", "5", "--fold-seeds", "1"]
 STAGES = {  # argv of a run with seed {seed} (output last), output name, what the output is
     "pool": (["pool", "--n", "8", "--workers", "1", "--seed", "{seed}", "--config", str(CONFIG), "-o"], "pool.yaml"),
-    "route": (["route", "{one}", "--seed", "{seed}", "-o"], "route.yaml"),
+    "route --csv": (["route", "{one}", "--seed", "{seed}", "--csv", "-o"], "route.yaml"),  # a pair and its CSV
+    "simulate": (["simulate", "{sixteen}", "--seed", "{seed}", "--config", str(CONFIG), "-o"], "m.yaml"),
     "simulate --bag": (["simulate", "{route}", "--rate", "100", "--seed", "{seed}", "--bag"], "session"),
     "measure": (["measure", "{dir}/bag{seed}", "--route", "{route}", "--session", "sim", "-o"], "measured.yaml"),
     "calibrate": ([*CALIBRATE, "--config", str(CONFIG), "--seed", "{seed}", "-o"], "cal"),
@@ -85,6 +89,7 @@ STAGES = {  # argv of a run with seed {seed} (output last), output name, what th
 
 IN_PROCESS = {
     "pool",
+    "simulate",
     "simulate --bag",
     "measure",
     "calibrate",
@@ -118,6 +123,9 @@ def artefact(folder: Path, name: str, written_in: tuple[Path, ...] = ()) -> dict
         if path.suffix == ".yaml" and "arrays" in (header := yaml.safe_load(path.read_text()) or {}):
             sidecar = folder / header["arrays"]["file"]
             found[sidecar.name] = sidecar.read_bytes()
+        for suffix in COMPANIONS:  # named by the header's bytes: the header on disk finds its own
+            if (companion := companion_of(path, suffix)) is not None:
+                found[companion.name] = companion.read_bytes()
     for where in (folder, *written_in):
         found = {k: v.replace(str(where / name).encode(), b"<out>") for k, v in found.items()}
     return found
@@ -131,6 +139,7 @@ def allowed_leftovers(folder: Path, name: str) -> set[Path]:
         folder / f"{name}.partial.jsonl",  # the pool's checkpoint, resumed from
         *leftover_temporaries(path),
         *sidecars_of(path),
+        *(p for suffix in COMPANIONS for p in companions_of(path, suffix)),
     }
 
 
