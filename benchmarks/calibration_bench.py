@@ -30,6 +30,7 @@ from posegen.calibrate import (
 from posegen.calibrate.deliverable_files import held_out_errors
 from posegen.calibrate.estimation import Noise, held_at_urdf
 from posegen.calibrate.estimation import fit as fit_parameters
+from posegen.io import Pool
 from posegen.model import (
     DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
@@ -43,7 +44,7 @@ from posegen.model import (
     start_point,
 )
 from posegen.parallel import ProcessBackend
-from posegen.robot import CandidateConfig, Pool, Scene, load_config
+from posegen.robot import CandidateConfig, Scene, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 POSEGEN = str(Path(sys.executable).with_name("posegen"))

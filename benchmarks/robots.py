@@ -28,8 +28,9 @@ def _run(*argv: str) -> tuple[float, str]:
 
 def _base_per_chain(pool_path: Path) -> dict[str, int]:
     """Base parameters of each chain alone, one table session (robot and plane parameters)."""
+    from posegen.io import load_pool
     from posegen.model import ContactModel, Contacts, planned_kinds, structural_base
-    from posegen.robot import load_pool, scene_for
+    from posegen.robot import scene_for
 
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, None)
@@ -45,8 +46,7 @@ def _base_per_chain(pool_path: Path) -> dict[str, int]:
 
 def _first_of_selection(selection: Path, out: Path, count: int) -> None:
     """A selection file of the first ``count`` postures: ``route`` can then replace a lost one from the pool."""
-    from posegen.io import read_yaml, write_yaml
-    from posegen.robot import SELECTION_FORMAT
+    from posegen.io import SELECTION_FORMAT, read_yaml, write_yaml
 
     data = read_yaml(selection, SELECTION_FORMAT)
     data["postures"] = data["postures"][:count]
@@ -55,7 +55,7 @@ def _first_of_selection(selection: Path, out: Path, count: int) -> None:
 
 def bench_robot(config: str, workdir: Path, n: int, routed: int) -> dict[str, str]:
     """Run one robot's pipeline in ``workdir``; its README row."""
-    from posegen.robot import load_pool, load_postures, write_pool
+    from posegen.io import load_pool, load_postures, write_pool
 
     pool = workdir / "pool.yaml"
     t_pool, _ = _run("pool", "--n", str(n), "--config", f"configs/{config}", "--workers", "2", "-q", "-o", str(pool))

@@ -49,7 +49,7 @@ def machine() -> str:
 
 
 def bench_pool(workdir: Path, n: int) -> Path:
-    from posegen.robot import load_pool
+    from posegen.io import load_pool
 
     out = workdir / "pool.yaml"
     before = os.getloadavg()[0]
@@ -99,7 +99,8 @@ def bench_pool(workdir: Path, n: int) -> Path:
 
 
 def bench_select(pool_path: Path, workdir: Path) -> None:
-    from posegen.robot import Scene, load_pool, parse_config
+    from posegen.io import load_pool
+    from posegen.robot import Scene, parse_config
     from posegen.select import build_design, detmax_runs, iroc, select_k
 
     start = time.perf_counter()
@@ -238,7 +239,8 @@ def bench_bag(pool_path: Path, workdir: Path, k: int = 41) -> None:
 def bench_calibration(workdir: Path) -> None:
     from calibration_bench import bench_corrupted_rows, bench_real, bench_recovery  # beside this script
 
-    from posegen.robot import Scene, load_config, load_pool
+    from posegen.io import load_pool
+    from posegen.robot import Scene, load_config
 
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
     data = real_data()

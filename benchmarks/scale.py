@@ -12,8 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-from posegen.io import sidecars_of
-from posegen.robot import load_pool
+from posegen.io import load_pool, sidecars_of
 
 ROOT = Path(__file__).resolve().parents[1]
 POSEGEN = str(Path(sys.executable).with_name("posegen"))

@@ -23,10 +23,10 @@ import numpy as np
 
 from posegen.calibrate import Calibration, Perturbation, Settings, calibrate, held_out_x
 from posegen.calibrate.simulation import contact_offsets, perturbed_robot, settle_true
-from posegen.io import write_yaml
+from posegen.io import load_pool, write_yaml
 from posegen.model import Contacts, build_design, planned_kinds, read_measurements
 from posegen.parallel import open_backend
-from posegen.robot import Scene, load_pool, scene_for
+from posegen.robot import Scene, scene_for
 from posegen.select import iroc
 from posegen.session import Robot, SessionSettings, read_index, rehearse_session, start_session
 

@@ -49,7 +49,7 @@ _HOMES = {  # public name -> the module that defines it (imported at first use)
     "SimulatedRobot": "posegen.api",
     "CalibrationSettings": "posegen.api",
     "Scene": "posegen.robot",
-    "Pool": "posegen.robot",
+    "Pool": "posegen.io",
     "Selection": "posegen.select",
     "SelectionSettings": "posegen.select",
     "Route": "posegen.io",

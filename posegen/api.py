@@ -38,21 +38,12 @@ from posegen.calibrate import (
 )
 from posegen.calibrate import Settings as CalibrationSettings
 from posegen.errors import InputError
-from posegen.io import ROUTE_FORMAT, Route, read_route, read_yaml
+from posegen.io import POOL_FORMAT, ROUTE_FORMAT, SELECTION_FORMAT, Pool, Route, load_pool, read_route, read_yaml
 from posegen.model import MEASUREMENT_FORMAT, Measurements, read_measurements
 from posegen.parallel import Backend
 from posegen.pool import check_pool_file, generate_pool_file
 from posegen.resources import DEFAULT_CONFIG
-from posegen.robot import (
-    POOL_FORMAT,
-    SELECTION_FORMAT,
-    Pool,
-    Scene,
-    Verification,
-    load_config,
-    load_pool,
-    scene_for,
-)
+from posegen.robot import Scene, Verification, load_config, scene_for
 from posegen.route import Exported, Routed, check_route_file, export_route_bag, route_postures_file
 from posegen.select import Selection, SelectionSettings, follow_up_pool_file, read_selection, select_pool_file
 

@@ -17,10 +17,10 @@ import yaml
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from posegen.calibrate import Calibration
-from posegen.io import write_yaml
+from posegen.io import Pool, write_yaml
 from posegen.model import Contacts
 from posegen.pool import generate_pool
-from posegen.robot import Config, Pool, Scene, load_config
+from posegen.robot import Config, Scene, load_config
 from posegen.route import route_postures_file
 from posegen.select import select_pool_file
 
@@ -78,7 +78,7 @@ def small_pool(config: Config) -> Pool:
 
 @pytest.fixture(scope="session")
 def example_pool() -> Pool:
-    from posegen.robot import load_pool
+    from posegen.io import load_pool
 
     return load_pool(EXAMPLE_POOL)
 

@@ -412,7 +412,7 @@ DICT_READERS = {
     "posegen.io.artefact": "reader: read_yaml checks every artefact's format and version",
     "posegen.io.recorded_bag": "reader: a rosbag2 folder's metadata.yaml",
     "posegen.pool.checkpoint": "reader: the pool checkpoint's lines",
-    "posegen.robot.postures": "reader: the pool and selection formats (Pool)",
+    "posegen.io.pool_file": "reader: the pool and selection formats (Pool)",
     "posegen.io.route_file": "reader: the route format (Route)",
     "posegen.api": "load(): dispatches on an artefact's format field to its reader",
     "posegen.model.measurements": "reader: the measurement format",

@@ -12,8 +12,9 @@ import pinocchio as pin
 import pytest
 import yaml
 
+from posegen.io import load_pool, write_pool
 from posegen.model import ChainModel
-from posegen.robot import Scene, load_config, load_pool, write_pool
+from posegen.robot import Scene, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))

@@ -27,6 +27,7 @@ from posegen.io import (
     companion_of,
     companions_of,
     dump_yaml,
+    load_postures,
     write_with_companions,
 )
 from posegen.model import (
@@ -40,7 +41,7 @@ from posegen.model import (
 )
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Scene, load_config, load_postures, scene_for
+from posegen.robot import FloatArray, Scene, load_config, scene_for
 
 TRUTH_FORMAT = "posegen-truth"
 TRUTH_SUFFIX = ".truth.yaml"  # beside a simulation's measurements: ``<name>.<sha256 prefix of it>.truth.yaml``

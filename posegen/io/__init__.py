@@ -5,7 +5,8 @@ rosbag2 modules hold the format concerns of talking to ROS 2: fixed-layout CDR
 (:mod:`~posegen.io.cdr`), indexed MCAP reading (:mod:`~posegen.io.mcap_index`), atomic bag
 writing (:mod:`~posegen.io.bag_writer`), recorded sessions (:mod:`~posegen.io.recorded_bag`)
 and routes as bags (:mod:`~posegen.io.trajectory_bag`). Route files (the typed
-:class:`~posegen.io.route_file.Route`, its reader and writer) live here too, below every stage that reads one.
+:class:`~posegen.io.route_file.Route`, its reader and writer) and pool and selection files
+(:class:`~posegen.io.pool_file.Pool`) live here too, below every stage that reads one.
 
 Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
 names here are its plumbing and may change between versions.
@@ -32,6 +33,19 @@ from posegen.io.output import (
     claim_output,
     input_files,
     lock_path,
+)
+from posegen.io.pool_file import (
+    POOL_FORMAT,
+    POOL_VERSION,
+    SELECTION_FORMAT,
+    Pool,
+    Posture,
+    load_pool,
+    load_postures,
+    pool_from_dict,
+    posture_entries,
+    posture_from_dict,
+    write_pool,
 )
 from posegen.io.recorded_bag import JOINT_STATE, WRENCH_STAMPED, JointStates, RecordedBag, Wrenches, write_recording
 from posegen.io.route_file import (
@@ -65,12 +79,15 @@ __all__ = [
     "JOINT_STATE",
     "MAX_DURATION_S",
     "MIN_STEP_S",
+    "POOL_FORMAT",
+    "POOL_VERSION",
     "POSITION_DTYPE",
     "ROUTE_ARRAYS",
     "ROUTE_FORMAT",
     "ROUTE_VERSION",
     "SEGMENT_FIELDS",
     "SEGMENT_TABLE",
+    "SELECTION_FORMAT",
     "TIME_DTYPE",
     "TRAJECTORY",
     "VELOCITY_STEP",
@@ -78,6 +95,8 @@ __all__ = [
     "JointStates",
     "OutputKind",
     "OutputLock",
+    "Pool",
+    "Posture",
     "RecordedBag",
     "Route",
     "Segment",
@@ -98,9 +117,14 @@ __all__ = [
     "encode_arrays",
     "input_files",
     "is_route_file",
+    "load_pool",
+    "load_postures",
     "load_yaml_file",
     "lock_path",
     "points_problem",
+    "pool_from_dict",
+    "posture_entries",
+    "posture_from_dict",
     "provenance",
     "read_arrays",
     "read_route",
@@ -116,6 +140,7 @@ __all__ = [
     "stored_arrays",
     "swap_folder",
     "write_atomic",
+    "write_pool",
     "write_recording",
     "write_route",
     "write_trajectory_bag",

@@ -16,18 +16,10 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from posegen.errors import BackendError
+from posegen.io import Posture
 from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import (
-    CollisionChecker,
-    Config,
-    Invariant,
-    Posture,
-    Scene,
-    Verification,
-    WorstSoFar,
-    assess,
-)
+from posegen.robot import CollisionChecker, Config, Invariant, Scene, Verification, WorstSoFar, assess
 
 CHUNK = 16  # postures per unit of work
 Measured = tuple[dict[Invariant, float], dict[Invariant, str]]  # excess and what was measured, per invariant

@@ -15,9 +15,9 @@ from typing import Any
 
 from posegen import __version__
 from posegen.errors import InputError
-from posegen.io import read_text_file
+from posegen.io import Posture, posture_from_dict, read_text_file
 from posegen.pool.sampler import Rejection
-from posegen.robot import Config, Posture, posture_from_dict
+from posegen.robot import Config
 
 Outcome = Posture | Rejection
 

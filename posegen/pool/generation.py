@@ -18,12 +18,12 @@ from pathlib import Path
 
 from posegen.arguments import check_seed
 from posegen.errors import BackendError, InfeasibleError
-from posegen.io import provenance
+from posegen.io import Pool, Posture, provenance
 from posegen.parallel import Backend, Job, as_backend
 from posegen.pool.checkpoint import Checkpoint, Outcome, run_key
 from posegen.pool.sampler import PostureSampler, rejection_counts
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import Config, Pool, Posture, Scene, check_for_planning
+from posegen.robot import Config, Scene, check_for_planning
 
 LOG = logging.getLogger(__name__)
 

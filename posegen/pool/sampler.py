@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from posegen.robot import CollisionChecker, FloatArray, Invariant, Posture, Projector, Scene, Spot, assess
+from posegen.io import Posture
+from posegen.robot import CollisionChecker, FloatArray, Invariant, Projector, Scene, Spot, assess
 
 
 class Rejection(str, enum.Enum):

@@ -7,23 +7,19 @@ from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import InputError, PosegenError
-from posegen.io import check_apart, claim_output, read_yaml
+from posegen.io import POOL_FORMAT, Pool, check_apart, claim_output, pool_from_dict, read_yaml, write_pool
 from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
 from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import (
-    POOL_FORMAT,
     CollisionChecker,
-    Pool,
     Scene,
     Verification,
     check_for_planning,
     geometry_coverage,
     load_config,
-    pool_from_dict,
     scene_for,
-    write_pool,
 )
 
 

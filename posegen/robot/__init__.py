@@ -57,19 +57,6 @@ from posegen.robot.geometry import (
     tilt_angles,
     yaw_rotation,
 )
-from posegen.robot.postures import (
-    POOL_FORMAT,
-    POOL_VERSION,
-    SELECTION_FORMAT,
-    Pool,
-    Posture,
-    load_pool,
-    load_postures,
-    pool_from_dict,
-    posture_entries,
-    posture_from_dict,
-    write_pool,
-)
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for
 from posegen.robot.stance_space import StanceSpace
@@ -94,9 +81,6 @@ __all__ = [
     "FLUSH",
     "MOMENT_ARM_M",
     "POINT",
-    "POOL_FORMAT",
-    "POOL_VERSION",
-    "SELECTION_FORMAT",
     "SOLE_ANGLE_TOL_RAD",
     "SOLE_POSITION_TOL_M",
     "TABLE",
@@ -114,8 +98,6 @@ __all__ = [
     "Invariant",
     "MarginConfig",
     "PairSurvey",
-    "Pool",
-    "Posture",
     "PriorConfig",
     "Projection",
     "Projector",
@@ -144,8 +126,6 @@ __all__ = [
     "kind_named",
     "kinematic_urdf",
     "load_config",
-    "load_pool",
-    "load_postures",
     "offset_derivatives",
     "offset_matrix",
     "parse_candidate",
@@ -153,9 +133,6 @@ __all__ = [
     "placement_derivatives",
     "placement_matrix",
     "polygon_margin",
-    "pool_from_dict",
-    "posture_entries",
-    "posture_from_dict",
     "registered_kinds",
     "robot_geometry",
     "rpy_derivatives",
@@ -170,6 +147,5 @@ __all__ = [
     "with_declared_frames",
     "worst_case",
     "write_draft",
-    "write_pool",
     "yaw_rotation",
 ]

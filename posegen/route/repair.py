@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from posegen.io import Posture
 from posegen.model import Design
-from posegen.robot import Posture
 
 INSERTION_PLACES = 3  # places in the order tried for a posture that could not be reached where it was
 SUBSTITUTE_TRIES = 8  # pool postures tried, by decreasing gain, in place of one lost posture

@@ -36,10 +36,10 @@ from typing import Any
 import numpy as np
 
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import Segment, SegmentType
+from posegen.io import Posture, Segment, SegmentType
 from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import FloatArray, Posture, Scene, check_for_planning
+from posegen.robot import FloatArray, Scene, check_for_planning
 from posegen.route.ordering import Order, order_postures, rest_to_rest_time
 from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer
 from posegen.route.repair import (

@@ -15,10 +15,12 @@ from posegen.arguments import check_seed, check_size
 from posegen.errors import ArgumentError, InputError
 from posegen.io import (
     OutputKind,
+    Pool,
     check_apart,
     check_bag_destination,
     check_writable,
     claim_output,
+    load_postures,
     read_route,
     route_outputs,
     write_route,
@@ -27,7 +29,7 @@ from posegen.io import (
 from posegen.model import Design, build_design
 from posegen.parallel import Backend
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import Pool, Scene, Verification, geometry_coverage, load_postures, scene_for
+from posegen.robot import Scene, Verification, geometry_coverage, scene_for
 from posegen.route.check import MIN_DT_S, verify_route
 from posegen.route.export import route_artefact
 from posegen.route.repair import Substitutes, o1_figures

@@ -7,9 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from posegen.io import atomic_path
+from posegen.io import Pool, atomic_path
 from posegen.model import Design
-from posegen.robot import Pool
 from posegen.select.selection import Iroc
 from posegen.select.selection_file import (
     Certificate,

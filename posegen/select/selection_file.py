@@ -13,7 +13,7 @@ selection, whose fields depend on its method::
     figures: {...}              # DesignFigures (iroc, k), FollowUpFigures, SessionFigures
     postures: [{pool_id, rank, weight, id, sample, chain, spot, joints, ...}, ...]
 
-The stages read a selection's postures through the pool reader (:func:`posegen.robot.load_postures`);
+The stages read a selection's postures through the pool reader (:func:`posegen.io.load_postures`);
 :func:`read_selection` reads the whole file.
 """
 
@@ -25,8 +25,7 @@ from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from posegen.errors import InputError, reason
-from posegen.io import read_yaml, write_yaml
-from posegen.robot import POOL_VERSION, SELECTION_FORMAT, Pool, Posture, posture_from_dict
+from posegen.io import POOL_VERSION, SELECTION_FORMAT, Pool, Posture, posture_from_dict, read_yaml, write_yaml
 
 
 class SelectionMethod(str, enum.Enum):

@@ -11,10 +11,10 @@ from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import check_apart, check_writable, claim_output
+from posegen.io import check_apart, check_writable, claim_output, load_pool
 from posegen.model import DEFAULT_NOISE, Contacts, build_design, measurement_item, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
-from posegen.robot import load_pool, scene_for
+from posegen.robot import scene_for
 from posegen.select.figures import design_selection, plot_detmax, plot_o1
 from posegen.select.followup import follow_up, read_calibration_model
 from posegen.select.selection import detmax_runs, iroc, select_k

@@ -22,10 +22,10 @@ from pathlib import Path
 import numpy as np
 
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import read_route
+from posegen.io import Pool, read_route
 from posegen.model import build_design
 from posegen.parallel import Backend
-from posegen.robot import Pool, scene_for
+from posegen.robot import scene_for
 from posegen.route import check_route_file, export_route_bag, route_postures_file, start_posture
 from posegen.select import (
     ChosenPosture,

@@ -17,9 +17,9 @@ from pathlib import Path
 from posegen.arguments import check_count, check_seed, check_size
 from posegen.calibrate import DeliverableKind, Settings, calibrate_files, measure_bag
 from posegen.errors import ArgumentError, InfeasibleError, InputError, unknown_name
-from posegen.io import OutputKind, RecordedBag, check_writable, claim_output, write_yaml
+from posegen.io import OutputKind, RecordedBag, check_writable, claim_output, load_pool, write_yaml
 from posegen.parallel import Backend
-from posegen.robot import load_pool, scene_for
+from posegen.robot import scene_for
 from posegen.session.batch import (
     CALIBRATION_FOLDER,
     MEASUREMENTS_FILE,

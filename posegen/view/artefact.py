@@ -19,18 +19,19 @@ import numpy as np
 
 from posegen.calibrate import CALIBRATION_FORMAT, CalibrationRecord, read_calibration
 from posegen.errors import InputError
-from posegen.io import Segment, is_route_file, load_yaml_file, read_route, read_yaml
-from posegen.robot import (
+from posegen.io import (
     POOL_FORMAT,
     SELECTION_FORMAT,
-    FloatArray,
     Pool,
-    Scene,
-    load_config,
+    Segment,
+    is_route_file,
+    load_yaml_file,
     pool_from_dict,
     posture_entries,
-    scene_for,
+    read_route,
+    read_yaml,
 )
+from posegen.robot import FloatArray, Scene, load_config, scene_for
 
 LOG = logging.getLogger(__name__)
 

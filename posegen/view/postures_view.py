@@ -13,7 +13,8 @@ from typing import Any
 import numpy as np
 import viser
 
-from posegen.robot import FloatArray, Pool, Scene
+from posegen.io import Pool
+from posegen.robot import FloatArray, Scene
 from posegen.view.artefact import ArtefactKind, PosturesArtefact
 from posegen.view.robot_figure import RobotFigure, robot_meshes
 from posegen.view.scenery import ROBOT_RGB, chain_colours, info_label, set_scenery

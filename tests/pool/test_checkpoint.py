@@ -9,9 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from posegen.errors import InputError
+from posegen.io import Posture
 from posegen.pool import Rejection
 from posegen.pool.checkpoint import Checkpoint
-from posegen.robot import Posture
 
 N_JOINTS = 4
 FLOATS = st.floats(allow_nan=False, allow_infinity=False)  # subnormals, -0.0 and extremes included

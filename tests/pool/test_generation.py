@@ -6,8 +6,8 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from posegen.errors import ConfigError, InfeasibleError
+from posegen.io import load_pool, pool_from_dict
 from posegen.pool import generate_pool, verify_postures
-from posegen.robot import load_pool, pool_from_dict
 
 
 def independent_invariants(scene, config, posture):
@@ -119,7 +119,7 @@ def test_pool_file_with_sidecar_round_trip(small_pool, tmp_path):
     """What ``posegen pool`` writes: a YAML header and a .npz of the postures, read back exactly."""
     import yaml
 
-    from posegen.robot import write_pool
+    from posegen.io import write_pool
 
     path = tmp_path / "pool.yaml"
     write_pool(path, small_pool)

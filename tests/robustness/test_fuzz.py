@@ -47,15 +47,18 @@ from posegen.io import (
     JointStates,
     RecordedBag,
     Wrenches,
+    load_postures,
+    pool_from_dict,
     read_arrays,
     read_route,
     sidecars_of,
+    write_pool,
     write_recording,
     write_with_arrays,
 )
+from posegen.io.pool_file import ARRAY_NAMES
 from posegen.model import read_measurements
-from posegen.robot import Scene, load_config, load_postures, pool_from_dict, write_pool
-from posegen.robot.postures import ARRAY_NAMES
+from posegen.robot import Scene, load_config
 from tests.conftest import CONFIG, EXAMPLE_POOL
 from tests.robustness.strategies import (
     NAMES,

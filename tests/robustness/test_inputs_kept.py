@@ -16,8 +16,7 @@ import pytest
 import yaml
 
 from posegen.cli import main
-from posegen.io import JointStates, Wrenches, sidecars_of, write_recording, write_yaml
-from posegen.robot import load_pool, write_pool
+from posegen.io import JointStates, Wrenches, load_pool, sidecars_of, write_pool, write_recording, write_yaml
 from tests.conftest import CONFIG, EXAMPLE_POOL
 from tests.robustness.test_cli_faults import assert_one_line_error, tree_state
 

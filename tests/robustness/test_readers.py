@@ -28,28 +28,23 @@ from posegen.calibrate import read_calibration
 from posegen.errors import PosegenError
 from posegen.io import (
     ROUTE_FORMAT,
+    SELECTION_FORMAT,
     JointStates,
     RecordedBag,
     Route,
     SegmentType,
     Wrenches,
     is_route_file,
+    load_pool,
+    load_postures,
+    pool_from_dict,
     read_route,
+    write_pool,
     write_recording,
 )
 from posegen.model import Contacts, measurements_to_dict, read_measurements
 from posegen.pool.checkpoint import Checkpoint
-from posegen.robot import (
-    SELECTION_FORMAT,
-    Config,
-    Scene,
-    load_config,
-    load_pool,
-    load_postures,
-    parse_config,
-    pool_from_dict,
-    write_pool,
-)
+from posegen.robot import Config, Scene, load_config, parse_config
 from posegen.select import read_calibration_model
 from posegen.view import open_artefact
 from tests.conftest import CONFIG, EXAMPLE_POOL

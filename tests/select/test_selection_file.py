@@ -4,8 +4,7 @@ import pytest
 import yaml
 
 from posegen.errors import InputError
-from posegen.io import write_yaml
-from posegen.robot import load_postures
+from posegen.io import load_postures, write_yaml
 from posegen.select import (
     DesignFigures,
     FollowUpFigures,

@@ -15,9 +15,17 @@ import yaml
 
 from posegen.cli import main
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import JointStates, RecordedBag, SegmentType, Wrenches, read_route, write_recording, write_yaml
+from posegen.io import (
+    JointStates,
+    RecordedBag,
+    SegmentType,
+    Wrenches,
+    load_pool,
+    read_route,
+    write_recording,
+    write_yaml,
+)
 from posegen.parallel import open_backend
-from posegen.robot import load_pool
 from posegen.route import route_postures_file
 from posegen.session import (
     INDEX_FILE,

@@ -37,8 +37,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from posegen.errors import InputError, reason
-from posegen.io import read_arrays, read_yaml, write_with_arrays
-from posegen.robot.geometry import FloatArray
+from posegen.io.arrays import read_arrays, write_with_arrays
+from posegen.io.artefact import read_yaml
+from posegen.numeric import FloatArray
 
 POOL_FORMAT = "posegen-pool"
 SELECTION_FORMAT = "posegen-selection"  # read here as postures; whole by posegen.select.read_selection
