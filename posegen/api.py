@@ -110,7 +110,7 @@ def load(path: str | Path) -> Pool | Selection[Any] | Route | Measurements | Cal
         InputError: Not a posegen artefact, or one its reader refuses.
 
     Example:
-        >>> pool = posegen.load("plans/talos/pool.yaml")
+        >>> pool = posegen.load("plans/pool.yaml")
         >>> len(pool.postures)
 
     """

@@ -69,7 +69,7 @@ class Pool:
     """Feasible contact postures with their provenance.
 
     Example:
-        >>> pool = posegen.load("plans/talos/pool.yaml")
+        >>> pool = posegen.load("plans/pool.yaml")
         >>> pool.postures[0].joints[:3], len(pool.postures)
 
     """

@@ -158,7 +158,7 @@ class Selection(Generic[F]):
     """A selection file: the chosen postures, their provenance and the figures of their choice.
 
     Example:
-        >>> chosen = posegen.select_postures("plans/talos/pool.yaml", "plans/selected.yaml")
+        >>> chosen = posegen.select_postures("plans/pool.yaml", "plans/selected.yaml")
         >>> [p.pool_id for p in chosen.postures][:5], chosen.method
 
     """
