@@ -140,6 +140,12 @@ def _added(session: str, added: Any) -> None:
             verdict = "ok" if error <= target else "above"
             print(f"    {chain}: {error:.2f} mm ({verdict} the target {target:g} mm)")
         write_report(f"{session}/{batch.folder}/calibration", None)
+        for chain, before, after in index.stalled:
+            print(
+                f"  {chain}: no gain from the last batch ({before:.2f} -> {after:.2f} mm): the "
+                f"{assessment.deliverable} deliverable may be at its floor (a URDF cannot hold compliant "
+                "joints; a session started with --deliverable compensated follows the compensated files)"
+            )
     if added.next_batch is None:
         print(f"session: done -> the deliverables are in {session}/{batch.folder}/calibration/")
         return

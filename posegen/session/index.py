@@ -126,6 +126,30 @@ class SessionIndex:
         tables = [b.recording.table for b in self.batches if b.recording is not None]
         return tables[-1] if tables else table_name(1)
 
+    @property
+    def stalled(self) -> tuple[tuple[str, float, float], ...]:
+        """Chains above the target whose predicted error did not fall with the last assessed batch.
+
+        ``(chain, before_mm, after_mm)`` between the last two batches with a calibration
+        figure; empty with fewer than two. A chain that stalls above the target may be at
+        its deliverable's floor (a URDF cannot hold compliant joints): more contacts of the
+        same kind may not bring it there.
+
+        Example:
+            >>> [f"{c}: {a:.2f} -> {b:.2f} mm" for c, a, b in index.stalled]
+
+        """
+        assessed = [b.assessment for b in self.batches if b.assessment is not None and not b.assessment.error]
+        if len(assessed) < 2:
+            return ()
+        before, after = assessed[-2].predicted_z_mm, assessed[-1].predicted_z_mm
+        target = self.settings.target_mm
+        return tuple(
+            (chain, before[chain], now)
+            for chain, now in sorted(after.items())
+            if chain in before and now > target and now >= before[chain]
+        )
+
     def with_batch(self, batch: Batch) -> SessionIndex:
         """The index with ``batch`` replacing the batch of its number, or appended."""
         kept = tuple(b for b in self.batches if b.number != batch.number)

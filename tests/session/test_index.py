@@ -75,3 +75,19 @@ def test_a_malformed_index_is_one_clear_error(tmp_path, edit, message):
 def test_no_index_is_not_a_session(tmp_path):
     with pytest.raises(InputError, match="not a posegen session"):
         read_index(tmp_path)
+
+
+def test_a_chain_above_the_target_whose_prediction_did_not_fall_is_stalled(tmp_path):
+    index = an_index(tmp_path)  # batch 1: left 5.25, right 3.5 (target 3); batch 2 not assessed yet
+    assert index.stalled == ()  # one figure: nothing to compare
+    recording = Recording("/bags/two", "ef" * 32, "table_1", 2, 25.0, ())
+    for left, right, stalled in (
+        (5.30, 3.6, (("left", 5.25, 5.30), ("right", 3.5, 3.6))),  # both rose, both above the target
+        (5.25, 2.9, (("left", 5.25, 5.25),)),  # left unchanged; right fell below the target
+        (5.00, 3.4, ()),  # both fell: no stall, though both are still above
+    ):
+        assessed = Assessment(29, "urdf", "offsets", {"left": left, "right": right}, False)
+        second = Batch(2, (7, 8), 25.0, {}, recording, assessed)
+        assert index.with_batch(second).stalled == stalled
+    failed = Batch(2, (7, 8), 25.0, {}, recording, Assessment(29, "", "", {}, False, error="too few contacts"))
+    assert index.with_batch(failed).stalled == ()  # a batch without a figure is not compared
