@@ -63,6 +63,25 @@ class Posture:
     min_distance_m: float  # closest pair of bodies (convex hulls)
     com_margin_m: float  # CoM projection's distance inside the support polygon
 
+    def to_dict(self, row: int) -> dict[str, Any]:
+        """The posture as plain data: its entry in a pool or selection file, ``row`` its pool row (``id``).
+
+        Example:
+            >>> pool.postures[3].to_dict(3)["chain"]
+
+        """
+        return {
+            "id": row,
+            "sample": self.sample,
+            "chain": self.chain,
+            "spot": self.spot,
+            "joints": list(self.joints),
+            "contact_xy_m": list(self.contact_xy_m),
+            "contact_yaw_rad": self.contact_yaw_rad,
+            "min_distance_m": self.min_distance_m,
+            "com_margin_m": self.com_margin_m,
+        }
+
 
 @dataclass(frozen=True)
 class Pool:
@@ -119,18 +138,7 @@ class Pool:
 
     def entry(self, index: int) -> dict[str, Any]:
         """One posture as plain data (an entry of ``postures`` in the inline format)."""
-        p = self.postures[index]
-        return {
-            "id": index,
-            "sample": p.sample,
-            "chain": p.chain,
-            "spot": p.spot,
-            "joints": list(p.joints),
-            "contact_xy_m": list(p.contact_xy_m),
-            "contact_yaw_rad": p.contact_yaw_rad,
-            "min_distance_m": p.min_distance_m,
-            "com_margin_m": p.com_margin_m,
-        }
+        return self.postures[index].to_dict(index)
 
     def header(self) -> dict[str, Any]:
         """Plain data of everything but the postures."""

@@ -48,21 +48,7 @@ class ChosenPosture:
 
     def to_dict(self) -> dict[str, Any]:
         """The posture's entry in the file."""
-        p = self.posture
-        return {
-            "pool_id": self.pool_id,
-            "rank": self.rank,
-            "weight": self.weight,
-            "id": self.pool_id,
-            "sample": p.sample,
-            "chain": p.chain,
-            "spot": p.spot,
-            "joints": list(p.joints),
-            "contact_xy_m": list(p.contact_xy_m),
-            "contact_yaw_rad": p.contact_yaw_rad,
-            "min_distance_m": p.min_distance_m,
-            "com_margin_m": p.com_margin_m,
-        }
+        return {"pool_id": self.pool_id, "rank": self.rank, "weight": self.weight, **self.posture.to_dict(self.pool_id)}
 
 
 def chosen_from_pool(pool: Pool, row: int, rank: int, weight: float) -> ChosenPosture:
