@@ -17,6 +17,7 @@ Each step returns what it found and the ``# CHECK:`` lines it adds, in the draft
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,6 +119,9 @@ class Body:
         return self.legs.joints | {j for arm in self.arms for j in arm}
 
 
+WORLD_LINK = "world"  # the URDF convention for a fixed base (a joint from it pins the robot)
+
+
 def study_body(src: DraftSource) -> Body:
     """Find the legs, soles, arms, reference posture and joints to lock of a humanoid.
 
@@ -149,8 +153,34 @@ def study_body(src: DraftSource) -> Body:
     cleared = clear_of_limits(model, q, sorted(kept - legs.joints))
     q = with_joints(model, q, cleared)
     reference_joints.update({name: round(value, 4) for name, value in cleared.items()})
-    checks += found
+    checks += found + fixed_base(src.text)
     return Body(tree, state, bearing, legs, arms, geometry, q, reference_joints, locked, margin, checks)
+
+
+def fixed_base(urdf_text: str) -> tuple[str, ...]:
+    """A CHECK line when the URDF pins its body to a ``world`` link (the URDF convention of a fixed base).
+
+    posegen always stands the robot free (a free-flyer at the URDF's root): a body pinned
+    to ``world``, as a simulator's description does, is stood free too, and the line asks
+    the user to confirm that is meant. A massless ``base_link`` root (REP 105) says nothing.
+
+    Example:
+        >>> fixed_base('<robot><link name="world"/><joint name="j" type="fixed">'
+        ...            '<parent link="world"/><child link="base"/></joint><link name="base"/></robot>')
+
+    """
+    root = ET.fromstring(urdf_text)
+    pinned = [
+        joint.find("child").get("link")  # type: ignore[union-attr]
+        for joint in root.iter("joint")
+        if joint.find("parent") is not None and joint.find("parent").get("link") == WORLD_LINK  # type: ignore[union-attr]
+    ]
+    if not pinned:
+        return ()
+    return (
+        f"the URDF pins '{pinned[0]}' to '{WORLD_LINK}' (a fixed base, as a simulator's description does): posegen "
+        "stands the robot free on its feet; check that this description is meant to stand",
+    )
 
 
 def srdf_state(model: pin.Model, files: RobotFiles) -> tuple[str, FloatArray, tuple[str, ...]]:

@@ -15,6 +15,7 @@ from posegen.robot.draft_body import (
     find_arms,
     find_legs,
     find_soles,
+    fixed_base,
     locked_joints,
     orient,
     srdf_state,
@@ -159,3 +160,22 @@ def test_study_body_gives_a_reference_with_its_locks_and_the_joints_it_set(sourc
         assert body.kept == set(range(2, model.njoints)) - {model.getJointId("neck")}
         assert body.checks[-1].startswith("no SRDF posture")
         assert pin.XYZQUATToSE3(body.reference[:7]).rotation == pytest.approx(body.bearing.root.rotation)
+
+
+def test_a_body_pinned_to_world_is_stood_free_and_said(tmp_path):
+    """A simulator's description (a fixed joint from ``world``) drafts as a free robot, with a CHECK line."""
+    urdf = humanoid_urdf(tmp_path, "z")
+    text = urdf.read_text()
+    assert fixed_base(text) == ()  # a free description says nothing
+    first = text.index("<link name=")
+    root = text[first:].split('"')[1]
+    pin_joint = (
+        f'<link name="world"/><joint name="pin" type="fixed"><parent link="world"/><child link="{root}"/></joint>'
+    )
+    pinned = urdf.with_name("pinned.urdf")
+    pinned.write_text(text[:first] + pin_joint + "\n" + text[first:])
+    [line] = fixed_base(pinned.read_text())
+    assert f"'{root}'" in line and "'world'" in line
+    body = study_body(load_draft_source(str(pinned), None, ()))
+    assert line in body.checks  # the draft carries it, and the body was still found and stood
+    assert body.legs.joints and len(body.arms) == 2
