@@ -58,7 +58,7 @@ class SimulatedRobot:
     """A perturbed robot for :func:`simulate` and :func:`simulate_recording` (``posegen simulate``'s options).
 
     Example:
-        >>> robot = SimulatedRobot(seed=7, error_mm=2.0, contact_noise_mm=3.0)
+        >>> robot = posegen.SimulatedRobot(seed=7, error_mm=2.0, contact_noise_mm=3.0)
 
     """
 
@@ -74,7 +74,7 @@ class SimulatedRobot:
         """The robot as the keyword arguments of the simulate functions.
 
         Example:
-            >>> SimulatedRobot().options()["error_mm"]
+            >>> posegen.SimulatedRobot().options()["error_mm"]
             2.0
 
         """
@@ -344,7 +344,7 @@ def calibrate_robot(
 
     Example:
         >>> summary = posegen.calibrate_robot(["plans/measured.yaml"], "plans/calibration")
-        >>> summary.load_line
+        >>> summary.predicted_error  # per chain: the held-out error cross-validation predicts
 
     """
     calibrated: Calibrated = calibrate_files(

@@ -99,3 +99,13 @@ def test_load_reads_each_artefact_as_its_object(example_pool, tmp_path):
     (tmp_path / "x.yaml").write_text("format: posegen-something\nformat_version: 2\n")
     with pytest.raises(posegen.PosegenError, match=r"x\.yaml"):
         posegen.load(tmp_path / "x.yaml")
+
+
+def test_the_examples_call_only_public_names():
+    """An example in a public docstring uses ``posegen.NAME`` only for names of the API (a typo fails here)."""
+    import re
+
+    docs = [inspect.getdoc(getattr(posegen, name)) or "" for name in PUBLIC] + [inspect.getdoc(posegen) or ""]
+    called = {m for doc in docs for m in re.findall(r">>> .*?\bposegen\.(\w+)", doc)}
+    called |= {m for doc in docs for m in re.findall(r"\.\.\. .*?\bposegen\.(\w+)", doc)}
+    assert called and called <= set(PUBLIC), sorted(called - set(PUBLIC))
