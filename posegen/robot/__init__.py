@@ -58,7 +58,7 @@ from posegen.robot.geometry import (
     yaw_rotation,
 )
 from posegen.robot.projection import Projection, Projector
-from posegen.robot.scene import Scene, Spot, scene_for
+from posegen.robot.scene import Scene, Spot, scene_for, scene_for_postures
 from posegen.robot.stance_space import StanceSpace
 from posegen.robot.statics import MOMENT_ARM_M, gravity_torques
 from posegen.robot.transforms import (
@@ -138,6 +138,7 @@ __all__ = [
     "rpy_derivatives",
     "rpy_matrix",
     "scene_for",
+    "scene_for_postures",
     "summarize",
     "survey_config_pairs",
     "tilt_angles",

@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError, InputError, unknown_name
-from posegen.io import provenance
+from posegen.io import Pool, provenance
 from posegen.robot.config import ChainConfig, Config, load_config, parse_config
 from posegen.robot.description import frame_id
 from posegen.robot.geometry import FloatArray, polygon_margin
@@ -287,3 +287,26 @@ def scene_for(recorded: dict[str, Any], config_path: str | None) -> Scene:
         raise InputError(f"the provenance must be a mapping, not {type(recorded).__name__}")
     config = load_config(config_path) if config_path else parse_config(recorded.get("config"), "")
     return Scene(config)
+
+
+def scene_for_postures(postures: Pool, path: str, config_path: str | None) -> Scene:
+    """The scene a pool or selection file was made for, checked against it (model hash, joints, limits).
+
+    Args:
+        postures: The file's postures (:func:`posegen.io.load_pool`, :func:`posegen.io.load_postures`).
+        path: The file, named in errors.
+        config_path: Scene config; None: the one saved in the file.
+
+    Raises:
+        PosegenError: The config cannot be read, or the postures are of another robot model,
+            lack its joints or leave its limits.
+
+    Example:
+        >>> scene = scene_for_postures(load_pool("plans/pool.yaml"), "plans/pool.yaml", None)
+
+    """
+    scene = scene_for(postures.provenance, config_path)
+    scene.check_made_for(postures.provenance, path)
+    postures.check_joints(scene.joint_names, path)
+    postures.check_limits(scene.joint_names, scene.lower, scene.upper, path)
+    return scene

@@ -29,7 +29,7 @@ from posegen.io import (
 from posegen.model import Design, build_design
 from posegen.parallel import Backend
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import Scene, Verification, geometry_coverage, scene_for
+from posegen.robot import Scene, Verification, geometry_coverage, scene_for, scene_for_postures
 from posegen.route.check import MIN_DT_S, verify_route
 from posegen.route.export import route_artefact
 from posegen.route.repair import Substitutes, o1_figures
@@ -98,10 +98,7 @@ def route_postures_file(
     check_apart(outputs, [postures_path, pool_path, config_path])
     chosen, entries = load_postures(postures_path)
     chosen, entries, repeated = _without_repeats(chosen, entries, postures_path)
-    scene = scene_for(chosen.provenance, config_path)
-    scene.check_made_for(chosen.provenance, postures_path)
-    chosen.check_joints(scene.joint_names, postures_path)
-    chosen.check_limits(scene.joint_names, scene.lower, scene.upper, postures_path)
+    scene = scene_for_postures(chosen, postures_path, config_path)
     substitutes, pool_entries, repair = _substitutes(scene, chosen, entries, postures_path, pool_path)
     with claim_output(path, beside=outputs[1:]):
         progress(Progress(0, 2 * len(chosen.postures) + 1, "job"))

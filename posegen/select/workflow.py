@@ -14,7 +14,7 @@ from posegen.errors import InfeasibleError, InputError
 from posegen.io import check_apart, check_writable, claim_output, load_pool
 from posegen.model import DEFAULT_NOISE, Contacts, build_design, measurement_item, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
-from posegen.robot import scene_for
+from posegen.robot import scene_for_postures
 from posegen.select.figures import design_selection, plot_detmax, plot_o1
 from posegen.select.followup import follow_up, read_calibration_model
 from posegen.select.selection import detmax_runs, iroc, select_k
@@ -89,10 +89,7 @@ def select_pool_file(
         check_writable(plot)
     check_apart([path, *plots], [pool_path, config_path])
     pool = load_pool(pool_path)
-    scene = scene_for(pool.provenance, config_path)
-    scene.check_made_for(pool.provenance, pool_path)
-    pool.check_joints(scene.joint_names, pool_path)
-    pool.check_limits(scene.joint_names, scene.lower, scene.upper, pool_path)
+    scene = scene_for_postures(pool, pool_path, config_path)
     if not pool.postures:
         raise InfeasibleError(f"{pool_path}: the pool is empty")
     if k is not None and k > len(pool.postures):
@@ -167,10 +164,7 @@ def follow_up_pool_file(
         raise InputError("given: at least one measurement file", parameter="given")
     check_apart([path], [pool_path, calibration_path, config_path, *(measurement_item(g)[0] for g in given)])
     pool = load_pool(pool_path)
-    scene = scene_for(pool.provenance, config_path)
-    scene.check_made_for(pool.provenance, pool_path)
-    pool.check_joints(scene.joint_names, pool_path)
-    pool.check_limits(scene.joint_names, scene.lower, scene.upper, pool_path)
+    scene = scene_for_postures(pool, pool_path, config_path)
     if k > len(pool.postures):
         raise InfeasibleError(f"k={k}: the pool has only {len(pool.postures)} postures", parameter="k")
     contacts: Contacts | None = None

@@ -19,7 +19,7 @@ from posegen.calibrate import DeliverableKind, Settings, calibrate_files, measur
 from posegen.errors import ArgumentError, InfeasibleError, InputError, unknown_name
 from posegen.io import OutputKind, RecordedBag, check_writable, claim_output, load_pool, write_yaml
 from posegen.parallel import Backend
-from posegen.robot import scene_for
+from posegen.robot import scene_for_postures
 from posegen.session.batch import (
     CALIBRATION_FOLDER,
     MEASUREMENTS_FILE,
@@ -93,10 +93,7 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
             parameter="output",
         )
     pool = load_pool(pool_path)
-    scene = scene_for(pool.provenance, None)
-    scene.check_made_for(pool.provenance, pool_path)
-    pool.check_joints(scene.joint_names, pool_path)
-    pool.check_limits(scene.joint_names, scene.lower, scene.upper, pool_path)
+    scene = scene_for_postures(pool, pool_path, None)
     if not pool.postures:
         raise InfeasibleError(f"{pool_path}: the pool is empty")
     names = [c.name for c in scene.calibration.candidates]
