@@ -49,6 +49,7 @@ FLAGS = {  # the library's words for a parameter (PosegenError.parameter) -> the
     "batch_postures": "--batch",
     "candidates": "--candidates",
     "max_batches": "--max-batches",
+    "patience": "--patience",
     "package_dirs": "--package-dir",
 }
 

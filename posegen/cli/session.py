@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import argparse
 import os
+from pathlib import Path
 from typing import Any
 
 from posegen.cli.export import SEGMENTS_TOPIC, TRAJECTORY_TOPIC
-from posegen.cli.options import JOINT_STATES_TOPIC, positive, positive_size, seed, size
+from posegen.cli.options import JOINT_STATES_TOPIC, non_negative, positive, positive_size, seed, size
 
 NAME = "session"
 HELP = "an experiment batch by batch: start, add each recorded bag, status; rehearse on a simulated robot"
@@ -28,6 +29,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--margin", type=size, default=0.2, help="first batch: (1 + margin) x the fewest identifying postures (0.2)"
     )
     start.add_argument("--batch", type=positive, default=10, help="postures of each next batch (default 10)")
+    start.add_argument(
+        "--patience",
+        type=non_negative,
+        default=2,
+        help="stop at the deliverable's floor after this many batches without a new low above the target "
+        "(default 2; 0: only the target stops the session)",
+    )
     start.add_argument(
         "--deliverable",
         choices=("urdf", "compensated"),
@@ -72,7 +80,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the step and print what it did."""
     from posegen.parallel import open_backend
-    from posegen.session import Deliverable, Robot, SessionSettings, rehearse_session, session_status, start_session
+    from posegen.session import (
+        Deliverable,
+        Robot,
+        SessionSettings,
+        read_index,
+        rehearse_session,
+        session_status,
+        start_session,
+    )
 
     if args.step == "status":
         return _status(session_status(args.session, args.plot))
@@ -83,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
                 seed=args.seed,
                 margin=args.margin,
                 batch_postures=args.batch,
+                patience=args.patience,
                 deliverable=Deliverable(args.deliverable),
                 candidates=tuple(args.candidates),
                 fold_seeds=args.fold_seeds,
@@ -106,8 +123,9 @@ def run(args: argparse.Namespace) -> int:
         )
         added = rehearse_session(args.session, robot, backend, args.max_batches, lambda a: _added(args.session, a))
     if not added:
-        print(f"session: {args.session} is done already: nothing to rehearse")
-    elif not added[-1].index.done:
+        verdict = "is done" if read_index(Path(args.session)).done else "stopped at the floor"
+        print(f"session: {args.session} {verdict} already: nothing to rehearse")
+    elif not added[-1].index.ended:
         print(f"session: not done after {len(added)} rehearsed batches (--max-batches {args.max_batches})")
     return 0
 
@@ -146,17 +164,27 @@ def _added(session: str, added: Any) -> None:
                 f"{assessment.deliverable} deliverable may be at its floor (a URDF cannot hold compliant "
                 "joints; a session started with --deliverable compensated follows the compensated files)"
             )
+    if added.next_batch is None and index.at_floor:
+        print(
+            f"session: stopped at the floor: no chain above the target {target:g} mm reached a new low in the last "
+            f"{index.settings.patience} batches -> the deliverables are in {session}/{batch.folder}/calibration/"
+        )
+        return
     if added.next_batch is None:
         print(f"session: done -> the deliverables are in {session}/{batch.folder}/calibration/")
         return
     _planned(session, added.next_batch)
 
 
+def _verdict(index: Any) -> str:
+    return "done" if index.done else "stopped at the floor" if index.at_floor else "not done"
+
+
 def _status(status: Any) -> int:
     index = status.index
     print(
         f"session: {len(index.batches)} batches, {status.contacts} contacts; robot time {status.spent_s:.0f} s spent, "
-        f"{status.planned_s:.0f} s planned; {'done' if index.done else 'not done'} "
+        f"{status.planned_s:.0f} s planned; {_verdict(index)} "
         f"(target {index.settings.target_mm:g} mm, {index.settings.deliverable.value} deliverable)"
     )
     for batch in index.batches:

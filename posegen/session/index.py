@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import enum
 import hashlib
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -54,6 +55,7 @@ class SessionSettings:
     joint_topic: str = "/joint_states"
     trajectory_topic: str = "/joint_trajectory_controller/joint_trajectory"
     segments_topic: str = "/posegen/segments"
+    patience: int = 2  # stop at the floor after this many batches without a new low above the target (0: never)
 
 
 @dataclass(frozen=True)
@@ -150,6 +152,38 @@ class SessionIndex:
             if chain in before and now > target and now >= before[chain]
         )
 
+    @property
+    def at_floor(self) -> bool:
+        """Whether the last ``patience`` batches brought no chain above the target a new lowest predicted error.
+
+        The session's rule for a deliverable that more contacts do not improve (a URDF
+        cannot hold compliant joints; its predicted error levels off above a low target):
+        with ``patience`` p, it stops when, for every chain still above the target, the
+        lowest prediction of the last p assessed batches is not below the lowest of the
+        batches before them. No threshold: a new low by any amount continues the session.
+        A session that met its target is done, not at its floor.
+
+        Example:
+            >>> index.at_floor, index.settings.patience
+
+        """
+        patience = self.settings.patience
+        assessed = [b.assessment for b in self.batches if b.assessment is not None and not b.assessment.error]
+        if self.done or patience < 1 or len(assessed) <= patience:
+            return False
+        earlier, recent = assessed[:-patience], assessed[-patience:]
+        above = [c for c, v in assessed[-1].predicted_z_mm.items() if v > self.settings.target_mm]
+
+        def lowest(assessments: list[Assessment], chain: str) -> float:
+            return min((a.predicted_z_mm[chain] for a in assessments if chain in a.predicted_z_mm), default=math.inf)
+
+        return bool(above) and all(lowest(recent, c) >= lowest(earlier, c) for c in above)
+
+    @property
+    def ended(self) -> bool:
+        """Whether no batch follows: done (the target met) or at the deliverable's floor."""
+        return self.done or self.at_floor
+
     def with_batch(self, batch: Batch) -> SessionIndex:
         """The index with ``batch`` replacing the batch of its number, or appended."""
         kept = tuple(b for b in self.batches if b.number != batch.number)
@@ -200,6 +234,7 @@ def index_to_dict(index: SessionIndex) -> dict[str, Any]:
         "pool_sha256": index.pool_sha256,
         "settings": settings,
         "done": index.done,
+        "at_floor": index.at_floor,
         "batches": batches,
     }
 

@@ -50,7 +50,7 @@ def rehearse_session(
     max_batches: int = 20,
     told: Callable[[Added], None] = lambda added: None,
 ) -> list[Added]:
-    """Play the session's batches on a simulated robot until it is done, or ``max_batches`` are added.
+    """Play the session's batches on a simulated robot until it ends (done, at its floor) or ``max_batches`` are added.
 
     Args:
         session: Session folder (started; it may be partly played: it resumes).
@@ -68,7 +68,7 @@ def rehearse_session(
     folder = Path(session)
     added: list[Added] = []
     index = open_session(folder)
-    while not index.done and len(added) < max_batches:
+    while not index.ended and len(added) < max_batches:
         last = index.batches[-1]
         bag = folder / last.folder / REHEARSAL_BAG
         if last.state is BatchState.PLANNED:

@@ -74,6 +74,7 @@ def check_settings(settings: SessionSettings) -> None:
         check_count(settings.fold_seeds, "fold_seeds")
     if settings.prior_scale is not None:
         check_size(settings.prior_scale, "prior_scale", positive=True)
+    check_count(settings.patience, "patience", minimum=0)
 
 
 def start_session(pool_path: str, output: str, settings: SessionSettings, backend: Backend) -> SessionIndex:
@@ -142,12 +143,14 @@ def _check_bag(index: SessionIndex, folder: Path, recorded: RecordedBag, digest:
     last = index.batches[-1]
     for batch in index.batches:
         recording = batch.recording
-        if recording is not None and recording.bag_sha256 == digest and (batch is not last or index.done):
+        if recording is not None and recording.bag_sha256 == digest and (batch is not last or index.ended):
             raise InputError(
                 f"{recorded.path}: this bag was already added (batch {batch.number}, sha256 {digest[:12]})"
             )
-    if index.done:
-        raise InputError(f"{folder}: the session is done (the calibration is in {last.folder}/{CALIBRATION_FOLDER})")
+    if index.ended:
+        verdict = "done" if index.done else "at its floor (no new low above the target)"
+        where = f"{last.folder}/{CALIBRATION_FOLDER}"
+        raise InputError(f"{folder}: the session is {verdict}: the calibration is in {where}")
     if last.recording is not None and last.recording.bag_sha256 != digest:
         raise InputError(
             f"{folder}: batch {last.number} was added from {last.recording.bag} and its next batch is not planned "
@@ -195,7 +198,7 @@ def add_bag(session: str, bag: str, backend: Backend, new_table: bool = False) -
             batch = _assess(folder, index, batch, backend)
             index = index.with_batch(batch)
             write_index(folder, index)
-        if index.done:
+        if index.ended:
             return Added(batch, None, index)
         next_batch = _plan_next(folder, index, batch, backend)
         index = index.with_batch(next_batch)

@@ -1,5 +1,7 @@
 """The session index: written and read back to the same dataclass; malformed or edited indexes refused."""
 
+import dataclasses
+
 import pytest
 import yaml
 
@@ -91,3 +93,51 @@ def test_a_chain_above_the_target_whose_prediction_did_not_fall_is_stalled(tmp_p
         assert index.with_batch(second).stalled == stalled
     failed = Batch(2, (7, 8), 25.0, {}, recording, Assessment(29, "", "", {}, False, error="too few contacts"))
     assert index.with_batch(failed).stalled == ()  # a batch without a figure is not compared
+
+
+def with_predictions(index, *predicted, patience=2):
+    """The index with one assessed batch per ``{chain: mm}`` of ``predicted`` (batch 1 replaced)."""
+    recording = Recording("/bags/b", "ef" * 32, "table_1", 10, 25.0, ())
+    batches = tuple(
+        Batch(n, (n,), 25.0, {}, recording, Assessment(10 * n, "urdf", "offsets", figures, False))
+        for n, figures in enumerate(predicted, start=1)
+    )
+    settings = dataclasses.replace(index.settings, patience=patience)
+    return dataclasses.replace(index, settings=settings, batches=batches)
+
+
+@pytest.mark.parametrize(
+    ("predicted", "patience", "at_floor"),
+    [
+        (({"left": 5.0}, {"left": 5.1}), 2, False),  # one batch without gain: patience 2 waits
+        (({"left": 5.0}, {"left": 5.1}, {"left": 5.05}), 2, True),  # two batches, no new low
+        (({"left": 5.0}, {"left": 5.1}, {"left": 4.99}), 2, False),  # a new low, by any amount
+        (({"left": 5.0}, {"left": 5.1}), 1, True),
+        (({"left": 5.0}, {"left": 5.1}, {"left": 5.2}), 0, False),  # 0: only the target stops it
+        (({"left": 5.0, "right": 4.0}, {"left": 4.0, "right": 4.5}, {"left": 3.9, "right": 4.6}), 2, False),
+        (({"left": 5.0, "right": 4.0}, {"left": 2.0, "right": 4.5}, {"left": 2.1, "right": 4.6}), 2, True),
+        (({"left": 2.0, "right": 2.0}, {"left": 2.5, "right": 2.9}, {"left": 2.6, "right": 2.9}), 2, False),  # done
+    ],
+)
+def test_a_session_is_at_its_floor_when_no_chain_above_the_target_reaches_a_new_low(
+    tmp_path, predicted, patience, at_floor
+):
+    index = with_predictions(an_index(tmp_path), *predicted, patience=patience)  # target 3 mm
+    assert index.at_floor is at_floor
+    assert index.ended is (at_floor or index.done)
+
+
+def test_patience_is_written_and_read_back(tmp_path):
+    index = with_predictions(an_index(tmp_path), {"left": 5.0}, {"left": 5.1}, patience=1)
+    write_index(tmp_path, index)
+    again = read_index(tmp_path)
+    assert again.settings.patience == 1 and again.at_floor
+    assert yaml.safe_load((tmp_path / INDEX_FILE).read_text())["at_floor"] is True
+
+
+def test_an_index_written_before_patience_existed_reads_with_its_default(tmp_path):
+    write_index(tmp_path, an_index(tmp_path))
+    data = yaml.safe_load((tmp_path / INDEX_FILE).read_text())
+    del data["settings"]["patience"]
+    (tmp_path / INDEX_FILE).write_text(yaml.safe_dump(data))
+    assert read_index(tmp_path).settings.patience == SessionSettings().patience

@@ -288,3 +288,27 @@ def test_the_session_stops_when_every_chain_meets_the_target(started, rehearsed,
     assert "already added" in capsys.readouterr().err
     assert main(["session", "rehearse", str(copy), "--seed", "3", "-q"]) == 0
     assert "is done already" in capsys.readouterr().out
+
+
+def test_the_session_stops_at_the_floor_when_batches_bring_no_new_low(started, rehearsed, backend, tmp_path, capsys):
+    copy = copy_of(started, tmp_path)
+    first = add_bag(str(copy), str(rehearsed[0] / "batch_001" / REHEARSAL_BAG), backend)
+    assert first.next_batch is not None and not first.index.ended  # one figure: nothing to compare yet
+    index = read_index(copy)  # as rehearsed so far; now an unreachable target, and a low no batch can beat
+    unreachable = dataclasses.replace(index.settings, target_mm=0.01, patience=1)
+    low = dataclasses.replace(index.batches[0].assessment, predicted_z_mm={CHAIN: 0.02})
+    index = index.with_batch(dataclasses.replace(index.batches[0], assessment=low))
+    write_index(copy, dataclasses.replace(index, settings=unreachable))
+    rehearse = ["session", "rehearse", str(copy), "--seed", "3", "--compliance", "0.3", "--workers", "2", "-q"]
+    assert main([*rehearse, "--max-batches", "5"]) == 0  # batch 2 played on the same robot, then the rule stops it
+    out = capsys.readouterr().out
+    assert "session: stopped at the floor: no chain above the target 0.01 mm reached a new low in the last 1" in out
+    assert "not done after" not in out
+    ended = read_index(copy)
+    assert ended.at_floor and not ended.done and len(ended.batches) == 2 and not (copy / "batch_003").exists()
+    assert main(["session", "add", str(copy), str(copy / "batch_002" / REHEARSAL_BAG), "-q"]) == 2
+    assert "already added" in capsys.readouterr().err
+    assert main(rehearse) == 0
+    assert "stopped at the floor already" in capsys.readouterr().out
+    assert main(["session", "status", str(copy), "--plot", str(tmp_path / "s.png")]) == 0
+    assert "stopped at the floor" in capsys.readouterr().out
