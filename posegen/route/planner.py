@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from posegen.errors import InfeasibleError
 from posegen.io import SegmentType
 from posegen.robot import CollisionChecker, Config, FloatArray, Projector, Scene, StanceSpace
 from posegen.route.free_motion import FreeMotion, Method, free_motions, raised_midpoints, stream_of, via_sequences
@@ -101,7 +102,10 @@ def plan_stop(planner: Planner, request: tuple[int, tuple[float, ...], str]) -> 
     if vertical is None:
         return Unplanned(UnplannedCause.NO_VERTICAL)
     limit = scene.velocity_limit * scene.route.velocity_scale_contact
-    timed = parameterize(np.array(vertical.go_to_contact), limit, _acceleration(scene))
+    try:
+        timed = parameterize(np.array(vertical.go_to_contact), limit, _acceleration(scene))
+    except InfeasibleError as exc:
+        return Unplanned(UnplannedCause.NO_TIMING, f"go-to-contact: {exc}")
     return Stop(node, chain, np.array(vertical.approach), timed, vertical.clearance)
 
 
@@ -119,12 +123,16 @@ def plan_transfer(planner: Planner, request: tuple[Stop | None, Stop | None]) ->
     if isinstance(found, Unplanned):
         return found
     best: Transfer | None = None
+    untimed = ""
     for motion in found:
-        transfer = _timed_transfer(planner, motion, source, target, keys)
+        try:
+            transfer = _timed_transfer(planner, motion, source, target, keys)
+        except InfeasibleError as exc:  # another motion found may still be timed
+            untimed = f"{len(found)} free motions found, none timed: {exc}"
+            continue
         if best is None or transfer.timed.times[-1] < best.timed.times[-1]:
             best = transfer
-    assert best is not None
-    return best
+    return Unplanned(UnplannedCause.NO_TIMING, untimed) if best is None else best
 
 
 def _timed_transfer(

@@ -21,6 +21,7 @@ import toppra
 import toppra.algorithm
 import toppra.constraint
 
+from posegen.errors import InfeasibleError
 from posegen.robot import FloatArray
 
 LOG = logging.getLogger(__name__)
@@ -54,6 +55,10 @@ def parameterize(waypoints: FloatArray, velocity_limit: FloatArray, acceleration
         waypoints: (m, nj) rad; consecutive duplicates are dropped.
         velocity_limit: (nj,) rad/s, or (m, nj): the limit at each waypoint.
         acceleration_limit: (nj,) rad/s^2.
+
+    Raises:
+        InfeasibleError: toppra finds no timing of the path (seen on paths that wind
+            tightly near a singular, limited knee).
 
     """
     waypoints = np.asarray(waypoints, dtype=float)
@@ -95,7 +100,7 @@ def parameterize(waypoints: FloatArray, velocity_limit: FloatArray, acceleration
     instance = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
     sdd, sd, _ = instance.compute_parameterization(0, 0)
     if sd is None or sdd is None:
-        raise RuntimeError("toppra found no parameterisation")
+        raise InfeasibleError(f"toppra found no parameterisation of a path of {len(positions)} waypoints")
     sd = np.maximum(np.asarray(sd, dtype=float), 0.0)
     sdd = np.append(np.asarray(sdd, dtype=float), float(sdd[-1]))
     dt = 2.0 * np.diff(grid) / np.maximum(sd[:-1] + sd[1:], 1e-12)

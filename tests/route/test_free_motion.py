@@ -5,11 +5,13 @@ import threading
 import numpy as np
 import pytest
 
+from posegen.errors import InfeasibleError
 from posegen.robot import CollisionChecker, Projector, StanceSpace
 from posegen.route import (
     Method,
     Planner,
     Unplanned,
+    UnplannedCause,
     free_motions,
     plan_free,
     plan_stop,
@@ -152,3 +154,35 @@ def test_a_via_state_equal_to_an_end_is_dropped_not_repeated(detour):
     steps = np.abs(np.diff(np.array(found[0].waypoints), axis=0)).max(axis=1)
     assert steps.min() > 0.0  # no waypoint repeated
     assert free_motions(space, start, goal, [[start], [goal]], stream=0, via_candidates=2)[0].method != Method.VIA
+
+
+def test_a_path_toppra_cannot_time_is_a_planning_failure_not_a_crash(detour, example_pool, monkeypatch):
+    import posegen.route.planner as planner_module
+
+    planner, (a, b) = detour
+    timed = planner_module.parameterize
+    calls = []
+
+    def first_fails(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 1:
+            raise InfeasibleError("toppra found no parameterisation of a path of 9 waypoints")
+        return timed(*args, **kwargs)
+
+    monkeypatch.setattr(planner_module, "parameterize", first_fails)
+    transfer = plan_transfer(planner, (a, b))  # two via paths: the second is timed
+    assert not isinstance(transfer, Unplanned) and len(calls) == 2
+
+    def never(*args, **kwargs):
+        raise InfeasibleError("toppra found no parameterisation of a path of 9 waypoints")
+
+    monkeypatch.setattr(planner_module, "parameterize", never)
+    untimed = plan_transfer(planner, (a, b))
+    assert isinstance(untimed, Unplanned) and untimed.cause is UnplannedCause.NO_TIMING
+    assert str(untimed) == (
+        "no time parameterisation of the planned path: 2 free motions found, none timed: "
+        "toppra found no parameterisation of a path of 9 waypoints"
+    )
+    posture = example_pool.postures[9]
+    stop = plan_stop(planner, (9, tuple(posture.joints), posture.chain))
+    assert isinstance(stop, Unplanned) and stop.cause is UnplannedCause.NO_TIMING
