@@ -1,0 +1,84 @@
+"""The URDF ``posegen robot init`` writes beside a draft made from an MJCF model.
+
+The stages read a URDF, so an MJCF model is converted (:func:`posegen.robot.mjcf.convert_mjcf`)
+and written next to the draft config, as ``<config stem>.urdf``; the draft names it in
+``robot.source.urdf`` with a ``# CHECK:`` line giving the MJCF it came from (path,
+SHA-256) and what the URDF does not carry. An existing file there is never
+overwritten: it is kept if it holds this very conversion (a re-run), refused otherwise.
+If drafting fails, a URDF this run wrote is removed: no URDF without its draft.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from posegen.errors import OutputError
+from posegen.io import write_atomic
+from posegen.robot.mjcf import convert_mjcf, is_mjcf
+
+
+@dataclass(frozen=True)
+class ConvertedSource:
+    """The URDF a draft reads, converted from an MJCF model."""
+
+    urdf: Path  # written beside the draft config
+    check: str  # the draft's ``# CHECK:`` line about the conversion
+    note: str  # what ``robot init`` says about it
+
+
+def mjcf_source(robot: str) -> Path | None:
+    """The MJCF file ``robot`` names, or None (an example-robot-data name, a URDF)."""
+    path = Path(robot)
+    return path if path.is_file() and is_mjcf(path) else None
+
+
+def urdf_beside(output: str | Path) -> Path:
+    """Where the URDF converted for the draft ``output`` goes: ``<output stem>.urdf`` beside it."""
+    return Path(output).with_suffix(".urdf")
+
+
+@contextlib.contextmanager
+def converted_urdf(mjcf: Path, output: str | Path) -> Iterator[ConvertedSource]:
+    """Convert ``mjcf``, write its URDF beside the draft ``output`` (atomically), and remove it if the block fails.
+
+    Args:
+        mjcf: The MJCF model.
+        output: The draft config to be written.
+
+    Yields:
+        The URDF's path, with the draft's ``# CHECK:`` line and a note about it.
+
+    Raises:
+        ConfigError: The MJCF cannot be converted (see :func:`~posegen.robot.mjcf.convert_mjcf`).
+        OutputError: The URDF's place is ``output`` itself, or holds another file.
+
+    Example:
+        >>> with converted_urdf(Path("humanoid.xml"), "configs/h.yaml") as source:  # doctest: +SKIP
+        ...     draft = draft_robot(str(source.urdf))
+
+    """
+    urdf = urdf_beside(output).absolute()
+    if urdf == Path(output).absolute():
+        raise OutputError(f"{output}: the draft's name ends in .urdf, where its converted URDF goes; name it .yaml")
+    converted = convert_mjcf(mjcf)
+    created = not urdf.exists()
+    if not created and urdf.read_bytes() != converted.text.encode():
+        raise OutputError(
+            f"{urdf} exists and is not this MJCF's conversion: not overwriting it (move it, or rename -o)"
+        )
+    if created:
+        write_atomic(urdf, converted.text)
+    dropped = "; ".join(converted.dropped) or "nothing"
+    check = (
+        f"robot.source.urdf was converted by posegen from the MJCF {converted.mjcf} (sha256 {converted.sha256}); "
+        f"the stages read the URDF, not the MJCF: re-run robot init if the MJCF changes. Not carried: {dropped}"
+    )
+    try:
+        yield ConvertedSource(urdf, check, f"MJCF {mjcf} converted to {urdf}")
+    except BaseException:
+        if created:
+            urdf.unlink(missing_ok=True)
+        raise
