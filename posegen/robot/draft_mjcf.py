@@ -5,7 +5,8 @@ and written next to the draft config, as ``<config stem>.urdf``; the draft names
 ``robot.source.urdf`` with a ``# CHECK:`` line giving the MJCF it came from (path,
 SHA-256) and what the URDF does not carry. An existing file there is never
 overwritten: it is kept if it holds this very conversion (a re-run), refused otherwise.
-If drafting fails, a URDF this run wrote is removed: no URDF without its draft.
+If drafting fails, a URDF this run wrote is removed (no URDF without its draft), and
+the error names the MJCF file rather than that URDF.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from posegen.errors import OutputError
+from posegen.errors import ConfigError, OutputError
 from posegen.io import write_atomic
 from posegen.robot.mjcf import convert_mjcf, is_mjcf
 
@@ -62,23 +63,30 @@ def converted_urdf(mjcf: Path, output: str | Path) -> Iterator[ConvertedSource]:
     """
     urdf = urdf_beside(output).absolute()
     if urdf == Path(output).absolute():
-        raise OutputError(f"{output}: the draft's name ends in .urdf, where its converted URDF goes; name it .yaml")
+        raise OutputError(
+            f"{output}: the draft's name ends in .urdf, where its converted URDF goes: give an output ending in .yaml",
+            parameter="output",
+        )
     converted = convert_mjcf(mjcf)
     created = not urdf.exists()
     if not created and urdf.read_bytes() != converted.text.encode():
         raise OutputError(
-            f"{urdf} exists and is not this MJCF's conversion: not overwriting it (move it, or rename -o)"
+            f"{urdf} exists and is not this MJCF's conversion: not overwriting it (move it, or give another output)",
+            parameter="output",
         )
     if created:
         write_atomic(urdf, converted.text)
     dropped = "; ".join(converted.dropped) or "nothing"
     check = (
         f"robot.source.urdf was converted by posegen from the MJCF {converted.mjcf} (sha256 {converted.sha256}); "
-        f"the stages read the URDF, not the MJCF: re-run robot init if the MJCF changes. Not carried: {dropped}"
+        f"the stages read the URDF, not the MJCF: re-run robot init if the MJCF changes. Not carried: {dropped} "
+        "(nor ever joint damping, armature, friction; infinite speed limits are written as 0)"
     )
     try:
         yield ConvertedSource(urdf, check, f"MJCF {mjcf} converted to {urdf}")
-    except BaseException:
+    except BaseException as exc:
         if created:
             urdf.unlink(missing_ok=True)
+        if isinstance(exc, ConfigError) and str(urdf) in str(exc):  # the user's file named, not the URDF removed
+            raise ConfigError(str(exc).replace(str(urdf), str(mjcf)), parameter=exc.parameter) from exc
         raise

@@ -58,9 +58,7 @@ def load_draft_source(name: str, srdf: str | None = None, package_dirs: tuple[st
         )
         root = _xml_root(absolute)
         if root.tag == MJCF_ROOT:
-            raise ConfigError(
-                f"{name}: an MJCF model; posegen's stages read a URDF: `posegen robot init` converts it"
-            )
+            raise ConfigError(f"{name}: an MJCF model; posegen's stages read a URDF: `posegen robot init` converts it")
         if root.tag != "robot":
             raise ConfigError(f"{name}: not a URDF (its root element is <{root.tag}>, not <robot>)")
     else:
