@@ -26,6 +26,7 @@ infinity).
 from __future__ import annotations
 
 import hashlib
+import tempfile
 import xml.etree.ElementTree as ET
 from collections import Counter
 from dataclasses import dataclass
@@ -35,6 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError
+from posegen.robot.mjcf_text import flattened_mjcf
 
 MJCF_ROOT = "mujoco"
 _IDENTITY_TOL = 1e-12
@@ -70,7 +72,7 @@ def convert_mjcf(path: str | Path) -> MjcfUrdf:
         The URDF, and what it could not carry.
 
     Raises:
-        ConfigError: The file is not XML, pinocchio cannot load it, an include is missing,
+        ConfigError: The file is not XML, pinocchio cannot load it, an include or mesh is missing,
             its root has no free joint, or it has a ball joint or a second body in
             ``<worldbody>`` (the file and the element named).
 
@@ -80,37 +82,35 @@ def convert_mjcf(path: str | Path) -> MjcfUrdf:
 
     """
     path = Path(path).resolve()
-    try:
-        data = path.read_bytes()
-        root = ET.fromstring(data)
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot be read ({exc.strerror})") from exc
-    except ET.ParseError as exc:
-        raise ConfigError(f"{path}: not valid XML ({exc})") from exc
+    root = flattened_mjcf(path)
     _check_elements(root, path)
-    try:
-        model = pin.buildModelFromMJCF(str(path))
-        collision = pin.buildGeomFromMJCF(model, str(path), pin.GeometryType.COLLISION)
-        visual = pin.buildGeomFromMJCF(model, str(path), pin.GeometryType.VISUAL)
-    except (RuntimeError, ValueError, IndexError) as exc:
-        lines = str(exc).strip().splitlines()
-        raise ConfigError(
-            f"{path}: pinocchio cannot load the MJCF: {lines[0] if lines else type(exc).__name__}"
-        ) from exc
+    model, collision, visual = _load(root, path)
     _check_tree(model, path)
     writer = _UrdfWriter(model, _body_joint_names(root), path)
     text = writer.write(collision, visual)
     dropped = tuple(writer.dropped) + _sections_dropped(root)
-    return MjcfUrdf(path, hashlib.sha256(data).hexdigest(), text, dropped)
+    return MjcfUrdf(path, hashlib.sha256(path.read_bytes()).hexdigest(), text, dropped)
+
+
+def _load(root: ET.Element, path: Path) -> tuple[pin.Model, pin.GeometryModel, pin.GeometryModel]:
+    """The model, collision and visual geometry pinocchio reads from the flattened MJCF (a temporary copy)."""
+    with tempfile.TemporaryDirectory(prefix="posegen-mjcf-") as folder:
+        flat = str(Path(folder) / path.name)
+        ET.ElementTree(root).write(flat, encoding="unicode")
+        try:
+            model = pin.buildModelFromMJCF(flat)
+            collision = pin.buildGeomFromMJCF(model, flat, pin.GeometryType.COLLISION)
+            visual = pin.buildGeomFromMJCF(model, flat, pin.GeometryType.VISUAL)
+        except (RuntimeError, ValueError, IndexError) as exc:
+            lines = str(exc).strip().splitlines()
+            first = lines[0] if lines else type(exc).__name__
+            raise ConfigError(f"{path}: pinocchio cannot load the MJCF: {first}") from exc
+    return model, collision, visual
 
 
 def _check_elements(root: ET.Element, path: Path) -> None:
-    """Includes that exist, one body in ``<worldbody>`` (pinocchio passes over the others without a word)."""
-    for include in root.iter("include"):
-        if not (path.parent / include.get("file", "")).is_file():
-            raise ConfigError(f'{path}: <include file="{include.get("file", "")}"> not found beside it')
-    compiler = root.find("compiler")
-    meshdir = path.parent / (compiler.get("meshdir", compiler.get("assetdir", "")) if compiler is not None else "")
+    """Meshes that exist, one body in ``<worldbody>`` (pinocchio passes over the others without a word)."""
+    meshdir = Path(next(c.get("meshdir", "") for c in root.findall("compiler") if c.get("meshdir")))  # absolute
     meshes = {}
     for mesh in root.iter("mesh"):
         if mesh.get("file"):
