@@ -31,13 +31,25 @@ class ConvertedSource:
 
 
 def mjcf_source(robot: str) -> Path | None:
-    """The MJCF file ``robot`` names, or None (an example-robot-data name, a URDF)."""
+    """The MJCF file ``robot`` names, or None (an example-robot-data name, a URDF).
+
+    Example:
+        >>> mjcf_source("talos") is None  # doctest: +SKIP
+        True
+
+    """
     path = Path(robot)
     return path if path.is_file() and is_mjcf(path) else None
 
 
 def urdf_beside(output: str | Path) -> Path:
-    """Where the URDF converted for the draft ``output`` goes: ``<output stem>.urdf`` beside it."""
+    """Where the URDF converted for the draft ``output`` goes: ``<output stem>.urdf`` beside it.
+
+    Example:
+        >>> urdf_beside("configs/h1_table.yaml")
+        PosixPath('configs/h1_table.urdf')
+
+    """
     return Path(output).with_suffix(".urdf")
 
 

@@ -55,7 +55,13 @@ class MjcfUrdf:
 
 
 def is_mjcf(path: Path) -> bool:
-    """Whether ``path`` is an XML file whose root element is ``<mujoco>`` (False if it is not XML)."""
+    """Whether ``path`` is an XML file whose root element is ``<mujoco>`` (False if it is not XML).
+
+    Example:
+        >>> is_mjcf(Path("humanoid.xml")), is_mjcf(Path("robot.urdf"))  # doctest: +SKIP
+        (True, False)
+
+    """
     try:
         return ET.parse(path).getroot().tag == MJCF_ROOT
     except (ET.ParseError, OSError):

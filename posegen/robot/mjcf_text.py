@@ -25,6 +25,10 @@ _ASSET_DIRS = ("meshdir", "texturedir", "assetdir")
 def parse_xml(path: Path) -> ET.Element:
     """The root element of an XML file.
 
+    Example:
+        >>> parse_xml(Path("humanoid.xml")).tag  # doctest: +SKIP
+        'mujoco'
+
     Raises:
         ConfigError: The file cannot be read or is not XML (the file named).
 

@@ -59,6 +59,9 @@ def test_a_urdf_in_the_way_is_never_overwritten(tmp_path, capsys):
     assert theirs.read_text() == "<robot name='theirs'/>" and not (tmp_path / "humanoid.yaml").exists()
     assert _init(mjcf, tmp_path / "model.urdf") == 2  # the draft itself where the URDF goes
     assert "give an -o ending in .yaml" in capsys.readouterr().err
+    before = mjcf.read_bytes()
+    assert _init(mjcf, mjcf) == 2  # the draft over its MJCF
+    assert "is an input of this command" in capsys.readouterr().err and mjcf.read_bytes() == before
 
 
 @pytest.mark.parametrize(
