@@ -16,14 +16,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(dest="action", required=True)
     init = actions.add_parser(
         "init",
-        help="draft a config for a humanoid: example-robot-data name or URDF file (soles, posture, contacts, pairs)",
-        description="Study a humanoid (an example-robot-data name or a URDF file; no SRDF needed) and write a "
+        help="draft a config for a humanoid: example-robot-data name, URDF or MJCF file (soles, posture, contacts)",
+        description="Study a humanoid (an example-robot-data name, a URDF file, or an MJCF file converted to a URDF "
+        "written beside the config; no SRDF needed) and write a "
         "starting config to edit: up axis, legs and soles, a standing posture, arms, joints to lock, a contact "
         "per hand, collision geometry for links that have none, a table from the arms' reach, velocity limits "
         "the URDF lacks, collision pairs to disable (sampled, as MoveIt's setup assistant). Every guess is "
         "marked '# CHECK:' in the draft.",
     )
-    init.add_argument("name", metavar="SOURCE", help="example-robot-data name, or a URDF file")
+    init.add_argument(
+        "name",
+        metavar="SOURCE",
+        help="example-robot-data name, a URDF file, or an MJCF file (converted to OUTPUT.urdf)",
+    )
     init.add_argument("-o", "--output", required=True, help="config file to write (e.g. configs/NAME_table.yaml)")
     init.add_argument("--srdf", default=None, help="an SRDF (path or package:// URI): its first state, disabled pairs")
     init.add_argument(

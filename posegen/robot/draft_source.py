@@ -1,5 +1,7 @@
 """The robot ``posegen robot init`` studies: an example-robot-data name or a URDF file.
 
+(An MJCF model is converted to a URDF first, by :mod:`posegen.robot.draft_mjcf`.)
+
 Whatever is wrong with it is said in one line naming the file and the element: a file
 that is missing or not XML, a URDF pinocchio cannot load, a mesh that cannot be found
 (relative paths are read from the URDF's folder, ``package://`` ones from the package
@@ -18,8 +20,7 @@ import pinocchio as pin
 from posegen.errors import ConfigError
 from posegen.robot.config import PACKAGE_URI, RobotSource
 from posegen.robot.description import RobotFiles, package_uri, resolve_path, resolve_source
-
-MJCF_ROOT = "mujoco"
+from posegen.robot.mjcf import MJCF_ROOT
 
 
 @dataclass(frozen=True)
@@ -57,9 +58,7 @@ def load_draft_source(name: str, srdf: str | None = None, package_dirs: tuple[st
         )
         root = _xml_root(absolute)
         if root.tag == MJCF_ROOT:
-            raise ConfigError(
-                f"{name}: an MJCF model; posegen's stages read a URDF: convert it (e.g. mjcf_urdf_simple_converter)"
-            )
+            raise ConfigError(f"{name}: an MJCF model; posegen's stages read a URDF: `posegen robot init` converts it")
         if root.tag != "robot":
             raise ConfigError(f"{name}: not a URDF (its root element is <{root.tag}>, not <robot>)")
     else:

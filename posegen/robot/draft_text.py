@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,7 @@ from posegen.robot.collision import CollisionChecker
 from posegen.robot.collision_matrix import PairSurvey, survey_scene_pairs
 from posegen.robot.config import load_config, parse_config
 from posegen.robot.draft import Draft, draft_robot
+from posegen.robot.draft_mjcf import converted_urdf, mjcf_source, urdf_beside
 from posegen.robot.scene import Scene
 from posegen.robot.validation import check_for_planning
 
@@ -184,7 +186,10 @@ def write_draft(
     package_dirs: tuple[str, ...] = (),
     command: str = "",
 ) -> Draft:
-    """Draft a config for a robot (example-robot-data name or URDF file) and write it (atomically) to ``output``.
+    """Draft a config for a robot (example-robot-data name, URDF or MJCF file) and write it (atomically) to ``output``.
+
+    An MJCF model is converted to a URDF written beside the draft (``<output stem>.urdf``,
+    :mod:`posegen.robot.draft_mjcf`), which the draft names and the stages read.
 
     The draft is re-read as a config before it is written; whether it already loads as a
     scene (names, balance, reach, collisions at the reference) is added to its notes.
@@ -192,12 +197,22 @@ def write_draft(
     Raises:
         ConfigError: Unknown robot, a description that does not load, or a structure that
             is not two legs and two arms.
-        OutputError: ``output`` cannot be written, or another posegen is writing it.
+        OutputError: ``output`` cannot be written, or another posegen is writing it; the
+            converted URDF's place holds another file.
 
     """
-    check_apart([output], [srdf])  # never over the SRDF it reads
-    with claim_output(output):  # checked and locked before any work
-        draft = draft_robot(robot, srdf, samples, seed, package_dirs)
+    mjcf = mjcf_source(robot)
+    urdf = urdf_beside(output) if mjcf else None
+    check_apart([output, urdf], [srdf, mjcf])  # never over the SRDF or the MJCF it reads
+    with claim_output(output, beside=[urdf] if urdf else []), contextlib.ExitStack() as stack:
+        if mjcf is None:
+            draft = draft_robot(robot, srdf, samples, seed, package_dirs)
+        else:  # the URDF converted beside the draft, removed if drafting fails
+            converted = stack.enter_context(converted_urdf(mjcf, output))
+            draft = draft_robot(str(converted.urdf), srdf, samples, seed, package_dirs)
+            draft = dataclasses.replace(
+                draft, robot=robot, checks=(converted.check, *draft.checks), notes=(converted.note, *draft.notes)
+            )
         text = render_draft(draft, seed, command)
         config = parse_config(yaml.safe_load(text), output)
         try:

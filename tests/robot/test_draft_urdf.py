@@ -94,7 +94,7 @@ def test_a_robot_without_any_geometry_gets_guessed_feet_and_capsules():
         ("not_xml", r"robot\.urdf: not valid XML"),
         ("mesh", r"robot\.urdf: link 'l_foot' (visual|collision) mesh '.*foot\.stl' not found"),
         ("one_leg", r"robot\.urdf: no two legs: .*'l_hip_yaw'.*waist"),
-        ("mjcf", r"robot\.xml: an MJCF model"),
+        ("mjcf", r"robot\.xml: no body in <worldbody>"),
         ("missing", r"nothing\.urdf: file not found"),
         ("not_urdf", r"robot\.urdf: not a URDF \(its root element is <sdf>"),
     ],

@@ -1,0 +1,106 @@
+"""The MJCF text pinocchio is given: includes inlined, assets in one section, asset folders absolute.
+
+pinocchio 3.8 builds a model's kinematics through ``<include>`` elements, but its
+geometry reader does not see the assets an included file defines (a ``material="self"``
+from an included ``materials.xml`` fails with ``unordered_map::at``, as in dm_control's
+humanoid), and it reads the first ``<asset>`` section only. So the model is flattened
+first: each ``<include>`` is replaced by the children of the included file's
+``<mujoco>`` (paths relative to the main file's folder, as MuJoCo reads them), the
+``<asset>`` sections are merged into one, and the compiler's ``meshdir``,
+``texturedir`` and ``assetdir`` are made absolute, so that the flattened text can be
+read from any folder.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from posegen.errors import ConfigError
+
+MAX_INCLUDE_DEPTH = 16  # deeper is a cycle
+_ASSET_DIRS = ("meshdir", "texturedir", "assetdir")
+
+
+def parse_xml(path: Path) -> ET.Element:
+    """The root element of an XML file.
+
+    Example:
+        >>> parse_xml(Path("humanoid.xml")).tag  # doctest: +SKIP
+        'mujoco'
+
+    Raises:
+        ConfigError: The file cannot be read or is not XML (the file named).
+
+    """
+    try:
+        return ET.parse(path).getroot()
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot be read ({exc.strerror})") from exc
+    except ET.ParseError as exc:
+        raise ConfigError(f"{path}: not valid XML ({exc})") from exc
+
+
+def flattened_mjcf(path: Path) -> ET.Element:
+    """The MJCF model at ``path`` with its includes inlined and its asset folders absolute.
+
+    Raises:
+        ConfigError: The file or an included one cannot be read or is not XML, an include
+            is missing, or includes nest deeper than :data:`MAX_INCLUDE_DEPTH` (a cycle).
+
+    Example:
+        >>> root = flattened_mjcf(Path("dm_control/suite/humanoid.xml"))  # doctest: +SKIP
+        >>> root.find("asset/material").get("name")  # doctest: +SKIP
+        'grid'
+
+    """
+    root = parse_xml(path)
+    _inline(root, path, 0)
+    _one_asset_section(root)
+    _absolute_asset_dirs(root, path.parent)
+    return root
+
+
+def _one_asset_section(root: ET.Element) -> None:
+    """Merge the top-level ``<asset>`` sections into the first (pinocchio reads the first one only)."""
+    sections = root.findall("asset")
+    for section in sections[1:]:
+        sections[0].extend(list(section))
+        root.remove(section)
+
+
+def _inline(element: ET.Element, path: Path, depth: int) -> None:
+    """Replace each ``<include>`` under ``element`` by the included file's elements (recursively)."""
+    children = list(element)
+    for child in children:
+        element.remove(child)
+    for child in children:
+        if child.tag != "include":
+            _inline(child, path, depth)
+            element.append(child)
+            continue
+        name = child.get("file", "")
+        included = path.parent / name
+        if not included.is_file():
+            raise ConfigError(f'{path}: <include file="{name}"> not found beside it')
+        if depth >= MAX_INCLUDE_DEPTH:
+            raise ConfigError(f'{path}: <include file="{name}"> nests {depth} deep: includes form a cycle')
+        inner = parse_xml(included)
+        _inline(inner, path, depth + 1)  # MuJoCo reads every include from the main file's folder
+        element.extend(list(inner))
+
+
+def _absolute_asset_dirs(root: ET.Element, folder: Path) -> None:
+    """Make the compiler's asset folders absolute (a compiler element is added if there is none)."""
+    compilers = root.findall("compiler")
+    if not compilers:
+        compilers = [ET.Element("compiler")]
+        root.insert(0, compilers[0])
+    for compiler in compilers:
+        for key in _ASSET_DIRS:
+            if compiler.get(key) is not None:
+                compiler.set(key, str((folder / compiler.get(key, "")).resolve()))
+    base = next((c.get("assetdir", "") for c in compilers if c.get("assetdir")), str(folder.resolve()))
+    for key in ("meshdir", "texturedir"):
+        if not any(c.get(key) for c in compilers):
+            compilers[0].set(key, base)
