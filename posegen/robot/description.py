@@ -159,12 +159,28 @@ def python_package_parent(name: str) -> tuple[str, ...]:
 
 
 def package_uri(path: Path) -> str | None:
-    """``package://NAME/...`` for a file inside an installed Python package NAME, else None."""
+    """``package://NAME/...`` for a file inside an installed Python package NAME, else None.
+
+    Installed: a regular package (with its ``__init__.py``) in a ``site-packages`` or
+    ``dist-packages`` folder. A folder that Python only finds because it sits in the
+    current or the script's folder (a namespace package) is not one: another process,
+    started elsewhere, would not find it.
+
+    Example:
+        >>> package_uri(Path(jvrc_description.__file__).parent / "urdf" / "jvrc1.urdf")
+        'package://jvrc_description/urdf/jvrc1.urdf'
+
+    """
     resolved = path.resolve()
     for folder in resolved.parents:
-        if str(folder.parent) in python_package_parent(folder.name):
+        if str(folder.parent) in python_package_parent(folder.name) and _installed(folder):
             return f"{PACKAGE_URI}{resolved.relative_to(folder.parent).as_posix()}"
     return None
+
+
+def _installed(folder: Path) -> bool:
+    """Whether a package's folder is an installed regular package (see :func:`package_uri`)."""
+    return (folder / "__init__.py").is_file() and bool({"site-packages", "dist-packages"} & set(folder.parts))
 
 
 def locked_configuration(model: pin.Model, locked: dict[str, float]) -> FloatArray:

@@ -34,7 +34,7 @@ def mjcf_source(robot: str) -> Path | None:
     """The MJCF file ``robot`` names, or None (an example-robot-data name, a URDF).
 
     Example:
-        >>> mjcf_source("talos") is None  # doctest: +SKIP
+        >>> mjcf_source("robot.urdf") is None  # doctest: +SKIP
         True
 
     """

@@ -51,7 +51,7 @@ class MjcfUrdf:
     mjcf: Path  # the MJCF file (absolute)
     sha256: str  # of the MJCF file's bytes
     text: str  # the URDF
-    dropped: tuple[str, ...]  # what the URDF does not carry, e.g. "2 ellipsoid geoms (l_foot)", "12 actuators"
+    dropped: tuple[str, ...]  # what the URDF does not carry, e.g. "2 ellipsoid geoms (a body name)", "12 actuators"
 
 
 def is_mjcf(path: Path) -> bool:
