@@ -266,6 +266,7 @@ def read_index(folder: Path) -> SessionIndex:
                 "deliverable": Deliverable(raw["deliverable"]),
                 "candidates": tuple(str(c) for c in raw["candidates"]),
                 "target_mm": float(raw["target_mm"]),
+                "patience": _count(raw.get("patience", SessionSettings.patience)),
             }
         )
         batches = tuple(_batch(entry) for entry in data["batches"])
@@ -275,6 +276,13 @@ def read_index(folder: Path) -> SessionIndex:
     if [b.number for b in batches] != list(range(1, len(batches) + 1)):
         raise InputError(f"{path}: batches are not numbered 1, 2, ...; was it edited by hand?")
     return index
+
+
+def _count(value: object) -> int:
+    """A non-negative whole number of the index (ValueError otherwise: the reader's one-line error)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f"expected a count, got {value!r}")
+    return value
 
 
 def _batch(entry: dict[str, Any]) -> Batch:

@@ -389,6 +389,7 @@ TABLE = [
     F("session", "start: --target-mm 0", "start", "{pool}", "--target-mm", "0", "-o", "{out}/s"),
     F("session", "start: negative --margin", "start", "{pool}", "--margin", "-1", "-o", "{out}/s"),
     F("session", "start: --batch 0", "start", "{pool}", "--batch", "0", "-o", "{out}/s"),
+    F("session", "start: negative --patience", "start", "{pool}", "--patience", "-1", "-o", "{out}/s"),
     F("session", "start: unknown candidate", "start", "{pool}", "--candidates", "nonsense", "-o", "{out}/s"),
     F("session", "start: -o a file", "start", "{pool}", "-o", "{existing}"),
     F("session", "start: -o unwritable", "start", "{pool}", "-o", f"{UNWRITABLE}/s"),

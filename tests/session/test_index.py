@@ -61,6 +61,8 @@ def test_a_file_edited_by_hand_is_refused(tmp_path):
         (lambda d: d.update(format_version=9), "version 9"),
         (lambda d: d["batches"][0].pop("pool_rows"), "not a valid session index"),
         (lambda d: d["settings"].update(deliverable="everything"), "not a valid session index"),
+        (lambda d: d["settings"].update(patience="soon"), "not a valid session index"),
+        (lambda d: d["settings"].update(patience=-2), "not a valid session index"),
         (lambda d: d["batches"][1].update(number=5), "numbered"),
         (lambda d: d.update(format="posegen-pool"), "posegen-pool"),
     ],
