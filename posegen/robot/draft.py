@@ -21,6 +21,7 @@ names, and records every guess with how to check it (:attr:`Draft.checks`):
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -140,7 +141,7 @@ def draft_robot(
         soles=(soles[0], soles[1]),
         foot_x_m=(max(s.x_m[0] for s in soles), min(s.x_m[1] for s in soles)),
         foot_y_m=(max(s.y_m[0] for s in soles), min(s.y_m[1] for s in soles)),
-        floor_contact=tuple(dict.fromkeys(s.foot_link for s in soles)),
+        floor_contact=floor_links(model, body.geometry, soles, src.text),
         chains=(chains[0], chains[1]),
         locked=body.locked,
         velocity_limits=speeds,
@@ -157,6 +158,25 @@ def draft_robot(
         joint_limit_margin_rad=body.joint_limit_margin_rad,
         checks=body.checks + checks + found,
     )
+
+
+def floor_links(model: pin.Model, geometry: Geometry, soles: list[Sole], urdf_text: str) -> tuple[str, ...]:
+    """The links that may touch the floor: each foot's link, or when it is empty the links fixed to it with geometry.
+
+    An empty foot link (no inertial, no geometry: an MJCF body with several hinges, converted,
+    ends in such a link, its geoms on the body's link fixed to it) gives way to the links
+    carrying the foot joint's collision geometry.
+    """
+    empty = {link.get("name") for link in ET.fromstring(urdf_text).iter("link") if len(link) == 0}
+    links = []
+    for sole in soles:
+        carriers = [
+            str(model.frames[o.parentFrame].name)
+            for o in geometry.collision.geometryObjects
+            if o.parentJoint == sole.foot_joint
+        ]
+        links += carriers if sole.foot_link in empty and carriers else [sole.foot_link]
+    return tuple(dict.fromkeys(links))
 
 
 @dataclass(frozen=True)

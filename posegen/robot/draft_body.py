@@ -5,7 +5,9 @@
 1. :func:`srdf_state`: the SRDF's first state, unless it breaks the URDF's limits;
 2. :func:`orient`: the up axis, forward and left (:mod:`posegen.robot.draft_stance`);
 3. :func:`find_legs` then :func:`find_soles`: the two branches reaching the floor, their
-   feet and soles;
+   feet and soles; the legs branch from the root, else from a joint below it (a torso-rooted
+   model: the joints from the root down to that branching joint are the waist, free joints of
+   the upper body, in neither the legs nor the arms: :func:`waist_joints`);
 4. :func:`bend_reference`: without an SRDF state, a standing posture with the knees bent;
 5. :func:`find_arms`: the two longest chains of the upper body, up to where they branch
    into light parts only (fingers: under 1 % of the robot's mass);
@@ -30,13 +32,14 @@ from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limi
 from posegen.robot.draft_source import DraftSource
 from posegen.robot.draft_stance import (
     ANKLE_HEIGHT,
-    FLOOR_TOL_M,
     Sole,
     bend_legs,
     find_sole,
     find_up,
     foot_joint,
+    reaching_branches,
     sole_pose,
+    upper_branches,
 )
 from posegen.robot.geometry import FloatArray, yaw_rotation
 
@@ -106,6 +109,7 @@ class Body:
     bearing: Bearing
     legs: Legs
     arms: list[list[int]]  # each arm's joints from the torso, left then right
+    waist: list[int]  # the joints from the root down to the legs' branching joint (none when it is the root)
     geometry: Geometry
     reference: FloatArray  # (nq,) root placed, legs bent (without a state), locked joints at their values
     reference_joints: dict[str, float]  # rad, what the draft set (legs bent, joints off their limits)
@@ -115,8 +119,8 @@ class Body:
 
     @property
     def kept(self) -> set[int]:
-        """The joints of the legs and arms (not locked)."""
-        return self.legs.joints | {j for arm in self.arms for j in arm}
+        """The joints of the legs, arms and waist (not locked)."""
+        return self.legs.joints | {j for arm in self.arms for j in arm} | set(self.waist)
 
 
 WORLD_LINK = "world"  # the URDF convention for a fixed base (a joint from it pins the robot)
@@ -147,14 +151,15 @@ def study_body(src: DraftSource) -> Body:
         found += bent
         pin.framesForwardKinematics(model, data, q)
     arms = find_arms(model, data, tree, roots, bearing.left, src.label)
-    kept = legs.joints | {j for arm in arms for j in arm}
+    waist = waist_joints(model, roots)
+    kept = legs.joints | {j for arm in arms for j in arm} | set(waist)
     locked = locked_joints(model, q, kept)
     q = with_joints(model, q, locked)
     cleared = clear_of_limits(model, q, sorted(kept - legs.joints))
     q = with_joints(model, q, cleared)
     reference_joints.update({name: round(value, 4) for name, value in cleared.items()})
     checks += found + fixed_base(src.text)
-    return Body(tree, state, bearing, legs, arms, geometry, q, reference_joints, locked, margin, checks)
+    return Body(tree, state, bearing, legs, arms, waist, geometry, q, reference_joints, locked, margin, checks)
 
 
 def fixed_base(urdf_text: str) -> tuple[str, ...]:
@@ -211,7 +216,7 @@ def orient(model: pin.Model, q: FloatArray, tree: Tree, label: str) -> Bearing:
         ConfigError: No up axis along which exactly two branches reach the lowest level.
 
     """
-    root, up = find_up(model, q, tree.children[1], tree.subtree, label)
+    root, up = find_up(model, q, tree.children, tree.subtree, label)
     forward = _forward(root)
     heading = pin.SE3(yaw_rotation(float(np.arctan2(forward[1], forward[0]))), np.zeros(3))
     return Bearing(root, up, forward, np.cross([0.0, 0.0, 1.0], forward), heading)
@@ -228,19 +233,38 @@ def _forward(root: pin.SE3) -> FloatArray:
 
 
 def find_legs(model: pin.Model, data: pin.Data, tree: Tree, left: FloatArray, label: str) -> list[int]:
-    """The first joints of the root's two branches that reach the floor, left then right, at the posture of ``data``.
+    """The first joints of the two legs, left then right, at the posture of ``data``.
+
+    The legs are the two branches reaching the floor of the root, else of the joint below it
+    where they branch (:func:`~posegen.robot.draft_stance.reaching_branches`).
 
     Raises:
         ConfigError: Not exactly two such branches.
 
     """
     floor = min(float(data.oMi[j].translation[2]) for j in range(1, model.njoints))
-    lowest = {b: min(float(data.oMi[j].translation[2]) for j in tree.subtree(b)) for b in tree.children[1]}
-    reaching = (b for b in tree.children[1] if lowest[b] < floor + FLOOR_TOL_M)
+    lowest = {b: min(float(data.oMi[j].translation[2]) for j in tree.subtree(b)) for b in range(2, model.njoints)}
+    reaching = reaching_branches(tree.children, lowest, floor)
     legs = sorted(reaching, key=lambda b: -float(data.oMi[b].translation @ left))
     if len(legs) != 2:
         raise ConfigError(f"{label}: expected two legs reaching the floor, found {len(legs)}")
     return legs
+
+
+def waist_joints(model: pin.Model, legs: list[int]) -> list[int]:
+    """The joints from the root down to the legs' branching joint (their parent), root side first; none at the root.
+
+    Example:
+        >>> waist_joints(model, [model.getJointId("l_hip_yaw"), model.getJointId("r_hip_yaw")])
+        [2, 3]
+
+    """
+    out = []
+    joint = int(model.parents[legs[0]])
+    while joint > 1:  # 1: the free-flyer root
+        out.append(joint)
+        joint = int(model.parents[joint])
+    return out[::-1]
 
 
 def find_soles(
@@ -318,14 +342,14 @@ def find_arms(
     """
     paths: list[list[int]] = []
     total = tree.mass(list(range(1, model.njoints)))
-    for branch in tree.children[1]:
-        if branch not in legs:
-            _arm_paths(branch, [], tree, total, paths)
+    upper = upper_branches(model, tree.children, legs)  # the root's off the legs, and the waist's
+    for branch in upper:
+        _arm_paths(branch, [], tree, total, paths)
     paths.sort(key=len, reverse=True)
     if len(paths) < 2 or len(paths[1]) < 3:
         found = ", ".join(f"'{model.names[p[-1]]}'" for p in paths) or "none"
-        upper = ", ".join(f"'{model.names[b]}'" for b in tree.children[1] if b not in legs) or "none"
-        raise ConfigError(f"{label}: no two arms: the upper body (from joint {upper}) has the chains ending at {found}")
+        names = ", ".join(f"'{model.names[b]}'" for b in upper) or "none"
+        raise ConfigError(f"{label}: no two arms: the upper body (from joint {names}) has the chains ending at {found}")
     return sorted(paths[:2], key=lambda p: -float(data.oMi[p[-1]].translation @ left))
 
 

@@ -1,8 +1,11 @@
 """How a robot stands, found from its description alone (``posegen robot init``).
 
-* up: of the six root axes, the one along which exactly two branches of the root reach
+* up: of the six root axes, the one along which exactly two branches alike in mass reach
   the lowest level (the legs) with the centre of mass highest above it; the root is
-  turned so that it points up (``stance.root_rpy_deg`` for a y-up model);
+  turned so that it points up (``stance.root_rpy_deg`` for a y-up model). The legs are
+  two branches of the root, else of the branching joint found by descending from the
+  root into its only branch reaching the floor (a torso-rooted model: waist joints down
+  to a pelvis, :func:`reaching_branches`);
 * forward: the root's x axis (REP 103, and the biomechanics convention of y-up models),
   left: up x forward;
 * soles: a link of the foot (fixed to it) with z up at the lowest point under the ankle
@@ -56,16 +59,25 @@ class Sole:
 Subtree = Callable[[int], list[int]]
 
 
-def find_up(model: pin.Model, q: FloatArray, branches: list[int], subtree: Subtree, label: str) -> tuple[pin.SE3, str]:
+def find_up(
+    model: pin.Model, q: FloatArray, children: dict[int, list[int]], subtree: Subtree, label: str
+) -> tuple[pin.SE3, str]:
     """The root's orientation that puts the model's up axis up, and that axis.
 
+    Args:
+        model: The robot model (joint 1 is the free-flyer root).
+        q: (nq,) the posture to turn.
+        children: Each joint's child joints.
+        subtree: A joint and every joint below it.
+        label: The model, named in errors.
+
     Raises:
-        ConfigError: No axis along which exactly two branches reach the floor (one leg, no legs).
+        ConfigError: No axis along which two branches of one joint, alike in mass, reach the
+            floor (one leg, no legs).
 
     """
     data = model.createData()
     best: tuple[float, pin.SE3, str] | None = None
-    counts = []
     for axis in range(3):
         for sign in (1.0, -1.0):
             u = np.zeros(3)
@@ -77,23 +89,65 @@ def find_up(model: pin.Model, q: FloatArray, branches: list[int], subtree: Subtr
             qq = q.copy()
             qq[:7] = pin.SE3ToXYZQUAT(root)
             pin.framesForwardKinematics(model, data, qq)
-            lowest = {b: min(_heights(model, data, set(subtree(b)))) for b in branches}
-            floor = min(lowest.values())
-            reaching = [b for b in branches if lowest[b] < floor + FLOOR_TOL_M]
-            counts.append(len(reaching))
+            lowest = {b: min(_heights(model, data, set(subtree(b)))) for b in range(2, model.njoints)}
+            floor = min(lowest[b] for b in children[1])
+            reaching = reaching_branches(children, lowest, floor)
             if len(reaching) != 2 or not _alike(model, subtree, reaching):
                 continue
+            if model.parents[reaching[0]] != 1 and len(upper_branches(model, children, reaching)) < 2:
+                continue  # legs below the root leave the arms: else a legless model stands on its arms
             com = float(pin.centerOfMass(model, data, qq)[2]) - floor
             name = f"{'+' if sign > 0 else '-'}{'xyz'[axis]}"
             if best is None or com > best[0]:
                 best = (com, root, name)
     if best is None:
-        names = ", ".join(f"'{model.names[b]}'" for b in branches)
+        names = ", ".join(f"'{model.names[b]}'" for b in children[1])
         raise ConfigError(
-            f"{label}: no two legs: along no axis do exactly two branches of the root ({names}) alike in mass "
-            f"reach the floor; posegen needs a humanoid with two legs"
+            f"{label}: no two legs: along no axis do exactly two branches of the root ({names}), or of a joint "
+            "below its only branch reaching the floor, alike in mass reach the floor; posegen needs a humanoid "
+            "with two legs"
         )
     return best[1], best[2]
+
+
+def reaching_branches(children: dict[int, list[int]], lowest: dict[int, float], floor: float) -> list[int]:
+    """The branches reaching the floor at the branching joint: the root's, else below its only reaching branch.
+
+    From the root down: where exactly one branch of a joint reaches the floor, the legs are
+    below it (waist joints down to a pelvis); the first joint with none or several reaching
+    branches is the branching joint.
+
+    Args:
+        children: Each joint's child joints (joint 1: the root).
+        lowest: Each joint's subtree's lowest height (m).
+        floor: The lowest height (m).
+
+    Example:
+        >>> reaching_branches({1: [2, 5], 2: [3, 4], 3: [], 4: [], 5: []}, {2: 0.0, 3: 0.0, 4: 0.01, 5: 1.0}, 0.0)
+        [3, 4]
+
+    """
+    joint = 1
+    while True:
+        reaching = [b for b in children[joint] if lowest[b] < floor + FLOOR_TOL_M]
+        if len(reaching) != 1:
+            return reaching
+        joint = reaching[0]
+
+
+def upper_branches(model: pin.Model, children: dict[int, list[int]], legs: list[int]) -> list[int]:
+    """The upper body's branches: of the root and of each joint down to the legs' branching joint, those off the legs.
+
+    Example:
+        >>> upper_branches(model, tree.children, legs.roots)  # the shoulders (and the neck)
+        [12, 13, 18]
+
+    """
+    path = [int(model.parents[legs[0]])]  # the branching joint up to the root
+    while path[-1] > 1:
+        path.append(int(model.parents[path[-1]]))
+    on_path = set(path) | set(legs)
+    return sorted(c for j in path for c in children[j] if c not in on_path)
 
 
 def _alike(model: pin.Model, subtree: Subtree, branches: list[int]) -> bool:

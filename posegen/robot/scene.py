@@ -225,16 +225,34 @@ class Scene:
         return polygon_margin(self.support_polygon, com[:2])
 
     def leg_joints(self, sole_frame: str) -> list[int]:
-        """Indices (in :attr:`joint_names`) of the joints from a sole up to the root, sole first."""
+        """Indices (in :attr:`joint_names`) of a leg's joints, sole first.
+
+        The joints from the sole up to, not including, the first joint both soles hang from
+        (the legs' branching joint: the root, or a pelvis below waist joints). The waist
+        carries both legs: it is no leg's joint, so a leg's joints never move the other sole.
+        """
         joint = self.model.frames[self.frame_id(sole_frame)].parentJoint
+        shared = self._stance_ancestors()
         out = []
-        while joint > 1:  # 0: universe, 1: the floating base
+        while joint not in shared:
             out.append(self.joint_index(str(self.model.names[joint])))
             joint = self.model.parents[joint]
         return out
 
+    def _stance_ancestors(self) -> set[int]:
+        """The joints both soles hang from (their common ancestors, the universe and the floating base included)."""
+        chains = []
+        for sole in self.stance.sole_frames:
+            joint = self.model.frames[self.frame_id(sole)].parentJoint
+            chain = {0, 1}  # 0: universe, 1: the floating base
+            while joint > 1:
+                chain.add(joint)
+                joint = self.model.parents[joint]
+            chains.append(chain)
+        return set.intersection(*chains)
+
     def stance_leg_joints(self) -> list[int]:
-        """Indices of the joints of both legs (from each sole up to the root), sorted."""
+        """Indices of the joints of both legs (from each sole up to their branching joint), sorted."""
         return sorted({j for sole in self.stance.sole_frames for j in self.leg_joints(sole)})
 
     def close_stance(self, joints: FloatArray, iterations: int = 30) -> FloatArray | None:

@@ -3,7 +3,9 @@
 Legs of 6 joints (hip yaw, roll, pitch, knee, ankle pitch, roll), a waist, arms of 5
 joints, a head; feet and hands are box meshes (STL files beside the URDF, named by
 relative paths). ``up`` picks the model's up axis: "z" (REP 103) or "y" (x forward, z
-to the right, as biomechanics models are).
+to the right, as biomechanics models are). ``waist`` roots the model at the torso instead
+of the pelvis, with that many waist joints (1: yaw; 2: yaw then pitch) from the torso down
+to the pelvis carrying the legs (the same body: the torso where it was, the pelvis below).
 """
 
 from __future__ import annotations
@@ -29,8 +31,8 @@ def _v(x: np.ndarray) -> str:
     return " ".join(f"{float(c):.6g}" for c in x)
 
 
-def humanoid_urdf(folder: Path, up: str = "z", legs: int = 2, meshes: bool = True) -> Path:
-    """Write the URDF (and its meshes under ``folder/meshes``); its path."""
+def humanoid_urdf(folder: Path, up: str = "z", legs: int = 2, meshes: bool = True, waist: int = 0) -> Path:
+    """Write the URDF (and its meshes under ``folder/meshes``); its path (``waist`` > 0: rooted at the torso)."""
     forward, left, upward = _axes(up)
     down = -upward
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
@@ -76,7 +78,14 @@ def humanoid_urdf(folder: Path, up: str = "z", legs: int = 2, meshes: bool = Tru
         link(f"{side}_foot", 1.0, 0.05 * down, "foot", 0.03 * forward + 0.06 * down)
         joint(f"{side}_ankle_roll", f"{side}_ankle", f"{side}_foot", np.zeros(3), forward, -0.5, 0.5)
     link("torso", 15.0, 0.2 * upward)
-    joint("waist", "pelvis", "torso", 0.1 * upward, upward, -1.0, 1.0)
+    if waist == 0:
+        joint("waist", "pelvis", "torso", 0.1 * upward, upward, -1.0, 1.0)
+    elif waist == 1:
+        joint("waist", "torso", "pelvis", 0.1 * down, upward, -1.0, 1.0)
+    else:
+        link("waist_link", 0.5, np.zeros(3))
+        joint("waist", "torso", "waist_link", 0.1 * down, upward, -1.0, 1.0)
+        joint("waist_pitch", "waist_link", "pelvis", np.zeros(3), left, -0.5, 0.5)
     link("head", 4.0, 0.1 * upward)
     joint("neck", "torso", "head", 0.45 * upward, upward, -1.0, 1.0)
     for side, sign in (("l", 1.0), ("r", -1.0)):
