@@ -7,6 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from posegen.errors import ConfigError
 from posegen.robot.draft_body import (
     LIMIT_CLEARANCE_RAD,
     Tree,
@@ -25,7 +26,7 @@ from posegen.robot.draft_body import (
 from posegen.robot.draft_geometry import load_geometry
 from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD
 from posegen.robot.draft_source import load_draft_source
-from posegen.robot.draft_stance import sole_pose
+from posegen.robot.draft_stance import reaching_branches, sole_pose, upper_branches
 from tests.robot.humanoid_urdf import humanoid_urdf
 
 
@@ -179,3 +180,52 @@ def test_a_body_pinned_to_world_is_stood_free_and_said(tmp_path):
     body = study_body(load_draft_source(str(pinned), None, ()))
     assert line in body.checks  # the draft carries it, and the body was still found and stood
     assert body.legs.joints and len(body.arms) == 2
+
+
+@pytest.fixture(scope="module")
+def waisted(tmp_path_factory):
+    """The synthetic humanoid rooted at the torso, one then two waist joints down to the pelvis."""
+    return {
+        n: load_draft_source(str(humanoid_urdf(tmp_path_factory.mktemp(f"waist{n}"), "z", waist=n)), None, ())
+        for n in (1, 2)
+    }
+
+
+def test_legs_below_a_waist_branch_from_the_pelvis(waisted):
+    """A torso-rooted model: the legs are the pelvis's branches, the waist joints neither legs nor arms, and free."""
+    for n, src in waisted.items():
+        model = src.model
+        assert model.frames[model.getFrameId("torso")].parentJoint == 1  # the root is the torso
+        body = study_body(src)
+        names = [str(model.names[j]) for j in body.waist]
+        assert body.bearing.up == "+z" and names == ["waist", "waist_pitch"][:n]
+        assert all(model.parents[j] == body.waist[-1] for j in body.legs.roots)  # they branch at the pelvis
+        assert [str(model.names[j]) for j in body.legs.roots] == ["l_hip_yaw", "r_hip_yaw"]
+        assert [str(model.names[j]) for j in body.legs.feet] == ["l_ankle_roll", "r_ankle_roll"]
+        assert [len(path) for path in body.legs.paths] == [6, 6] and not set(body.waist) & body.legs.joints
+        assert [str(model.names[a[0]]) for a in body.arms] == ["l_shoulder_pitch", "r_shoulder_pitch"]
+        assert not set(body.waist) & {j for arm in body.arms for j in arm}
+        assert set(body.waist) <= body.kept and set(body.locked) == {"neck"}
+        assert body.kept == set(range(2, model.njoints)) - {model.getJointId("neck")}
+
+
+def test_the_descent_follows_the_only_reaching_branch_and_the_arms_start_above_it(waisted):
+    src = waisted[2]
+    model, tree = src.model, Tree.of(src.model)
+    hips = [model.getJointId("l_hip_yaw"), model.getJointId("r_hip_yaw")]
+    lowest = {j: 1.0 for j in range(2, model.njoints)}  # only the legs reach the floor (0 m)
+    lowest.update({j: 0.0 for hip in hips for j in tree.subtree(hip)})
+    for j in (model.getJointId("waist"), model.getJointId("waist_pitch")):
+        lowest[j] = 0.0
+    assert reaching_branches(tree.children, lowest, 0.0) == sorted(hips)
+    lowest[model.getJointId("neck")] = 0.0  # two branches of the root reach: no descent (today's rule)
+    assert reaching_branches(tree.children, lowest, 0.0) == sorted([model.getJointId(n) for n in ("waist", "neck")])
+    upper = {str(model.names[j]) for j in upper_branches(model, tree.children, hips)}
+    assert upper == {"neck", "l_shoulder_pitch", "r_shoulder_pitch"}  # the torso's, off the waist
+
+
+def test_a_model_without_legs_is_not_stood_on_its_arms_below_its_waist(tmp_path):
+    """Pelvis, waist, torso, arms: the descent finds the arms reaching the floor upside down, and refuses them."""
+    src = load_draft_source(str(humanoid_urdf(tmp_path, "z", legs=0)), None, ())
+    with pytest.raises(ConfigError, match=r"no two legs: .*'waist'"):
+        study_body(src)

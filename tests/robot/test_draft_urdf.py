@@ -12,6 +12,7 @@ import pytest
 
 from posegen.cli.main import main
 from posegen.errors import ConfigError
+from posegen.io import load_pool, write_pool
 from posegen.robot import Scene, load_config, write_draft
 from posegen.robot.additions import Capsule, CollisionConfig, VisualHull
 from posegen.robot.coverage import geometry_coverage
@@ -179,3 +180,49 @@ def test_check_says_what_it_checks_with_and_warns_of_bare_links(drafts, tmp_path
     out = capsys.readouterr().out
     assert "(4 meshes; pinocchio" in out and f"WARN {len(draft.covered)} moving links have no collision geometry" in out
     assert " l_thigh " in out + " "
+
+
+def test_a_foot_whose_geometry_hangs_from_a_fixed_link_touches_the_floor_by_it(tmp_path):
+    """An empty ankle link with the foot's geometry on a link fixed to it (a converted MJCF body's layout)."""
+    path = humanoid_urdf(tmp_path, "z")
+    text = path.read_text()
+    for side in "lr":
+        text = text.replace(
+            f'<child link="{side}_foot"/>',
+            f'<child link="{side}_ankle_end"/>',
+        ).replace(
+            "</robot>",
+            f'<link name="{side}_ankle_end"/><joint name="{side}_foot_fixed" type="fixed">'
+            f'<parent link="{side}_ankle_end"/><child link="{side}_foot"/></joint>\n</robot>',
+        )
+    path.write_text(text)
+    draft = write_draft(str(path), str(tmp_path / "config.yaml"), samples=20)
+    assert [s.foot_link for s in draft.soles] == ["l_ankle_end", "r_ankle_end"]
+    assert draft.floor_contact == ("l_foot", "r_foot")  # the links carrying the geometry
+    assert draft.notes[-1].startswith("the draft loads as a scene")  # the feet stand on the floor, not in it
+
+
+def test_a_torso_rooted_draft_runs_the_whole_chain(tmp_path, capsys):
+    """Waist joints between the root (torso) and the legs: init, pool, check, route, check, simulate, calibrate."""
+
+    def run(*argv: str) -> str:
+        code = main(list(argv))
+        out, err = capsys.readouterr()
+        assert code == 0, (argv[0], out, err)
+        return out
+
+    config = str(tmp_path / "config.yaml")
+    run("robot", "init", str(humanoid_urdf(tmp_path / "description", "z", waist=2)), "--samples", "40", "-o", config)
+    pool = tmp_path / "pool.yaml"
+    accepted = run("pool", "--n", "10", "--seed", "3", "--workers", "1", "--config", config, "-o", str(pool))
+    assert re.search(r"pool: 10 postures accepted", accepted)
+    assert "FAIL" not in run("check", str(pool), "-q")
+    made, first, route = load_pool(pool), tmp_path / "first.yaml", tmp_path / "route.yaml"
+    write_pool(first, dataclasses.replace(made, postures=made.postures[:3]))
+    routed = re.search(r"route: (\d) of 3 postures", run("route", str(first), "-q", "--workers", "1", "-o", str(route)))
+    assert routed and int(routed.group(1)) >= 1
+    assert "FAIL" not in run("check", str(route), "-q")
+    measurements = tmp_path / "sim.yaml"
+    run("simulate", str(pool), "--seed", "1", "-o", str(measurements))
+    run("calibrate", str(measurements), "--prior-scale", "5", "-q", "-o", str(tmp_path / "cal"))
+    assert (tmp_path / "cal" / "calibrated.urdf").exists()

@@ -55,3 +55,44 @@ def test_support_polygon_contains_both_feet(scene):
 
     for pose in scene.sole_poses.values():
         assert polygon_margin(scene.support_polygon, pose[:2, 3]) > 0.05
+
+
+@pytest.fixture(scope="module")
+def waist_scene(tmp_path_factory):
+    """The draft of the synthetic humanoid rooted at its torso, two waist joints down to the pelvis, as a scene."""
+    from posegen.robot import Scene, load_config, write_draft
+    from tests.robot.humanoid_urdf import humanoid_urdf
+
+    folder = tmp_path_factory.mktemp("waist")
+    config = folder / "config.yaml"
+    write_draft(str(humanoid_urdf(folder / "description", "z", waist=2)), str(config), samples=20)
+    return Scene(load_config(config))
+
+
+def test_legs_below_a_waist_stop_at_the_pelvis(waist_scene):
+    scene = waist_scene
+    hip_to_ankle = ["hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle_pitch", "ankle_roll"]
+    for sole, side in zip(scene.stance.sole_frames, "lr", strict=True):
+        assert [scene.joint_names[i] for i in scene.leg_joints(sole)] == [f"{side}_{j}" for j in hip_to_ankle[::-1]]
+    waist = [scene.joint_index(name) for name in ("waist", "waist_pitch")]
+    assert not set(waist) & set(scene.stance_leg_joints()) and not scene.locked[waist].any()
+    assert len(scene.stance_leg_joints()) == 12
+
+
+def test_close_stance_below_a_waist_moves_the_second_leg_alone(waist_scene):
+    """From perturbed states (waist, both legs, arms), both soles close exactly; waist and anchor leg stay put."""
+    scene = waist_scene
+    closing = set(scene.leg_joints(scene.second_sole))
+    free = np.flatnonzero(~scene.locked)
+    data = scene.model.createData()
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        joints = scene.reference.copy()
+        joints[free] += rng.uniform(-0.05, 0.05, len(free))
+        closed = scene.close_stance(joints)
+        assert closed is not None
+        assert set(np.flatnonzero(closed != joints)) <= closing  # waist, anchor leg, arms untouched
+        pin.framesForwardKinematics(scene.model, data, scene.configuration(closed))
+        for sole in scene.stance.sole_frames:
+            pose = pin.SE3(scene.sole_poses[sole])
+            assert np.linalg.norm(pin.log6(data.oMf[scene.frame_id(sole)].actInv(pose)).vector) < 1e-10
