@@ -255,7 +255,7 @@ def waist_joints(model: pin.Model, legs: list[int]) -> list[int]:
     """The joints from the root down to the legs' branching joint (their parent), root side first; none at the root.
 
     Example:
-        >>> waist_joints(model, [model.getJointId("l_hip_yaw"), model.getJointId("r_hip_yaw")])
+        >>> waist_joints(model, legs.roots)  # a torso root, two waist joints down to the pelvis
         [2, 3]
 
     """
