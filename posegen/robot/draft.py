@@ -161,11 +161,11 @@ def draft_robot(
 
 
 def floor_links(model: pin.Model, geometry: Geometry, soles: list[Sole], urdf_text: str) -> tuple[str, ...]:
-    """The links that may touch the floor: each foot's link, or when it is empty the links fixed to it with geometry.
+    """The links that may touch the floor: each foot's link and the links fixed to it that carry geometry.
 
-    An empty foot link (no inertial, no geometry: an MJCF body with several hinges, converted,
-    ends in such a link, its geoms on the body's link fixed to it) gives way to the links
-    carrying the foot joint's collision geometry.
+    A foot is one rigid body: its joint's link, and links fixed to it (a sole plate fixed to
+    the ankle link; an MJCF body converted with several hinges, whose foot link is empty and
+    its geoms on the body's link fixed to it). An empty foot link itself is left out.
     """
     empty = {link.get("name") for link in ET.fromstring(urdf_text).iter("link") if len(link) == 0}
     links = []
@@ -175,7 +175,7 @@ def floor_links(model: pin.Model, geometry: Geometry, soles: list[Sole], urdf_te
             for o in geometry.collision.geometryObjects
             if o.parentJoint == sole.foot_joint
         ]
-        links += carriers if sole.foot_link in empty and carriers else [sole.foot_link]
+        links += ([] if sole.foot_link in empty and carriers else [sole.foot_link]) + carriers
     return tuple(dict.fromkeys(links))
 
 

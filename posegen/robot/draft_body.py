@@ -28,6 +28,7 @@ import pinocchio as pin
 from posegen.errors import ConfigError
 from posegen.robot.description import RobotFiles
 from posegen.robot.draft_geometry import Geometry, load_geometry
+from posegen.robot.draft_heading import TURNED, Bearing, forward_of, knees_face_back
 from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limit, outside_limits
 from posegen.robot.draft_source import DraftSource
 from posegen.robot.draft_stance import (
@@ -71,17 +72,6 @@ class Tree:
     def mass(self, joints: list[int]) -> float:
         """The mass (kg) the bodies of these joints carry."""
         return float(sum(self.model.inertias[j].mass for j in joints))
-
-
-@dataclass(frozen=True, eq=False)
-class Bearing:
-    """How the robot is turned: its root's pose, the up axis, and the horizontal directions."""
-
-    root: pin.SE3  # the root's pose (its orientation puts the up axis up)
-    up: str  # the root's axis pointing up, e.g. "+z"
-    forward: FloatArray  # (3,) world, horizontal
-    left: FloatArray  # (3,) world, up x forward
-    heading: pin.SE3  # the yaw of forward, at the origin
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,6 +132,8 @@ def study_body(src: DraftSource) -> Body:
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
     roots = find_legs(model, data, tree, bearing.left, src.label)
+    if knees_face_back(model, data, tree.children, tree.subtree, roots, bearing.forward):
+        bearing, roots, checks = bearing.turned(), roots[::-1], (*checks, TURNED)
     geometry = load_geometry(model, src.text, src.files.package_dirs)
     legs, found = find_soles(model, data, geometry, tree, roots, bearing.heading)
     reference_joints: dict[str, float] = {}
@@ -217,19 +209,9 @@ def orient(model: pin.Model, q: FloatArray, tree: Tree, label: str) -> Bearing:
 
     """
     root, up = find_up(model, q, tree.children, tree.subtree, label)
-    forward = _forward(root)
+    forward = forward_of(root)
     heading = pin.SE3(yaw_rotation(float(np.arctan2(forward[1], forward[0]))), np.zeros(3))
     return Bearing(root, up, forward, np.cross([0.0, 0.0, 1.0], forward), heading)
-
-
-def _forward(root: pin.SE3) -> FloatArray:
-    """The robot's forward direction in the world: its root's x axis, levelled. Shape (3,)."""
-    for column in (0, 2, 1):
-        v = root.rotation[:, column].copy()
-        v[2] = 0.0
-        if np.linalg.norm(v) > 0.5:
-            return np.asarray(v / np.linalg.norm(v))
-    return np.array([1.0, 0.0, 0.0])
 
 
 def find_legs(model: pin.Model, data: pin.Data, tree: Tree, left: FloatArray, label: str) -> list[int]:

@@ -156,6 +156,7 @@ def skeleton(model: pin.Model, link: str) -> list[Capsule]:
     ends = [model.jointPlacements[c].translation for c in range(2, model.njoints) if model.parents[c] == joint]
     inertia = model.inertias[joint]
     ends = [e for e in ends if np.linalg.norm(e) >= MIN_SEGMENT_M]
+    at_joint = bool(ends)  # the capsules end at child joints (else one through the CoM)
     if not ends and inertia.mass > 0 and np.linalg.norm(inertia.lever) >= MIN_SEGMENT_M:
         ends = [2.0 * inertia.lever]
     origin = to_link.translation
@@ -164,6 +165,8 @@ def skeleton(model: pin.Model, link: str) -> list[Capsule]:
         tip = to_link.act(np.asarray(end))
         length = float(np.linalg.norm(tip - origin))
         radius = round(float(np.clip(0.2 * length, 0.02, 0.06)), 3)
+        if at_joint and length - radius >= MIN_SEGMENT_M:  # its cap reaches the child joint, not past it
+            tip = origin + (tip - origin) * (length - radius) / length  # (a shank's cap past the ankle: the floor)
         out.append(Capsule(link, round3(origin), round3(tip), radius))
     return out
 

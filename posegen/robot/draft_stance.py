@@ -217,7 +217,7 @@ def knee_of(model: pin.Model, data: pin.Data, leg: list[int], forward: FloatArra
 
     far = max(middle(j) for j in leg)
     near_middle = [j for j in leg if middle(j) > far - 0.01]
-    return max(near_middle, key=lambda j: abs(float(data.oMi[j].rotation @ _axis(model.joints[j]) @ lateral)))
+    return max(near_middle, key=lambda j: abs(float(data.oMi[j].rotation @ joint_axis(model.joints[j]) @ lateral)))
 
 
 def bend_legs(
@@ -279,7 +279,7 @@ def _bend(
 
 def _knee_start(model: pin.Model, data: pin.Data, knee: int, foot: int, forward: FloatArray) -> float:
     """A starting knee angle that moves the foot backwards, within the joint's limits."""
-    axis = data.oMi[knee].rotation @ _axis(model.joints[knee])
+    axis = data.oMi[knee].rotation @ joint_axis(model.joints[knee])
     lever = data.oMi[foot].translation - data.oMi[knee].translation
     backwards = -float(np.cross(axis, lever) @ forward)  # d(foot)/d(angle) . (-forward)
     i = model.joints[knee].idx_q
@@ -288,7 +288,8 @@ def _knee_start(model: pin.Model, data: pin.Data, knee: int, foot: int, forward:
     return float(np.clip(angle, lower, upper))
 
 
-def _axis(joint: pin.JointModel) -> FloatArray:
+def joint_axis(joint: pin.JointModel) -> FloatArray:
+    """A 1-dof joint's axis in its own frame. Shape (3,)."""
     name = joint.shortname()
     if name.startswith("JointModelR") and name[-1] in "XYZ" and "Unaligned" not in name:
         out = np.zeros(3)

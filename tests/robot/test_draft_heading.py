@@ -1,0 +1,57 @@
+"""Which way a drafted robot faces: its root's x axis, unless both knees bend the other way (iCub's root)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from posegen.robot import Scene, load_config, write_draft
+from posegen.robot.draft_geometry import skeleton
+from posegen.robot.draft_heading import TURNED
+from tests.robot.humanoid_urdf import humanoid_urdf
+from tests.test_artefact_bytes import ICUB  # the reduced iCub of example-robot-data: its root's x axis points back
+
+
+@pytest.fixture(scope="module")
+def icub(tmp_path_factory):
+    config = tmp_path_factory.mktemp("icub") / "icub.yaml"
+    draft = write_draft(ICUB, str(config), samples=10, seed=2)
+    return draft, Scene(load_config(config))
+
+
+def test_a_robot_whose_knees_bend_against_its_root_x_axis_is_turned_around(icub):
+    draft, scene = icub
+    assert TURNED in draft.checks
+    assert [s.declared.parent for s in draft.soles] == ["l_ankle_2", "r_ankle_2"]  # left is left
+    q = scene.configuration(scene.reference)
+    data = scene.model.createData()
+    pin.framesForwardKinematics(scene.model, data, q)
+    left, right = (data.oMf[scene.frame_id(s)].translation for s in scene.stance.sole_frames)
+    table = scene.table_pose[:3, 3]
+    forward = np.cross(left - right, [0.0, 0.0, 1.0])  # left = up x forward, so forward = left x up
+    assert (table - (left + right) / 2) @ forward > 0  # the table stands in front of it
+    knee = scene.model.getJointId("l_knee")
+    assert scene.model.lowerPositionLimit[scene.model.joints[knee].idx_q] < -1.5  # it flexes negative: backwards
+
+
+def test_the_turned_draft_loads_and_stands_its_feet_on_the_floor(icub):
+    draft, scene = icub
+    assert draft.notes[-1].startswith("the draft loads as a scene"), draft.notes[-1]
+    assert {"l_foot", "r_foot"} <= set(scene.stance.floor_contact_frames)  # the plates fixed to the ankles
+
+
+def test_a_robot_facing_its_root_x_axis_is_not_turned(tmp_path):
+    draft = write_draft(str(humanoid_urdf(tmp_path / "description", "z")), str(tmp_path / "c.yaml"), samples=5)
+    assert TURNED not in draft.checks
+
+
+def test_a_capsule_along_the_joints_reaches_the_child_joint_not_past_it():
+    model = pin.buildModelFromUrdf(ICUB, pin.JointModelFreeFlyer())
+    shin = skeleton(model, "l_lower_leg")
+    frame = model.frames[model.getFrameId("l_lower_leg")]
+    ankle = next(c for c in range(2, model.njoints) if model.parents[c] == frame.parentJoint)
+    joint_in_link = frame.placement.actInv(model.jointPlacements[ankle].translation)
+    (capsule,) = shin
+    reach = np.linalg.norm(np.subtract(capsule.to_m, capsule.from_m)) + capsule.radius_m
+    assert reach == pytest.approx(np.linalg.norm(joint_in_link - np.array(capsule.from_m)), abs=2e-3)  # rounded to mm
