@@ -10,6 +10,8 @@ from __future__ import annotations
 import json
 import math
 import statistics
+import sys
+import textwrap
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -157,7 +159,7 @@ def plot_curves(trials: Sequence[SeedResult], title: str, path: Path) -> None:
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("true held-out height error, worst chain (mm)")
     axes[0].legend(fontsize=8)
-    fig.suptitle(title, fontsize=9)
+    fig.suptitle(textwrap.fill(title, 150), fontsize=8)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
@@ -179,3 +181,8 @@ def read_json(path: Path) -> tuple[list[SeedResult], dict[str, object]]:
     """The per-seed figures and settings ``write_json`` wrote (to report them again)."""
     data = json.loads(path.read_text())
     return [SeedResult(**seed) for seed in data["seeds"]], data["settings"]
+
+
+if __name__ == "__main__":  # report a run again from its JSON: session_compare.py JSON [PNG]
+    again, facts = read_json(Path(sys.argv[1]))
+    report(again, str(facts["machine"]), str(facts["about"]), Path(sys.argv[2]) if len(sys.argv) > 2 else None)
