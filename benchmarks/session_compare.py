@@ -112,7 +112,9 @@ def print_comparison(trials: Sequence[SeedResult]) -> None:
             if first is None:
                 verdict = "not reached within the batches run"
             else:
-                verdict = f"{first} contacts ({100 * (k - first) / k:+.0f} % vs {k}; saves {(k - first) * pace:.0f} s)"
+                fewer = 100 * (k - first) / k
+                change = f"{fewer:.0f} % fewer than {k}" if fewer >= 0 else f"{-fewer:.0f} % more than {k}"
+                verdict = f"{first} contacts ({change}; robot time {(k - first) * pace:+.0f} s saved)"
             print(f"- {deliverable}, {order} order reaches the fixed design's median: {verdict}; per seed: {seeds}")
     print("\nat the last batch: predicted (CV, worst chain) / true held-out error (worst chain, with contact noise)")
     for deliverable in DELIVERABLES:
@@ -185,4 +187,9 @@ def read_json(path: Path) -> tuple[list[SeedResult], dict[str, object]]:
 
 if __name__ == "__main__":  # report a run again from its JSON: session_compare.py JSON [PNG]
     again, facts = read_json(Path(sys.argv[1]))
-    report(again, str(facts["machine"]), str(facts["about"]), Path(sys.argv[2]) if len(sys.argv) > 2 else None)
+    report(
+        again,
+        str(facts.get("machine", "partial run")),
+        str(facts.get("about", "partial run")),
+        Path(sys.argv[2]) if len(sys.argv) > 2 else None,
+    )
