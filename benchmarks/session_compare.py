@@ -127,6 +127,23 @@ def print_comparison(trials: Sequence[SeedResult]) -> None:
         )
 
 
+def print_seeds(trials: Sequence[SeedResult]) -> None:
+    """Per seed: the fixed design's and the session's first and last errors, its robot time, the stopping ratios."""
+    print(
+        "\n| seed | fixed IROC: urdf / compensated mm | session, first batch | session, last batch | s per contact "
+        "| predicted / true at the last batch: urdf, compensated |"
+    )
+    print("|---" * 6 + "|")
+    for t in trials:
+        ratio = {d: t.predicted_mm[d] / t.noisy_true_mm[d] for d in DELIVERABLES}
+        first, last = (" / ".join(f"{t.errors[d][ORDERS[0]][b]:.2f}" for d in DELIVERABLES) for b in (0, -1))
+        print(
+            f"| {t.seed} | {' / '.join(f'{t.fixed_error[d]:.2f}' for d in DELIVERABLES)} ({t.fixed_contacts}) "
+            f"| {first} ({t.counts[0]}) | {last} ({t.counts[-1]}) | {t.s_per_contact:.1f} "
+            f"| {ratio['urdf']:.2f}, {ratio['compensated']:.2f} |"
+        )
+
+
 def write_json(trials: Sequence[SeedResult], settings: dict[str, object], path: Path) -> None:
     """The raw per-seed numbers and the settings they were measured with."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -175,6 +192,7 @@ def report(trials: Sequence[SeedResult], machine: str, about: str, plot: Path | 
     for deliverable in DELIVERABLES:
         print_table(trials, deliverable)
     print_comparison(trials)
+    print_seeds(trials)
     if plot is not None:
         plot_curves(trials, about, plot)
 
