@@ -231,7 +231,7 @@ def bench_session(
     about = describe(robot, settings, len(seeds), held_out, len(split.design_rows), took)
     facts = {"machine": machine, "about": about, "robot": asdict(robot), "session": str(settings), "wall_s": took}
     write_json(trials, facts | {"held_out": held_out, "fixed_k": fixed_k, "max_batches": max_batches}, workdir / JSON)
-    report(trials, machine, about, plot)
+    report(trials, machine, about, plot, fixed_k)
     return trials
 
 

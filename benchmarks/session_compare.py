@@ -98,9 +98,11 @@ def reach(
     return first, per_seed
 
 
-def print_comparison(trials: Sequence[SeedResult]) -> None:
-    """The fixed design's comparison (contacts to reach, robot time saved) and the stopping rule's ratio."""
-    k = int(statistics.median(t.fixed_contacts for t in trials))
+def print_comparison(trials: Sequence[SeedResult], k: int = 60) -> None:
+    """The fixed design's comparison against its ``k`` planned postures (contacts to reach, robot time saved).
+
+    And the stopping rule's ratio.
+    """
     pace = statistics.median(t.s_per_contact for t in trials)
     print(
         f"\nrobot time per contact (the session's bags: joint-state span / contacts, median over seeds): {pace:.1f} s"
@@ -185,13 +187,13 @@ def plot_curves(trials: Sequence[SeedResult], title: str, path: Path) -> None:
     plt.close(fig)
 
 
-def report(trials: Sequence[SeedResult], machine: str, about: str, plot: Path | None = None) -> None:
+def report(trials: Sequence[SeedResult], machine: str, about: str, plot: Path | None = None, k: int = 60) -> None:
     """Print every table and figure of the session benchmark; draw its curves into ``plot`` (PNG) if given."""
     print(f"\n### session: true held-out height error at fixed contact counts ({machine})\n\n{about}\n")
     print("true error: mean abs height, worst chain, on held-out contacts without contact noise (the model's)")
     for deliverable in DELIVERABLES:
         print_table(trials, deliverable)
-    print_comparison(trials)
+    print_comparison(trials, k)
     print_seeds(trials)
     if plot is not None:
         plot_curves(trials, about, plot)
@@ -210,4 +212,5 @@ if __name__ == "__main__":  # report a run again from its JSON: session_compare.
         str(facts.get("machine", "partial run")),
         str(facts.get("about", "partial run")),
         Path(sys.argv[2]) if len(sys.argv) > 2 else None,
+        int(facts.get("fixed_k", 60)),  # type: ignore[call-overload]
     )
