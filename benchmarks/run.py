@@ -330,6 +330,9 @@ def main() -> None:
     )
     parser.add_argument("--session-seeds", type=int, default=3, help="robot seeds of the session stage")
     parser.add_argument("--session-workers", type=int, default=2, help="worker processes of the session stage")
+    parser.add_argument("--session-batches", type=int, default=6, help="batches each rehearsal adds at most")
+    parser.add_argument("--session-pool", default=None, help="pool of the session stage (default: the stage pool's)")
+    parser.add_argument("--session-plot", default=None, help="draw the session stage's curves into this PNG")
     parser.add_argument("--keep", default=None, help="keep the generated files in this folder")
     args = parser.parse_args()
     workdir = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="posegen-bench-"))
@@ -354,7 +357,15 @@ def main() -> None:
         from session_bench import bench_session  # benchmarks/session_bench.py, beside this script
 
         seeds = tuple(range(1, args.session_seeds + 1))
-        bench_session(pool_path, workdir, machine(), seeds=seeds, workers=args.session_workers)
+        bench_session(
+            Path(args.session_pool) if args.session_pool else pool_path,
+            workdir,
+            machine(),
+            seeds=seeds,
+            workers=args.session_workers,
+            max_batches=args.session_batches,
+            plot=Path(args.session_plot) if args.session_plot else None,
+        )
     if "view" in args.only:
         bench_view(pool_path, workdir)
     if "scale" in args.only:

@@ -9,17 +9,27 @@ taken in the IROC ranking order and in a random order. The three use the same ca
 settings. The session's own contacts come from its recordings (``simulate --bag``); the
 fixed orders' from ``posegen simulate`` at their postures (same robot, same table plane),
 and so, for a like-for-like comparison of the choice alone, do the session's postures.
+So does the fixed exact-k IROC design (``posegen select --k K`` on the design pool, K = 60 by
+default), the session's yardstick. Both deliverables are judged: the URDF alone, and the URDF
+with its compliance compensation (NaN when no compliant candidate wins). The figures are
+summarised by ``benchmarks/session_compare.py``.
 """
 
 from __future__ import annotations
 
-import statistics
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from session_compare import (  # benchmarks/session_compare.py, beside this module
+    DELIVERABLES,
+    ORDERS,
+    SeedResult,
+    report,
+    write_json,
+)
 
 from posegen.calibrate import Calibration, Perturbation, Settings, calibrate, held_out_x
 from posegen.calibrate.simulation import contact_offsets, perturbed_robot, settle_true
@@ -27,10 +37,11 @@ from posegen.io import load_pool, write_yaml
 from posegen.model import Contacts, build_design, planned_kinds, read_measurements
 from posegen.parallel import open_backend
 from posegen.robot import Scene, scene_for
-from posegen.select import iroc
-from posegen.session import Robot, SessionSettings, read_index, rehearse_session, start_session
+from posegen.select import iroc, select_k
+from posegen.session import Robot, SessionIndex, SessionSettings, read_index, rehearse_session, start_session
 
 TABLE = "table_1"  # the table session of every rehearsal
+JSON = "session_bench.json"  # the raw per-seed figures, in the work folder
 
 
 def robot_contacts(
@@ -59,17 +70,26 @@ def robot_contacts(
     return settled.at(settled.joints + rng.normal(0.0, perturbation.encoder_noise_rad, settled.joints.shape))
 
 
-def true_error_mm(calibration: Calibration, held: Contacts) -> float:
-    """Mean absolute held-out height error (mm) of the URDF deliverable, of its worst chain (the stopping chain)."""
+def true_error_mm(calibration: Calibration, held: Contacts, deliverable: str = "urdf") -> float:
+    """Mean absolute held-out height error (mm) of a deliverable, of its worst chain (the stopping chain).
+
+    ``deliverable``: ``urdf`` (the URDF alone) or ``compensated`` (the URDF with its compliance
+    compensation); NaN when the calibration ships no compensated deliverable.
+    """
+    chosen = getattr(calibration.deliverables, deliverable)
+    if chosen is None:
+        return float("nan")
     model = calibration.model
     mine = held.subset([i for i, c in enumerate(held.chains) if c in model.contact.chains])
-    x = held_out_x(calibration, calibration.deliverables.urdf.estimate.x, mine)
+    x = held_out_x(calibration, chosen.estimate.x, mine)
     residuals = model.evaluate(x, model.observations(mine), floor=False).contact
     by_chain = np.array(mine.chains)
     return max(float(np.mean(np.abs(residuals[by_chain == c, 0])) * 1e3) for c in sorted(set(mine.chains)))
 
 
-ORDERS = ("session (its recordings)", "session postures", "IROC", "random")
+def both_errors(calibration: Calibration, held: Contacts) -> dict[str, float]:
+    """Each deliverable's true error (mm)."""
+    return {d: true_error_mm(calibration, held, d) for d in DELIVERABLES}
 
 
 @dataclass(frozen=True)
@@ -83,6 +103,7 @@ class Split:
     design_rows: list[int]  # pool rows of the design pool, in its order
     held_rows: list[int]
     ranking: list[int]  # IROC ranking of the design pool (its rows)
+    fixed: list[int]  # the exact-k IROC design (select --k) of the design pool (its rows)
 
     def contacts(self, rows: Sequence[int], robot: Robot) -> Contacts:
         """The robot's contacts at some pool rows."""
@@ -90,8 +111,11 @@ class Split:
         return robot_contacts(self.scene, self.joints[list(rows)], chains, spots, robot)
 
 
-def split_pool(pool_path: Path, workdir: Path, held_out: int) -> tuple[Split, Path]:
-    """Hold postures out of the pool (seed 0); write the design pool; rank it by IROC."""
+def split_pool(pool_path: Path, workdir: Path, held_out: int, fixed_k: int = 60) -> tuple[Split, Path]:
+    """Hold postures out of the pool (seed 0); write the design pool; rank it by IROC; its exact-k design.
+
+    The exact design is what ``posegen select --k fixed_k`` writes for the design pool (no DETMAX runs).
+    """
     pool = load_pool(pool_path)
     scene = scene_for(pool.provenance, None)
     held = sorted(np.random.default_rng(0).choice(len(pool.postures), size=held_out, replace=False).tolist())
@@ -102,9 +126,24 @@ def split_pool(pool_path: Path, workdir: Path, held_out: int) -> tuple[Split, Pa
     write_yaml(design_pool, data)
     joints, chains = pool.joints(), [p.chain for p in pool.postures]
     design, _ = build_design(scene, joints[design_rows], [chains[i] for i in design_rows])
-    ranking = list(iroc(design).ranking)
+    ranking = iroc(design).ranking
+    fixed = list(select_k(design, fixed_k, ranking).rows)
     spots = [p.spot for p in pool.postures]
-    return Split(scene, joints, chains, spots, design_rows, held, ranking), design_pool
+    return Split(scene, joints, chains, spots, design_rows, held, list(ranking), fixed), design_pool
+
+
+def predicted_mm(calibration: Calibration, deliverable: str) -> float:
+    """A deliverable's CV-predicted held-out height error (mm, mean abs, worst chain); NaN when it is not shipped."""
+    chosen = getattr(calibration.deliverables, deliverable)
+    if chosen is None:
+        return float("nan")
+    return max(e.mean_abs[0] for e in chosen.result.chains.values()) * 1e3
+
+
+def robot_time(index: SessionIndex) -> tuple[float, int]:
+    """Robot time the session's bags recorded (s, their joint states) and the contacts measured in them."""
+    recorded = [b.recording for b in index.batches if b.recording is not None]
+    return sum(r.duration_s for r in recorded), sum(r.contacts for r in recorded)
 
 
 def judge_seed(
@@ -114,16 +153,13 @@ def judge_seed(
     robot: Robot,
     settings: SessionSettings,
     max_batches: int,
-    workers: int = 2,
-) -> tuple[list[int], dict[str, list[float]], float, float]:
-    """Rehearse one robot.
+    workers: int,
+) -> SeedResult:
+    """Rehearse one robot; judge every order after each batch, and the fixed design, on its held-out postures.
 
-    Returns:
-        The contact counts after each batch; each order's true error there (on the held-out
-        postures without contact noise: the model's error alone); at the last batch, the
-        session's predicted error and its true error on held-out contacts with the
-        rehearsal's contact noise (what a validation set would show, as the CV predicts).
-
+    True errors are on the held-out postures without contact noise (the model's error alone);
+    the stopping rule's is on held-out contacts with the rehearsal's contact noise (what a
+    validation set would show, as the CV predicts), at the last batch.
     """
     with open_backend(workers) as backend:
         start_session(str(design_pool), str(folder), settings, backend)
@@ -131,14 +167,15 @@ def judge_seed(
     lean = Settings(candidates=settings.candidates, fold_seeds=settings.fold_seeds, seed=settings.seed)
     held = split.contacts(split.held_rows, replace(robot, contact_noise_mm=0.0, contact_noise_deg=0.0))
     noisy_held = split.contacts(split.held_rows, robot)
-    noisy = float("nan")
     shuffled = np.random.default_rng(robot.seed).permutation(len(split.design_rows)).tolist()
     recorded: Contacts | None = None
     planned: list[int] = []  # design pool rows
-    errors: dict[str, list[float]] = {k: [] for k in ORDERS}
+    errors: dict[str, dict[str, list[float]]] = {d: {k: [] for k in ORDERS} for d in DELIVERABLES}
     counts: list[int] = []
-    predicted = float("nan")
-    for batch in read_index(folder).batches:
+    predicted: dict[str, float] = {}
+    noisy: dict[str, float] = {}
+    index = read_index(folder)
+    for batch in index.batches:
         if batch.assessment is None or batch.assessment.error:
             continue
         part = read_measurements(folder / batch.folder / "measurements.yaml", split.scene).contacts
@@ -146,14 +183,19 @@ def judge_seed(
         planned.extend(batch.pool_rows)
         counts.append(len(recorded))
         calibration = calibrate(split.scene, recorded, [TABLE], lean)
-        errors[ORDERS[0]].append(true_error_mm(calibration, held))
-        noisy = true_error_mm(calibration, noisy_held)
-        for name, picked in zip(ORDERS[1:], (planned, split.ranking, shuffled), strict=True):
-            rows = [split.design_rows[i] for i in picked[: len(recorded)]]
-            contacts = split.contacts(rows, robot)
-            errors[name].append(true_error_mm(calibrate(split.scene, contacts, [TABLE], lean), held))
-        predicted = max(batch.assessment.predicted_z_mm.values())
-    return counts, errors, predicted, noisy
+        judged = [both_errors(calibration, held)]
+        noisy = {d: true_error_mm(calibration, noisy_held, d) for d in DELIVERABLES}
+        predicted = {d: predicted_mm(calibration, d) for d in DELIVERABLES}
+        for picked in (planned, split.ranking, shuffled):
+            contacts = split.contacts([split.design_rows[i] for i in picked[: len(recorded)]], robot)
+            judged.append(both_errors(calibrate(split.scene, contacts, [TABLE], lean), held))
+        for name, figures in zip(ORDERS, judged, strict=True):
+            for d in DELIVERABLES:
+                errors[d][name].append(figures[d])
+    fixed = split.contacts([split.design_rows[i] for i in split.fixed], robot)
+    fixed_error = both_errors(calibrate(split.scene, fixed, [TABLE], lean), held)
+    spent, measured = robot_time(index)
+    return SeedResult(robot.seed, counts, errors, len(fixed), fixed_error, predicted, noisy, spent, measured)
 
 
 def bench_session(
@@ -167,45 +209,37 @@ def bench_session(
     settings: SessionSettings | None = None,
     workers: int = 2,
     robot: Robot | None = None,
-) -> None:
-    """Print the table: true held-out error at the session's contact counts, four orders, over robot seeds.
+    fixed_k: int = 60,
+    plot: Path | None = None,
+) -> list[SeedResult]:
+    """Print the tables: true held-out error at the session's contact counts, four orders and the fixed design.
 
     ``robot``: the simulated robot's sizes (its seed is each of ``seeds``); None: ``Robot``'s defaults
-    (contact noise as the real recordings') with the hips' ``compliance``.
+    (contact noise as the real recordings') with the hips' ``compliance``. The raw per-seed figures
+    go to ``workdir/session_bench.json``; the curves to ``plot`` (PNG) if given.
     """
     robot = robot or Robot(compliance_rad_per_knm=compliance)
     settings = settings or SessionSettings(target_mm=1.0, candidates=("offsets", "offsets_hip_pitch"), fold_seeds=1)
-    split, design_pool = split_pool(pool_path, workdir, held_out)
+    split, design_pool = split_pool(pool_path, workdir, held_out, fixed_k)
     start = time.perf_counter()
-    trials = [
-        judge_seed(
-            split, design_pool, workdir / f"session_{seed}", replace(robot, seed=seed), settings, max_batches, workers
-        )
-        for seed in seeds
-    ]
+    trials = []
+    for seed in seeds:
+        folder = workdir / f"session_{seed}"
+        trials.append(judge_seed(split, design_pool, folder, replace(robot, seed=seed), settings, max_batches, workers))
+        write_json(trials, {"partial": True}, workdir / JSON)  # a long run keeps what it has
     took = time.perf_counter() - start
-    print(f"\n### session: true held-out height error at fixed contact counts ({machine})\n")
-    print(
-        f"{len(seeds)} robot seeds (hips {robot.compliance_rad_per_knm:g} rad/kN m, contact noise "
+    about = describe(robot, settings, len(seeds), held_out, len(split.design_rows), took)
+    facts = {"machine": machine, "about": about, "robot": asdict(robot), "session": str(settings), "wall_s": took}
+    write_json(trials, facts | {"held_out": held_out, "fixed_k": fixed_k, "max_batches": max_batches}, workdir / JSON)
+    report(trials, machine, about, plot, fixed_k)
+    return trials
+
+
+def describe(robot: Robot, settings: SessionSettings, seeds: int, held_out: int, pool: int, took_s: float) -> str:
+    """The settings of a run, in one line."""
+    return (
+        f"{seeds} robot seeds (hips {robot.compliance_rad_per_knm:g} rad/kN m, contact noise "
         f"{robot.contact_noise_mm:g} mm / {robot.contact_noise_deg:g} deg), {held_out} held-out postures, pool "
-        f"{len(split.design_rows)}; URDF deliverable, candidates {', '.join(settings.candidates)}; {took:.0f} s\n"
-    )
-    print("true error: mean abs height, worst chain, on held-out contacts without contact noise (the model's)\n")
-    print("| contacts | " + " | ".join(f"{name}: median (min-max) mm" for name in ORDERS) + " |")
-    print("|---" * (len(ORDERS) + 1) + "|")
-    for b in range(min(len(counts) for counts, _, _, _ in trials)):
-        cells = []
-        for name in ORDERS:
-            values = [errors[name][b] for _, errors, _, _ in trials]
-            cells.append(f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})")
-        shown = sorted({counts[b] for counts, _, _, _ in trials})
-        print(f"| {'/'.join(str(c) for c in shown)} | " + " | ".join(cells) + " |")
-    ratios = [predicted / noisy for _, _, predicted, noisy in trials]
-    predicted = ", ".join(f"{p:.2f}" for _, _, p, _ in trials)
-    true = ", ".join(f"{n:.2f}" for *_, n in trials)
-    contacts = ", ".join(str(counts[-1]) for counts, _, _, _ in trials)
-    print(
-        f"\nat the last batch: predicted (CV, worst chain) / true held-out error (worst chain, held-out contacts "
-        f"with contact noise) = {', '.join(f'{r:.2f}' for r in ratios)} (median {statistics.median(ratios):.2f}); "
-        f"predicted {predicted} mm, true {true} mm; contacts {contacts}"
+        f"{pool}, margin {settings.margin:g}, {settings.batch_postures}-posture batches, "
+        f"candidates {', '.join(settings.candidates)}, fold seeds {settings.fold_seeds}; {took_s:.0f} s"
     )
