@@ -219,7 +219,9 @@ def bench_session(
     go to ``workdir/session_bench.json``; the curves to ``plot`` (PNG) if given.
     """
     robot = robot or Robot(compliance_rad_per_knm=compliance)
-    settings = settings or SessionSettings(target_mm=1.0, candidates=("offsets", "offsets_hip_pitch"), fold_seeds=1)
+    settings = settings or SessionSettings(  # no stop before max_batches: every curve reaches the same counts
+        target_mm=1.0, candidates=("offsets", "offsets_hip_pitch"), fold_seeds=1, patience=0
+    )
     split, design_pool = split_pool(pool_path, workdir, held_out, fixed_k)
     start = time.perf_counter()
     trials = []
