@@ -1,4 +1,4 @@
-"""``posegen session``: an experiment batch by batch, until the predicted error meets the target."""
+"""``posegen session``: an experiment batch by batch, until the predicted error meets the target or stops falling."""
 
 from __future__ import annotations
 
