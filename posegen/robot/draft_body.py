@@ -7,7 +7,7 @@
 3. :func:`find_legs` then :func:`find_soles`: the two branches reaching the floor, their
    feet and soles; the legs branch from the root, else from a joint below it (a torso-rooted
    model: the joints from the root down to that branching joint are the waist, free joints of
-   the upper body, in neither the legs nor the arms: :func:`waist_joints`);
+   the upper body, in neither the legs nor the arms: :func:`~posegen.robot.draft_stance.waist_joints`);
 4. :func:`bend_reference`: without an SRDF state, a standing posture with the knees bent;
 5. :func:`find_arms`: the two longest chains of the upper body, up to where they branch
    into light parts only (fingers: under 1 % of the robot's mass);
@@ -38,9 +38,11 @@ from posegen.robot.draft_stance import (
     find_sole,
     find_up,
     foot_joint,
+    joint_path,
     reaching_branches,
     sole_pose,
     upper_branches,
+    waist_joints,
 )
 from posegen.robot.geometry import FloatArray, yaw_rotation
 
@@ -233,28 +235,12 @@ def find_legs(model: pin.Model, data: pin.Data, tree: Tree, left: FloatArray, la
     return legs
 
 
-def waist_joints(model: pin.Model, legs: list[int]) -> list[int]:
-    """The joints from the root down to the legs' branching joint (their parent), root side first; none at the root.
-
-    Example:
-        >>> waist_joints(model, legs.roots)  # a torso root, two waist joints down to the pelvis
-        [2, 3]
-
-    """
-    out = []
-    joint = int(model.parents[legs[0]])
-    while joint > 1:  # 1: the free-flyer root
-        out.append(joint)
-        joint = int(model.parents[joint])
-    return out[::-1]
-
-
 def find_soles(
     model: pin.Model, data: pin.Data, geometry: Geometry, tree: Tree, roots: list[int], heading: pin.SE3
 ) -> tuple[Legs, tuple[str, ...]]:
     """Each leg's foot (down its heaviest branch), path and sole, at the posture of ``data``."""
     feet = [foot_joint(model, b, tree.children, tree.subtree) for b in roots]
-    paths = [_path(model, b, f) for b, f in zip(roots, feet, strict=True)]
+    paths = [joint_path(model, b, f) for b, f in zip(roots, feet, strict=True)]
     length = float(np.linalg.norm(data.oMi[roots[0]].translation - data.oMi[feet[0]].translation))
     soles = [
         find_sole(model, data, geometry, side, f, length, heading)
@@ -271,14 +257,6 @@ def find_soles(
         elif sole.declared is not None:
             checks.append(f"sole '{sole.frame}' declared under the ankle, on the lowest vertices of {sole.foot_link}")
     return Legs(roots, feet, paths, length, soles), tuple(checks)
-
-
-def _path(model: pin.Model, first: int, last: int) -> list[int]:
-    """Joints from ``first`` down to ``last`` (its descendant)."""
-    out = [last]
-    while out[-1] != first:
-        out.append(model.parents[out[-1]])
-    return out[::-1]
 
 
 def bend_reference(

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot.draft_stance import Subtree, foot_joint, joint_axis, knee_of
+from posegen.robot.draft_stance import Subtree, foot_joint, joint_axis, joint_path, knee_of
 from posegen.robot.geometry import FloatArray, yaw_rotation
 
 ONE_SIDED = 2.0  # a knee's range is one-sided when one side is at least this many times the other
@@ -84,10 +84,7 @@ def _knee_vote(
 ) -> int:
     """+1: the knee's flexion moves the foot backwards (``forward`` agrees); -1: forwards; 0: no clear say."""
     foot = foot_joint(model, leg, children, subtree)
-    path = [foot]
-    while path[-1] != leg:
-        path.append(model.parents[path[-1]])
-    knee = knee_of(model, data, path[::-1], forward)
+    knee = knee_of(model, data, joint_path(model, leg, foot), forward)
     joint = model.joints[knee]
     if joint.nq != 1:
         return 0

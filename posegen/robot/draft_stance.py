@@ -143,11 +143,39 @@ def upper_branches(model: pin.Model, children: dict[int, list[int]], legs: list[
         [12, 13, 18]
 
     """
-    path = [int(model.parents[legs[0]])]  # the branching joint up to the root
-    while path[-1] > 1:
-        path.append(int(model.parents[path[-1]]))
+    path = [1, *waist_joints(model, legs)]  # the root down to the branching joint
     on_path = set(path) | set(legs)
     return sorted(c for j in path for c in children[j] if c not in on_path)
+
+
+def waist_joints(model: pin.Model, legs: list[int]) -> list[int]:
+    """The joints from the root down to the legs' branching joint (their parent), root side first; none at the root.
+
+    Example:
+        >>> waist_joints(model, legs.roots)  # a torso root, two waist joints down to the pelvis
+        [2, 3]
+
+    """
+    out = []
+    joint = int(model.parents[legs[0]])
+    while joint > 1:  # 1: the free-flyer root
+        out.append(joint)
+        joint = int(model.parents[joint])
+    return out[::-1]
+
+
+def joint_path(model: pin.Model, first: int, last: int) -> list[int]:
+    """Joints from ``first`` down to ``last`` (its descendant), both included.
+
+    Example:
+        >>> joint_path(model, legs.roots[0], foot)  # hip to ankle
+        [2, 3, 4, 5, 6, 7]
+
+    """
+    out = [last]
+    while out[-1] != first:
+        out.append(int(model.parents[out[-1]]))
+    return out[::-1]
 
 
 def _alike(model: pin.Model, subtree: Subtree, branches: list[int]) -> bool:
