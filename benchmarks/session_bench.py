@@ -34,7 +34,7 @@ from session_compare import (  # benchmarks/session_compare.py, beside this modu
 from posegen.calibrate import Calibration, Perturbation, Settings, calibrate, held_out_x
 from posegen.calibrate.simulation import contact_offsets, perturbed_robot, settle_true
 from posegen.io import load_pool, write_yaml
-from posegen.model import Contacts, build_design, planned_kinds, read_measurements
+from posegen.model import Contacts, Design, build_design, planned_kinds, read_measurements
 from posegen.parallel import open_backend
 from posegen.robot import Scene, scene_for
 from posegen.select import iroc, select_k
@@ -104,6 +104,7 @@ class Split:
     held_rows: list[int]
     ranking: list[int]  # IROC ranking of the design pool (its rows)
     fixed: list[int]  # the exact-k IROC design (select --k) of the design pool (its rows)
+    design: Design  # of the design pool (its base regressors)
 
     def contacts(self, rows: Sequence[int], robot: Robot) -> Contacts:
         """The robot's contacts at some pool rows."""
@@ -129,7 +130,7 @@ def split_pool(pool_path: Path, workdir: Path, held_out: int, fixed_k: int = 60)
     ranking = iroc(design).ranking
     fixed = list(select_k(design, fixed_k, ranking).rows)
     spots = [p.spot for p in pool.postures]
-    return Split(scene, joints, chains, spots, design_rows, held, list(ranking), fixed), design_pool
+    return Split(scene, joints, chains, spots, design_rows, held, list(ranking), fixed, design), design_pool
 
 
 def predicted_mm(calibration: Calibration, deliverable: str) -> float:
