@@ -51,6 +51,20 @@ def first_rows(split: Split, margin: float, grow: bool) -> list[int]:
         k = min(design.size, k + max(1, k // 10))
 
 
+def greedy_full_rank(split: Split) -> int:
+    """Postures a greedy search needs to identify every base parameter (each step: the most new rank, then the score).
+
+    The fewest count (rows >= base parameters) assumes every posture adds 3 independent rows;
+    this measures how many the pool's postures actually need.
+    """
+    design = split.design
+    rows: list[int] = []
+    while design.rank(rows) < design.n_params and len(rows) < design.size:
+        left = [j for j in range(design.size) if j not in rows]
+        rows.append(max(left, key=lambda j: (design.rank([*rows, j]), design.score([*rows, j]))))
+    return len(rows)
+
+
 def run_seed(split: Split, seed: int, first: list[int], batches: int, batch: int, settings: Settings) -> dict:
     """One robot: the session's choice batch by batch, the IROC order at the same counts, the fixed design."""
     robot = Robot(seed=seed, compliance_rad_per_knm=0.3)
@@ -132,7 +146,10 @@ def main(argv: list[str]) -> int:
         print(f"seed {seed}: contacts {results[-1]['counts']}", file=sys.stderr, flush=True)
     options = {**vars(args), "output": str(args.output)}
     args.output.write_text(json.dumps({"first_postures": len(first), "options": options, "results": results}, indent=1))
-    print(f"first batch: {len(first)} postures (rank {split.design.rank(first)} of {split.design.n_params})")
+    print(
+        f"first batch: {len(first)} postures (rank {split.design.rank(first)} of {split.design.n_params}); "
+        f"fewest by rows {split.design.fewest(split.ranking)}, by a greedy full-rank search {greedy_full_rank(split)}"
+    )
     print(report(results))
     return 0
 

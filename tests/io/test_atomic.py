@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
@@ -16,9 +12,8 @@ import yaml
 from posegen.errors import OutputError
 from posegen.io import atomic as atomic_module
 from posegen.io import atomic_folder, check_replaceable, read_arrays, sidecars_of, write_with_arrays
-from posegen.io.atomic import CRASH_AT, CRASH_LOG, leftover_temporaries
-
-ROOT = Path(__file__).resolve().parents[2]
+from posegen.io.atomic import leftover_temporaries
+from tests.io.crashing import kill_at_every_point
 
 
 def tree(folder: Path) -> dict[str, str]:
@@ -148,16 +143,6 @@ SCRIPT = textwrap.dedent(
 )
 
 
-def run_script(out: Path, env: dict[str, str]) -> subprocess.CompletedProcess[bytes]:
-    return subprocess.run(
-        [sys.executable, "-c", SCRIPT, str(out)],
-        env={**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1", **env},
-        capture_output=True,
-        timeout=120,
-        check=False,
-    )
-
-
 def old_state(out: Path) -> None:
     write_with_arrays(out / "r.yaml", {"format": "test", "run": 1}, {"a": np.full((2, 3), 1.0)})
     write_folder(out / "folder", {"x.txt": "1", "z.txt": "1"})
@@ -165,24 +150,15 @@ def old_state(out: Path) -> None:
 
 def test_a_kill_at_every_rename_boundary_leaves_the_old_or_the_new_artefact(tmp_path):
     """The process kills itself at each crash point in turn: the pair and the folder are each old or new, whole."""
-    log = tmp_path / "points.log"
-    out = tmp_path / "log"
-    out.mkdir()
-    old_state(out)
-    assert run_script(out, {CRASH_LOG: str(log)}).returncode == 0
-    points = log.read_text().splitlines()
-    labels = [line.split(" ", 1)[1] for line in points]
-    assert "before r.yaml" in labels and "before folder/" in labels and "after folder/ (old not yet removed)" in labels
-    for n in range(1, len(points) + 1):
-        out = tmp_path / f"kill{n}"
-        out.mkdir()
-        old_state(out)
-        done = run_script(out, {CRASH_AT: str(n)})
-        assert done.returncode == -signal.SIGKILL, (points[n - 1], done.stderr)
+
+    def check(out: Path, point: str) -> None:
         run = yaml.safe_load((out / "r.yaml").read_text())["run"]
         assert header_and_arrays(out / "r.yaml")[1][0, 0] == run  # the header reads its own arrays
-        assert tree(out / "folder") in ({"x.txt": "1", "z.txt": "1"}, {"x.txt": "2", "y.txt": "2"}), points[n - 1]
+        assert tree(out / "folder") in ({"x.txt": "1", "z.txt": "1"}, {"x.txt": "2", "y.txt": "2"}), point
         allowed = [*sidecars_of(out / "r.yaml"), *leftover_temporaries(out / "r.yaml")]
         allowed += leftover_temporaries(out / "folder")  # the staging folder, or the old folder once swapped out
         hidden = [p for p in out.iterdir() if p.name not in ("r.yaml", "folder")]
-        assert all(p in allowed for p in hidden), (points[n - 1], hidden)
+        assert all(p in allowed for p in hidden), (point, hidden)
+
+    labels = kill_at_every_point(tmp_path, SCRIPT, old_state, check)
+    assert "before r.yaml" in labels and "before folder/" in labels and "after folder/ (old not yet removed)" in labels

@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
@@ -23,9 +19,8 @@ from posegen.io import (
     write_with_arrays,
     write_with_companions,
 )
-from posegen.io.atomic import CRASH_AT, CRASH_LOG, leftover_temporaries
-
-ROOT = Path(__file__).resolve().parents[2]
+from posegen.io.atomic import leftover_temporaries
+from tests.io.crashing import kill_at_every_point
 
 
 def test_a_companion_is_named_by_its_headers_bytes_and_the_old_one_removed_after(tmp_path):
@@ -87,46 +82,25 @@ SCRIPT = textwrap.dedent(
 )
 
 
-def run_script(out: Path, env: dict[str, str]) -> subprocess.CompletedProcess[bytes]:
-    return subprocess.run(
-        [sys.executable, "-c", SCRIPT, str(out)],
-        env={**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1", **env},
-        capture_output=True,
-        timeout=120,
-        check=False,
-    )
-
-
 def old_state(out: Path) -> None:
     write_with_companions(out / "m.yaml", b"run: 1\n", {".truth.yaml": b"run: 1\n"})
     write_with_arrays(out / "r.yaml", {"run": 1}, {"a": np.full((2, 3), 1.0)}, companions={".csv": b"run: 1\n"})
 
 
 def test_a_kill_at_every_rename_boundary_leaves_each_header_with_its_own_companion(tmp_path):
-    log = tmp_path / "points.log"
-    out = tmp_path / "log"
-    out.mkdir()
-    old_state(out)
-    assert run_script(out, {CRASH_LOG: str(log)}).returncode == 0
-    points = log.read_text().splitlines()
-    labels = [line.split(" ", 1)[1] for line in points]
-    assert "before m.yaml" in labels and "before r.yaml" in labels
-    assert sum(label.startswith("before removing") for label in labels) == 3  # the old truth, CSV and sidecar
-    for n in range(1, len(points) + 1):
-        out = tmp_path / f"kill{n}"
-        out.mkdir()
-        old_state(out)
-        done = run_script(out, {CRASH_AT: str(n)})
-        assert done.returncode == -signal.SIGKILL, (points[n - 1], done.stderr)
+    def check(out: Path, point: str) -> None:
         for name, suffix in (("m.yaml", ".truth.yaml"), ("r.yaml", ".csv")):
             header = (out / name).read_bytes()
             run = yaml.safe_load(header)["run"]
-            assert companion_of(out / name, suffix).read_bytes() == f"run: {run}\n".encode(), points[n - 1]
-        run = yaml.safe_load((out / "r.yaml").read_text())["run"]
+            assert companion_of(out / name, suffix).read_bytes() == f"run: {run}\n".encode(), point
         header = yaml.safe_load((out / "r.yaml").read_text())
-        assert read_arrays(out / "r.yaml", header["arrays"], ("a",))["a"][0, 0] == run
+        assert read_arrays(out / "r.yaml", header["arrays"], ("a",))["a"][0, 0] == header["run"]
         allowed = [*sidecars_of(out / "r.yaml"), *companions_of(out / "r.yaml", ".csv")]
         allowed += [*companions_of(out / "m.yaml", ".truth.yaml")]
         allowed += [*leftover_temporaries(out / "r.yaml"), *leftover_temporaries(out / "m.yaml")]
         hidden = [p for p in out.iterdir() if p.name not in ("r.yaml", "m.yaml")]
-        assert all(p in allowed for p in hidden), (points[n - 1], hidden)
+        assert all(p in allowed for p in hidden), (point, hidden)
+
+    labels = kill_at_every_point(tmp_path, SCRIPT, old_state, check)
+    assert "before m.yaml" in labels and "before r.yaml" in labels
+    assert sum(label.startswith("before removing") for label in labels) == 3  # the old truth, CSV and sidecar
