@@ -17,7 +17,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from posegen.errors import InputError, reason
+from posegen.arguments import check_count
+from posegen.errors import ArgumentError, InputError, reason
 from posegen.io import read_yaml, write_yaml
 
 SESSION_FORMAT = "posegen-session"
@@ -266,23 +267,16 @@ def read_index(folder: Path) -> SessionIndex:
                 "deliverable": Deliverable(raw["deliverable"]),
                 "candidates": tuple(str(c) for c in raw["candidates"]),
                 "target_mm": float(raw["target_mm"]),
-                "patience": _count(raw.get("patience", SessionSettings.patience)),
+                "patience": check_count(raw.get("patience", SessionSettings.patience), "patience", minimum=0),
             }
         )
         batches = tuple(_batch(entry) for entry in data["batches"])
         index = SessionIndex(dict(data["provenance"]), str(data["pool"]), str(data["pool_sha256"]), settings, batches)
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError, ArgumentError) as exc:
         raise InputError(f"{path}: not a valid session index ({reason(exc)}); was it edited by hand?") from exc
     if [b.number for b in batches] != list(range(1, len(batches) + 1)):
         raise InputError(f"{path}: batches are not numbered 1, 2, ...; was it edited by hand?")
     return index
-
-
-def _count(value: object) -> int:
-    """A non-negative whole number of the index (ValueError otherwise: the reader's one-line error)."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-        raise ValueError(f"expected a count, got {value!r}")
-    return value
 
 
 def _batch(entry: dict[str, Any]) -> Batch:
