@@ -7,6 +7,7 @@ and hands each stage the typed sub-config it reads (``scene.margins``, ``scene.r
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -232,14 +233,15 @@ class Scene:
         carries both legs: it is no leg's joint, so a leg's joints never move the other sole.
         """
         joint = self.model.frames[self.frame_id(sole_frame)].parentJoint
-        shared = self._stance_ancestors()
+        shared = self._stance_ancestors
         out = []
         while joint not in shared:
             out.append(self.joint_index(str(self.model.names[joint])))
             joint = self.model.parents[joint]
         return out
 
-    def _stance_ancestors(self) -> set[int]:
+    @cached_property
+    def _stance_ancestors(self) -> frozenset[int]:
         """The joints both soles hang from (their common ancestors, the universe and the floating base included)."""
         chains = []
         for sole in self.stance.sole_frames:
@@ -249,7 +251,7 @@ class Scene:
                 chain.add(joint)
                 joint = self.model.parents[joint]
             chains.append(chain)
-        return set.intersection(*chains)
+        return frozenset(set.intersection(*chains))
 
     def stance_leg_joints(self) -> list[int]:
         """Indices of the joints of both legs (from each sole up to their branching joint), sorted."""
