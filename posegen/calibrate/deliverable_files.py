@@ -26,7 +26,7 @@ from posegen.calibrate.deliverables import Deliverable, DeliverableKind
 from posegen.calibrate.offsets import OFFSETS_FILE, joint_offsets, write_offsets
 from posegen.calibrate.scoring import DELIVERABLE_RULE, CvResult, column_stats
 from posegen.calibrate.summary import CalibrationSummary
-from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf
+from posegen.calibrate.urdf_export import calibrated_robot, calibrated_urdf
 from posegen.io import dump_yaml, write_atomic
 from posegen.model import Contacts, Kind, masked
 from posegen.robot import FloatArray
@@ -57,15 +57,6 @@ def files_of(deliverable: Deliverable) -> list[str]:
     return [f"{folder}/{n}" if folder else n for n in names]
 
 
-def deliverable_urdf(calibration: Calibration, deliverable: Deliverable) -> str:
-    """The URDF text of a deliverable: the nominal one as it is, or the URDF of its fit."""
-    nominal = calibration.model.scene.files.urdf.read_text()
-    if deliverable.nominal:
-        return nominal
-    theta = calibration.model.theta(deliverable.estimate.x)
-    return calibrated_urdf(nominal, calibration.model.contact, theta)
-
-
 def compliance_of(calibration: Calibration, deliverable: Deliverable) -> Compliance:
     """The compliance groups a deliverable's candidate fits, with their values and posterior std."""
     model = calibration.model
@@ -79,22 +70,29 @@ def compliance_of(calibration: Calibration, deliverable: Deliverable) -> Complia
 
 
 def write_deliverable(calibration: Calibration, deliverable: Deliverable, out_dir: Path, seed: int | None) -> str:
-    """Write a deliverable's files into the calibration folder ``out_dir``; its URDF text."""
-    scene = calibration.model.scene
+    """Write a deliverable's files into the calibration folder ``out_dir``; its URDF text.
+
+    The URDF is the nominal one as it is, or the URDF of the deliverable's fit (built once,
+    with its config for the URDF deliverable).
+    """
+    model = calibration.model
+    scene = model.scene
     folder = out_dir / folder_of(deliverable)
     folder.mkdir(parents=True, exist_ok=True)
-    urdf = deliverable_urdf(calibration, deliverable)
+    nominal = scene.files.urdf.read_text()
+    theta = model.contact.nominal() if deliverable.nominal else model.theta(deliverable.estimate.x)
+    urdf, config = nominal, None
+    if deliverable.kind == DeliverableKind.URDF:  # nominal: the config's frames as they are
+        exported, config = calibrated_robot(nominal, model.contact, theta, folder / URDF_FILE)
+        urdf = nominal if deliverable.nominal else exported
+    elif not deliverable.nominal:
+        urdf = calibrated_urdf(nominal, model.contact, theta)
     write_atomic(folder / URDF_FILE, urdf)
     provenance = scene.provenance(seed)
-    offsets = joint_offsets(scene.files.urdf.read_text(), urdf)
-    write_offsets(folder / OFFSETS_FILE, offsets, URDF_FILE, str(scene.files.urdf), provenance)
-    if deliverable.kind == DeliverableKind.COMPENSATED:
+    write_offsets(folder / OFFSETS_FILE, joint_offsets(nominal, urdf), URDF_FILE, str(scene.files.urdf), provenance)
+    if config is None:  # the compensated deliverable
         write_compliance(folder / COMPLIANCE_FILE, compliance_of(calibration, deliverable), URDF_FILE, provenance)
     else:
-        theta = calibration.model.theta(deliverable.estimate.x)
-        if deliverable.nominal:
-            theta = calibration.model.contact.nominal()  # the URDF as it is: the config's frames as they are
-        config = calibrated_config(calibration.model.contact, theta, folder / URDF_FILE)
         write_atomic(folder / CONFIG_FILE, dump_yaml(config))
     return urdf
 

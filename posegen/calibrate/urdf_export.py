@@ -161,15 +161,36 @@ def calibrated_config(model: ContactModel, theta: FloatArray, urdf_path: Path) -
         ConfigError: A chain's layout cannot carry its placements (the frame is named).
 
     """
+    return calibrated_robot(model.scene.files.urdf.read_text(), model, theta, urdf_path)[1]
+
+
+def calibrated_robot(
+    urdf_text: str, model: ContactModel, theta: FloatArray, urdf_path: Path
+) -> tuple[str, dict[str, Any]]:
+    """:func:`calibrated_urdf` and :func:`calibrated_config` of one export (the URDF built and checked once).
+
+    Args:
+        urdf_text: The original (nominal) URDF.
+        model: The measurement model the parameters belong to.
+        theta: (p,) identified parameters.
+        urdf_path: Where the calibrated URDF is written (the config names it relatively).
+
+    Raises:
+        ConfigError: A chain's layout cannot carry its placements (the frame is named).
+
+    Example:
+        >>> urdf, config = calibrated_robot(nominal_text, model.contact, theta, folder / "calibrated.urdf")
+
+    """
     scene = model.scene
-    export = _export(scene.files.urdf.read_text(), model, theta)
+    export = _export(urdf_text, model, theta)
     config = dataclasses.replace(scene.config, frames=export.frames).to_dict()
     config["robot"]["source"] = {
         "urdf": urdf_path.name,  # relative: resolved against the config's own folder, where it is written
         **({"srdf": str(scene.files.srdf)} if scene.files.srdf is not None else {}),  # a robot may have none
         "package_dirs": list(scene.files.package_dirs),
     }
-    return config
+    return export.urdf, config
 
 
 def _write_ends(

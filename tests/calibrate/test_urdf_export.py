@@ -29,7 +29,7 @@ from posegen.calibrate import (
     write_calibration,
 )
 from posegen.errors import ConfigError
-from posegen.io import write_yaml
+from posegen.io import dump_yaml, write_yaml
 from posegen.model import CalibrationModel, ContactModel, Contacts, Kind, placement_matrix
 from posegen.robot import FLUSH, POINT, Scene, contact_placement, load_config, parse_config, with_declared_frames
 from tests.conftest import ROOT, point_config_data
@@ -60,6 +60,19 @@ def test_same_links_and_joints(scene, calibrated):
     assert [e.get("name") for e in original.iter("joint")] == [e.get("name") for e in new.iter("joint")]
     model = pin.buildModelFromUrdf(str(out / "calibrated.urdf"), pin.JointModelFreeFlyer())
     assert model.nq == scene.model.nq
+
+
+def test_the_deliverable_is_what_calibrated_urdf_and_calibrated_config_build(scene, calibrated):
+    # the folder's URDF and config come from one export: the same bytes as the two public functions give
+    calibration, _, out = calibrated
+    deliverable = calibration.deliverables.urdf
+    assert not deliverable.nominal
+    model = calibration.model
+    theta = model.theta(deliverable.estimate.x)
+    urdf = calibrated_urdf(scene.files.urdf.read_text(), model.contact, theta)
+    assert (out / "calibrated.urdf").read_text() == urdf
+    config = calibrated_config(model.contact, theta, out / "calibrated.urdf")
+    assert (out / "calibrated.yaml").read_text() == dump_yaml(config)
 
 
 def test_calibrated_urdf_reproduces_the_calibrated_residuals(calibrated):
