@@ -50,7 +50,9 @@ def robot_contacts(
     """Contacts of the rehearsal's robot (every chain of the config, one table) at planned postures, as simulate.
 
     Each posture on its local plane (the rehearsal's contact noise, drawn as ``simulate`` draws it: the same
-    posture gets the same offset in the session's recordings and in the fixed orders).
+    posture gets the same offset in every order). The session's recordings hold the route's contact
+    posture instead (a few mrad off, the go-to-contact's overshoot), whose draw is another, independent one;
+    and ``simulate --bag`` keeps the legs as routed where this closes the second leg on the true floor.
     """
     perturbation = Perturbation(
         length_m=robot.error_mm * 1e-3,
