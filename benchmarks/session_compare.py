@@ -72,6 +72,33 @@ def print_table(trials: Sequence[SeedResult], deliverable: str) -> None:
         print(f"| {'/'.join(str(c) for c in shown)} | " + " | ".join(cells) + " |")
 
 
+def print_paired(trials: Sequence[SeedResult], deliverable: str) -> None:
+    """The session's error minus each other order's and the fixed design's on the same robot, per batch.
+
+    Paired by seed: the robots differ more from one another (3-7 mm) than the orders do, so
+    a difference of column medians says little; the median of the per-seed differences and
+    the seeds where the session is lower say what the choice does.
+    """
+    session = ORDERS[0]
+    others = [*ORDERS[1:], "fixed"]
+    print(f"\n{deliverable}: the session's recordings minus each, paired by seed (median mm; seeds where lower)\n")
+    print("| contacts | " + " | ".join(others) + " |")
+    print("|---" * (len(others) + 1) + "|")
+    for b in range(batches_of(trials)):
+        cells = []
+        for other in others:
+            differences = [
+                t.errors[deliverable][session][b]
+                - (t.fixed_error[deliverable] if other == "fixed" else t.errors[deliverable][other][b])
+                for t in trials
+            ]
+            kept = [d for d in differences if not math.isnan(d)]
+            lower = sum(d < 0 for d in kept)
+            cells.append(f"{statistics.median(kept):+.2f} ({lower} of {len(kept)})" if kept else "n/a")
+        shown = sorted({t.counts[b] for t in trials})
+        print(f"| {'/'.join(str(c) for c in shown)} | " + " | ".join(cells) + " |")
+
+
 def reach(
     trials: Sequence[SeedResult], deliverable: str, order: str = ORDERS[0]
 ) -> tuple[int | None, list[int | None]]:
@@ -193,6 +220,7 @@ def report(trials: Sequence[SeedResult], machine: str, about: str, plot: Path | 
     print("true error: mean abs height, worst chain, on held-out contacts without contact noise (the model's)")
     for deliverable in DELIVERABLES:
         print_table(trials, deliverable)
+        print_paired(trials, deliverable)
     print_comparison(trials, k)
     print_seeds(trials)
     if plot is not None:
