@@ -7,7 +7,7 @@ Layers, bottom first (docs/architecture.md)::
     io | parallel | arguments
     robot
     model
-    pool | select | route | calibrate      (stages: never each other)
+    draft | pool | select | route | calibrate   (stages: never each other; draft is stage 0, robot init)
     session | view                         (chains the stages | reads every stage's artefacts)
     cli
 
@@ -41,6 +41,7 @@ LAYERS = {
     "posegen.arguments": 1,
     "posegen.robot": 2,
     "posegen.model": 3,
+    "posegen.draft": 4,  # stage 0: a robot's config drafted from its description (robot init)
     "posegen.pool": 4,
     "posegen.select": 4,
     "posegen.route": 4,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pinocchio as pin
 
-from posegen.robot.geometry import FloatArray
+from posegen.robot import FloatArray
 
 IMPLAUSIBLE_SPEED_RAD_S = 20.0
 PLACEHOLDER_SPEED_RAD_S = 1.0
