@@ -39,7 +39,14 @@ from posegen.draft.geometry import (
     skeleton,
     vertices,
 )
-from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD, limits, missing_efforts, velocity_placeholders
+from posegen.draft.limits import (
+    IMPLAUSIBLE_SPEED_RAD_S,
+    JOINT_LIMIT_MARGIN_RAD,
+    PLACEHOLDER_SPEED_RAD_S,
+    limits,
+    missing_efforts,
+    velocity_placeholders,
+)
 from posegen.draft.source import DraftSource, load_draft_source
 from posegen.draft.stance import Sole, floor_height, foot_box
 from posegen.draft.table import Table, arm_length, place_table
@@ -132,7 +139,11 @@ def draft_robot(
     chains, found = find_hands(model, data, geometry, body)
     speeds, urdf_speed = velocity_placeholders(model, body.kept)
     if speeds:
-        found += (f"{len(speeds)} joints have no plausible URDF velocity limit: placeholders of 1 rad/s",)
+        found += (
+            f"{len(speeds)} joints have no plausible URDF velocity limit (none, or above "
+            f"{IMPLAUSIBLE_SPEED_RAD_S:g} rad/s): placeholders of {PLACEHOLDER_SPEED_RAD_S:g} rad/s in "
+            "robot.velocity_limits_rad_s; put your robot's",
+        )
     no_effort = missing_efforts(model, body.kept, set(body.locked))
     if no_effort:
         found += (

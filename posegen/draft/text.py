@@ -11,8 +11,9 @@ import yaml
 
 from posegen.draft.drafting import Draft, draft_robot
 from posegen.draft.mjcf_source import converted_urdf, mjcf_source, urdf_beside
-from posegen.errors import ConfigError
+from posegen.errors import ConfigError, InfeasibleError
 from posegen.io import check_apart, claim_output, write_atomic
+from posegen.model import pool_size
 from posegen.robot import (
     Box,
     Capsule,
@@ -225,11 +226,14 @@ def write_draft(
         try:
             scene = Scene(config)
             check_for_planning(scene, CollisionChecker(scene))
-            verdict = "the draft loads as a scene (names, soles, balance, reach, collisions at the reference checked)"
-        except ConfigError as exc:
-            verdict = f"the draft does not load yet: {exc}"
+            verdicts: tuple[str, ...] = (
+                pool_size(scene).describe(),
+                "the draft loads as a scene (names, soles, balance, reach, collisions at the reference checked)",
+            )  # the verdict last
+        except (ConfigError, InfeasibleError) as exc:
+            verdicts = (f"the draft does not load yet: {exc}",)
         write_atomic(output, text)
-    return dataclasses.replace(draft, notes=(*draft.notes, verdict))
+    return dataclasses.replace(draft, notes=(*draft.notes, *verdicts))
 
 
 def survey_config_pairs(config_path: str, samples: int = 400, seed: int = 0) -> tuple[PairSurvey, str]:
