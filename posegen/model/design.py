@@ -204,7 +204,7 @@ def build_design(
         raise InfeasibleError(
             f"the pool is rank deficient: its {n} postures identify {rank} of the {nb} base parameters; "
             f"a contact measures {per_contact} number{'s' if per_contact > 1 else ''}: no fewer than {least} "
-            f"postures can, and a pool needs more: sample {POOL_FACTOR * least} or more (pool --n)"
+            f"postures can, and a pool needs more: sample {POOL_FACTOR * least} or more"
         )
     for rows in _chunks(3 * n, DESIGN_CHUNK):
         flat[rows] = np.linalg.solve(r.T, flat[rows].T).T  # A_i R^-1

@@ -47,7 +47,7 @@ class PoolSize:
         chains = ", ".join(f"{c} {n} ({self.rows[c]} per contact)" for c, n in self.base_parameters.items())
         return (
             f"a pool needs at least {self.minimum} postures to identify the base parameters (per chain: "
-            f"{chains}); sample {self.recommended} or more (pool --n {self.recommended})"
+            f"{chains}); sample a pool of {self.recommended} or more"
         )
 
 
