@@ -37,7 +37,7 @@ from posegen.calibrate.record import (
 )
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
-from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
+from posegen.calibrate.simulation import Perturbation, perturbed_robot, simulate, true_parameters
 from posegen.calibrate.summary import (
     CalibrationSummary,
     ChosenModel,
@@ -51,7 +51,7 @@ from posegen.calibrate.summary import (
     summary_from_dict,
     write_summary,
 )
-from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
+from posegen.calibrate.urdf_export import calibrated_config, calibrated_robot, calibrated_urdf, check_exportable
 from posegen.calibrate.workflow import (
     Calibrated,
     Simulated,
@@ -103,6 +103,7 @@ __all__ = [
     "calibrate",
     "calibrate_files",
     "calibrated_config",
+    "calibrated_robot",
     "calibrated_urdf",
     "check_exportable",
     "compensate",
@@ -116,6 +117,7 @@ __all__ = [
     "levenberg_marquardt",
     "load_line",
     "measure_bag",
+    "perturbed_robot",
     "posterior_of",
     "read_calibration",
     "read_compliance",

@@ -1,0 +1,184 @@
+"""The force-controlled go-to-contact, hold and release: an admittance at the hand.
+
+Each hand moves by a twist the stabilizer makes its joints give (:mod:`posegen.physics.stabilizer`),
+computed from its wrist sensor: the reading less the tool's weight (the nominal URDF's
+tool, turned with the wrist as the encoders say) and less a tare taken while the hand is
+free just before its approach (the sensor's offset, the tool's model error), moved to
+the contact frame's origin in world axes.
+
+A contact of the route runs, in route time:
+
+* **approach** (the route's): the hand gives way to any force above ``GUARD_FORCE_N``
+  (a table higher than planned is met, not pushed);
+* **go-to-contact and hold**: force control along the table normal to the target force
+  ``force_n``: ``dz/dt = K_FORCE (f - force_n)`` within ``MAX_SPEED_M_S`` once
+  touching, ``SEARCH_SPEED_M_S`` down before (a table lower than planned is searched
+  for, below the route's overshoot); in contact the hand also turns to zero roll and pitch torque
+  about the contact frame's origin, so the fingertips settle flush and share the load;
+* **release**: the target force falls to zero over ``UNLOAD_S`` as the route's release
+  starts, then the hand's offset fades back to the plan over the rest of the release.
+
+A free hand outside these phases stays where the plan puts it (zero twist) unless a force
+above ``GUARD_FORCE_N`` pushes it.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+
+from posegen.io import Route, SegmentType
+from posegen.physics.nominal import NominalRobot
+from posegen.robot import FloatArray
+
+K_FORCE = 1e-3  # m/s per N of normal force error
+K_TORQUE = 0.01  # rad/s per N m of roll or pitch torque about the contact origin
+MAX_TILT_RAD = 0.05  # the hand turns at most this far from the plan
+SEARCH_SPEED_M_S = 0.005
+MAX_SPEED_M_S = 0.02
+MAX_TURN_RAD_S = 0.2
+GUARD_FORCE_N = 10.0
+TOUCH_FORCE_N = 3.0  # in contact: above this normal force
+UNLOAD_S = 0.1
+TARE_S = 0.1
+
+
+class Phase(enum.Enum):
+    """What a hand's controller is doing."""
+
+    FREE = "free"
+    APPROACH = "approach"
+    PRESS = "press"  # go-to-contact and hold: force control
+    RELEASE = "release"
+
+
+@dataclass(frozen=True)
+class ContactTimes:
+    """When the route makes one contact (route time, s)."""
+
+    chain: str
+    label: str  # "posture 3 (pool 17)"
+    approach_s: float
+    press_s: float  # go-to-contact starts
+    hold_s: float
+    lift_s: float  # release starts
+    free_s: float  # release ends
+
+
+def contact_times(route: Route) -> tuple[ContactTimes, ...]:
+    """The route's contacts (approach, go-to-contact, hold and release each), in time order."""
+    steps: dict[int | None, dict[SegmentType, tuple[float, float, str, int | None]]] = {}
+    for s in route.segments:
+        if s.type != SegmentType.FREE and s.chain is not None:
+            steps.setdefault(s.posture, {})[s.type] = (s.start_s, s.end_s, s.chain, s.pool_id)
+    out = []
+    kinds = (SegmentType.APPROACH, SegmentType.GO_TO_CONTACT, SegmentType.HOLD, SegmentType.RELEASE)
+    for posture, found in steps.items():
+        if any(k not in found for k in kinds):
+            continue  # a route always has the four; a hand-edited one may not
+        approach, press, hold, release = (found[k] for k in kinds)
+        label = f"posture {posture}" + ("" if hold[3] is None else f" (pool {hold[3]})")
+        out.append(ContactTimes(hold[2], label, approach[0], press[0], hold[0], release[0], release[1]))
+    return tuple(sorted(out, key=lambda c: c.hold_s))
+
+
+@dataclass
+class _Hand:
+    """One hand's controller state."""
+
+    tare: FloatArray  # (6,) sensor frame
+    tare_sum: FloatArray
+    tare_count: int
+    offset: FloatArray  # (6,) the twist integrated so far (world axes; angles small)
+
+
+class HandControl:
+    """Both hands' admittance, from their wrist sensors and the route's contact times.
+
+    Example:
+        >>> hands = HandControl(robot, contact_times(route), force_n=30.0)
+        >>> twists = hands.step(route_time_s, wrists, dt_s=0.002)
+
+    """
+
+    def __init__(self, robot: NominalRobot, contacts: tuple[ContactTimes, ...], force_n: float) -> None:
+        self.robot = robot
+        self.force_n = force_n
+        self.contacts = {c: [k for k in contacts if k.chain == c] for c in robot.tools}
+        self.hands = {c: _Hand(np.zeros(6), np.zeros(6), 0, np.zeros(6)) for c in robot.tools}
+        self.wrenches = {c: np.zeros(6) for c in robot.tools}  # the last compensated wrench, at the contact
+
+    def _current(self, chain: str, t: float) -> ContactTimes | None:
+        for contact in self.contacts[chain]:
+            if contact.approach_s - TARE_S <= t < contact.free_s:
+                return contact
+        return None
+
+    def phase(self, chain: str, t: float) -> Phase:
+        """A hand's phase at route time ``t``."""
+        contact = self._current(chain, t)
+        if contact is None or t < contact.approach_s:
+            return Phase.FREE
+        if t < contact.press_s:
+            return Phase.APPROACH
+        return Phase.PRESS if t < contact.lift_s else Phase.RELEASE
+
+    def step(self, t: float, wrists: dict[str, FloatArray], dt_s: float) -> dict[str, FloatArray]:
+        """Each hand's twist (6,) (world axes at its contact frame) at route time ``t``.
+
+        Args:
+            t: Route time, s.
+            wrists: Chain -> its wrist sensor's reading (6,).
+            dt_s: Control period, s.
+
+        """
+        out = {}
+        for chain, hand in self.hands.items():
+            contact = self._current(chain, t)
+            compensated = wrists[chain] - self.robot.tool_wrench(chain)
+            if contact is not None and t < contact.approach_s:  # free, before the approach: tare
+                hand.tare_sum += compensated
+                hand.tare_count += 1
+                hand.tare = hand.tare_sum / hand.tare_count
+            else:
+                hand.tare_sum, hand.tare_count = np.zeros(6), 0
+            wrench = self.robot.at_contact(chain, compensated - hand.tare)
+            self.wrenches[chain] = wrench
+            twist = self._twist(chain, contact, t, wrench, hand)
+            hand.offset += twist * dt_s
+            out[chain] = twist
+        return out
+
+    def _twist(self, chain: str, contact: ContactTimes | None, t: float, wrench: FloatArray, hand: _Hand) -> FloatArray:
+        phase = self.phase(chain, t)
+        if phase == Phase.RELEASE and contact is not None and t >= contact.lift_s + UNLOAD_S:
+            remaining = max(contact.free_s - t, 0.05)
+            return -hand.offset / remaining  # back to the plan by the release's end
+        if phase in (Phase.FREE, Phase.APPROACH):
+            excess = max(np.linalg.norm(wrench[:3]) - GUARD_FORCE_N, 0.0)
+            if not excess:
+                return np.zeros(6) if phase == Phase.APPROACH else -hand.offset / 0.5
+            return self._give_way(wrench * excess / max(np.linalg.norm(wrench[:3]), 1e-9), 0.0, hand.offset)
+        target = self.force_n
+        if phase == Phase.RELEASE and contact is not None:
+            target *= max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)
+        return self._give_way(wrench, target, hand.offset)
+
+    @staticmethod
+    def _give_way(wrench: FloatArray, target_n: float, offset: FloatArray) -> FloatArray:
+        """The admittance twist (6,): along the normal to the target force, roll and pitch to zero torque.
+
+        The tangent and the yaw are held (the fingertips' friction holds them; the
+        measurement needs neither); the hand turns at most ``MAX_TILT_RAD`` from the plan.
+        """
+        twist = np.zeros(6)
+        if wrench[2] <= TOUCH_FORCE_N:  # not touching: search down (or stay, when unloaded)
+            twist[2] = -SEARCH_SPEED_M_S if target_n > TOUCH_FORCE_N else 0.0
+            return twist
+        twist[2] = np.clip(K_FORCE * (wrench[2] - target_n), -MAX_SPEED_M_S, MAX_SPEED_M_S)
+        turn = np.clip(K_TORQUE * wrench[3:5], -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD
+        twist[3:5] = np.where(blocked & (np.sign(turn) == np.sign(offset[3:5])), 0.0, turn)
+        return twist

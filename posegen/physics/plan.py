@@ -1,0 +1,93 @@
+"""The planned run, sampled at the control rate: joint commands, and what the plan says of the CoM and pelvis.
+
+The commands follow the route's trajectory as a joint trajectory controller does (cubic
+Hermite through its points' positions and velocities), held at the route's first posture
+for ``rest_s`` before it starts and at its last for ``rest_s`` after it ends. The planned
+CoM and pelvis are the nominal model's at the commanded angles, its anchor sole at its place.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.io import Route
+from posegen.robot import FloatArray, Scene
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The commands and the planned figures at each control sample."""
+
+    times_s: FloatArray  # (n,) s from the run's start
+    route_start_s: float  # the route's time 0 on the run's clock
+    positions: FloatArray  # (n, nj) rad, scene joint order
+    velocities: FloatArray  # (n, nj) rad/s
+    com: FloatArray  # (n, 2) m, the planned CoM's ground projection
+    pelvis_z: FloatArray  # (n,) m, the planned height of the free base
+    base_rotation: FloatArray  # (n, 3, 3) the free base's planned orientation
+
+
+def hermite(times: FloatArray, positions: FloatArray, velocities: FloatArray, at: FloatArray) -> FloatArray:
+    """Cubic Hermite positions (n, nj) at ``at`` (n,); constant before and after ``times``."""
+    k = np.clip(np.searchsorted(times, at, side="right") - 1, 0, len(times) - 2)
+    h = (times[k + 1] - times[k])[:, None]
+    s = np.clip((at - times[k])[:, None] / h, 0.0, 1.0)
+    s2, s3 = s * s, s * s * s
+    return np.asarray(
+        (2 * s3 - 3 * s2 + 1) * positions[k]
+        + (s3 - 2 * s2 + s) * h * velocities[k]
+        + (3 * s2 - 2 * s3) * positions[k + 1]
+        + (s3 - s2) * h * velocities[k + 1]
+    )
+
+
+def _hermite_rate(times: FloatArray, positions: FloatArray, velocities: FloatArray, at: FloatArray) -> FloatArray:
+    """The time derivative (n, nj) of :func:`hermite`; zero before and after ``times``."""
+    k = np.clip(np.searchsorted(times, at, side="right") - 1, 0, len(times) - 2)
+    h = (times[k + 1] - times[k])[:, None]
+    raw = (at - times[k])[:, None] / h
+    s = np.clip(raw, 0.0, 1.0)
+    s2 = s * s
+    rate = (
+        (6 * s2 - 6 * s) * positions[k] / h
+        + (3 * s2 - 4 * s + 1) * velocities[k]
+        + (6 * s - 6 * s2) * positions[k + 1] / h
+        + (3 * s2 - 2 * s) * velocities[k + 1]
+    )
+    inside = (raw >= 0.0) & (raw <= 1.0)
+    return np.asarray(np.where(inside, rate, 0.0))
+
+
+def sample_plan(scene: Scene, route: Route, period_s: float, rest_s: float) -> Plan:
+    """The route sampled every ``period_s``, with ``rest_s`` at rest before and after.
+
+    Args:
+        scene: The nominal scene (the route's joints reordered to its order).
+        route: The route (validated by :func:`posegen.io.read_route`).
+        period_s: Control period, s.
+        rest_s: Time at rest before the route starts and after it ends, s.
+
+    Example:
+        >>> plan = sample_plan(scene, read_route("plans/route.yaml"), 0.002, 1.0)
+
+    """
+    columns = route.joint_columns(scene.joint_names)
+    positions, velocities = route.positions[:, columns], route.velocities[:, columns]
+    count = int(np.floor((float(route.times[-1]) + 2 * rest_s) / period_s + 1e-9)) + 1
+    times = np.arange(count) * period_s
+    at = times - rest_s
+    commanded = hermite(route.times, positions, velocities, at)
+    rates = _hermite_rate(route.times, positions, velocities, at)
+    model, data = scene.model, scene.model.createData()
+    com = np.zeros((count, 2))
+    pelvis = np.zeros(count)
+    rotation = np.zeros((count, 3, 3))
+    for i, joints in enumerate(commanded):
+        q = scene.configuration(joints)
+        com[i] = pin.centerOfMass(model, data, q, False)[:2]
+        pelvis[i] = q[2]
+        rotation[i] = pin.Quaternion(q[3:7]).toRotationMatrix()
+    return Plan(times, rest_s, commanded, rates, com, pelvis, rotation)

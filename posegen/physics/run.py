@@ -1,0 +1,179 @@
+"""The run loop: the true robot, its controllers and its sensors, stepped through a planned route.
+
+The simulator steps at ``TIMESTEP_S`` (implicitfast); the controllers run and the
+sensors are recorded every ``stride`` steps (the recording rate). Each control period:
+
+1. the sensors are read (encoders, wrist and sole force/torque sensors);
+2. the nominal model is updated at the encoders' angles (:class:`NominalRobot`);
+3. the hands' contact controllers give their twists (:class:`HandControl`), the
+   stabilizer the soles' (:class:`Stabilizer`), and their joint offset is integrated
+   (:class:`JointOffsets`);
+4. each joint loop is sent the planned angle plus the offset, the planned velocity, and
+   the static torque of the posture as feed-forward (gravity, both soles' shares; a
+   hand's push is left to the joint loops).
+
+The robot starts at the route's first posture, its anchor sole flat at its place and its
+second leg closed on the floor (the robot put down on its feet: the second leg's angles
+solved on the true robot, the stabilizer's offset starting there), and rests
+``rest_s`` before the route starts and after it ends. A fall (the base lower than
+planned by ``FALL_M``) ends the run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from posegen.physics.builder import Built, glue_feet
+from posegen.physics.contact_control import ContactTimes, HandControl, Phase
+from posegen.physics.gains import Gains
+from posegen.physics.monitor import Monitor, Truth
+from posegen.physics.nominal import NominalRobot
+from posegen.physics.offsets import JointOffsets
+from posegen.physics.plan import Plan
+from posegen.physics.sensors import Sensors
+from posegen.physics.stabilizer import SoleReadings, Stabilizer
+from posegen.physics.stance import put_down
+from posegen.physics.tool import Tool
+from posegen.progress import Progress, ProgressCallback, ignore_progress
+from posegen.robot import FloatArray, Scene
+
+FALL_M = 0.2  # the base this far below its planned height: fallen
+PROGRESS_S = 1.0  # robot time between progress reports
+
+
+@dataclass(frozen=True)
+class Recorded:
+    """What the robot's sensors recorded (the bag's content), at the recording rate."""
+
+    times_s: FloatArray  # (n,) s from the run's start
+    encoders: FloatArray  # (n, nj) rad, scene joint order
+    wrists: dict[str, FloatArray]  # chain -> (n, 6) force N, torque N m, sensor frame
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """A run: the recording, the ground truth, and where it ended."""
+
+    recorded: Recorded
+    truth: Truth
+    plan: Plan
+    fell_at_s: float | None  # None: the run completed
+    soles_at_start: tuple[FloatArray, ...]  # (4, 4) each true sole frame's world pose when the route starts
+
+
+class Run:
+    """One run of a route on a built robot; :meth:`run` steps it to the end."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        built: Built,
+        gains: Gains,
+        plan: Plan,
+        contacts: tuple[ContactTimes, ...],
+        sensors: Sensors,
+        tools: dict[str, Tool],
+        force_n: float,
+        stride: int,
+    ) -> None:
+        self.scene, self.built, self.gains, self.plan = scene, built, gains, plan
+        self.model, self.layout = built.model, built.layout
+        self.data = mujoco.MjData(self.model)
+        self.sensors = sensors
+        self.robot = NominalRobot(scene, tools)
+        self.hands = HandControl(self.robot, contacts, force_n)
+        self.stabilizer = Stabilizer(scene, self.robot, glued_feet=self.model.neq > 0)
+        self.offsets = JointOffsets(scene, self.robot)
+        self.force_n = force_n
+        self.stride = stride
+        self.period_s = stride * self.model.opt.timestep
+        samples = len(plan.times_s)
+        self.monitor = Monitor(self.model, self.layout, samples, (scene.stance.foot_x_m, scene.stance.foot_y_m))
+        self.encoders = np.zeros((samples, len(scene.joint_names)))
+        self.wrists = {c: np.zeros((samples, 6)) for c in self.layout.wrists}
+
+    def _control(self, index: int) -> None:
+        """Read the sensors of sample ``index``, record them, and set the joint loops' commands."""
+        data, plan = self.data, self.plan
+        encoders = self.sensors.encoders(data)
+        wrists = self.sensors.wrists(data)
+        self.encoders[index] = encoders
+        for chain, reading in wrists.items():
+            self.wrists[chain][index] = reading
+        t_route = plan.times_s[index] - plan.route_start_s
+        imu = self.sensors.imu(data)
+        self.robot.update(encoders, imu)
+        hands = self.hands.step(t_route, wrists, self.period_s)
+        soles = SoleReadings(self.sensors.soles(data))
+        attitude = (imu, plan.base_rotation[index])
+        feet = self.stabilizer.step(soles, self.hands.wrenches, attitude, plan.com[index], self.period_s)
+        offset = self.offsets.step(feet, hands, self.period_s)
+        target = np.clip(plan.positions[index] + offset, self.scene.lower, self.scene.upper)
+        torque = self.robot.static_torques({})
+        gains = self.gains
+        data.ctrl[self.layout.actuator] = target + (torque + gains.kd * plan.velocities[index]) / gains.kp
+
+    def start(self) -> None:
+        """Put the robot down at the route's first posture and settle its state."""
+        closed = put_down(self.scene, self.model, self.data, self.layout, self.plan.positions[0])
+        self.offsets.dq[:] = closed - self.plan.positions[0]
+        if self.model.neq:
+            glue_feet(self.model, self.data)
+
+    def run(self, progress: ProgressCallback = ignore_progress) -> RunResult:
+        """Step to the end of the plan (or a fall).
+
+        Args:
+            progress: Told the robot time done, in seconds, about once per ``PROGRESS_S``.
+
+        """
+        self.start()
+        plan, data = self.plan, self.data
+        samples = len(plan.times_s)
+        soles_at_start: tuple[FloatArray, ...] = ()
+        start_index = int(round(plan.route_start_s / self.period_s))
+        fell_at = None
+        every = max(int(round(PROGRESS_S / self.period_s)), 1)
+        total = int(np.ceil(plan.times_s[-1]))
+        for index in range(samples):
+            self._control(index)
+            self.monitor.record(data, index, float(plan.times_s[index]))
+            if index == start_index:
+                soles_at_start = self._sole_poses()
+            if self.monitor.truth.pelvis_z[index] < plan.pelvis_z[index] - FALL_M:
+                fell_at = float(plan.times_s[index])
+                samples = index + 1
+                break
+            for _ in range(self.stride):
+                mujoco.mj_step(self.model, data)
+            if index % every == 0:
+                progress(Progress(min(int(plan.times_s[index]), total), total, "second"))
+        return RunResult(self._recorded(samples), self._truth(samples), plan, fell_at, soles_at_start)
+
+    def _sole_poses(self) -> tuple[FloatArray, ...]:
+        poses = []
+        for sensor in self.layout.soles.values():
+            pose = np.eye(4)
+            pose[:3, :3] = self.data.site_xmat[sensor.site].reshape(3, 3)
+            pose[:3, 3] = self.data.site_xpos[sensor.site]
+            poses.append(pose)
+        return tuple(poses)
+
+    def _recorded(self, samples: int) -> Recorded:
+        times = self.plan.times_s[:samples]
+        return Recorded(times, self.encoders[:samples], {c: w[:samples] for c, w in self.wrists.items()})
+
+    def _truth(self, samples: int) -> Truth:
+        truth = self.monitor.truth
+        return Truth(
+            truth.pelvis_z[:samples],
+            truth.soles_xy[:samples],
+            truth.zmp_margin[:samples],
+            truth.torque_ratio[:samples],
+            truth.worst_joint[:samples],
+            {c: f[:samples] for c, f in truth.contact_force.items()},
+            truth.touches,
+        )

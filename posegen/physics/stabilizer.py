@@ -1,0 +1,163 @@
+"""The balance stabilizer: DCM feedback realised by foot admittance (the ankle strategy).
+
+Position-controlled humanoids balance by regulating the ZMP with their feet (Kajita et
+al., 2010): a desired ZMP is computed from the divergent component of motion (DCM) of
+the centre of mass, and each foot gives way to the wrench it carries beyond its share
+of that ZMP, so the ankles lean the body until the floor's wrench is the desired one.
+
+* **DCM feedback.** The CoM ``c`` and its velocity are estimated on the nominal model
+  from the encoders and the IMU (:class:`NominalRobot`); ``xi = c + c' / omega``,
+  ``omega = sqrt(g / z_c)``. The desired ZMP is
+  ``p_d = c_ref + (1 + K_DCM / omega) (xi - c_ref)``, kept ``ZMP_MARGIN_M`` inside the
+  support polygon; ``c_ref`` is the planned CoM moved back by the moment the hands'
+  measured pushes put on the floor (:func:`com_reference`), so the ZMP stays where the
+  plan puts it while a hand presses on the table.
+* **Foot admittance** (foot damping control). The desired ZMP's wrench is shared by the
+  soles as flat feet share it (:meth:`NominalRobot.sole_split`); each sole moves, relative
+  to the base, at ``v = K (w - w_share)`` in its frame, forces and torques alike: a sole
+  on its edge turns flat, a leg the true kinematics makes long shortens, and together
+  they lean the body to move the ZMP.
+* **Body attitude.** The base's roll and pitch, as the IMU reads them, are slowly
+  levelled to the plan's by turning both soles alike relative to the base
+  (``K_ATTITUDE``): the true legs tilt the body where the nominal ones would not.
+
+The output is each sole's twist relative to the base; :mod:`posegen.physics.offsets`
+turns it into leg joint offsets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.physics.nominal import GRAVITY, NominalRobot
+from posegen.robot import FloatArray, Scene, convex_hull_clockwise, polygon_margin
+
+K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
+VELOCITY_FILTER_S = 0.02  # low-pass of the CoM velocity estimate
+ZMP_MARGIN_M = 0.01  # the desired ZMP is kept this far inside the support polygon
+K_FOOT_FORCE = 1e-4  # m/s per N of excess force on a sole
+K_FOOT_TORQUE = 1e-3  # rad/s per N m of excess torque
+MAX_FOOT_SPEED = 0.02  # m/s and rad/s
+K_ATTITUDE_PER_S = 0.5  # base tilt error -> both soles' turn relative to the base
+MAX_TURN_RAD_S = 0.05
+
+
+@dataclass(frozen=True)
+class SoleReadings:
+    """The floor's wrench on each sole, as its sensor reads it: (6,) (force N, torque N m), sole frame."""
+
+    wrenches: tuple[FloatArray, ...]  # in the stance's sole order
+
+
+def com_reference(robot: NominalRobot, hands: dict[str, FloatArray], com_planned: FloatArray) -> FloatArray:
+    """Where the CoM (2,) m must be for the static ZMP to stay at the planned CoM while the hands push.
+
+    The floor carries the weight and what the hands push down (their measured forces,
+    world wrenches (6,) at their contact frames): the CoM moves back by the hands'
+    moment about the planned CoM over the weight.
+    """
+    weight = robot.mass_kg * -GRAVITY[2]
+    moment = np.zeros(2)
+    for chain, wrench in hands.items():
+        down = max(float(wrench[2]), 0.0)  # the table pushes the hand up: the hand pushes the table down
+        moment += down * (robot.pose(robot.contact_frames[chain])[:2, 3] - com_planned)
+    return np.asarray(com_planned - moment / weight)
+
+
+def clamp_into(polygon: FloatArray, point: FloatArray, margin_m: float) -> FloatArray:
+    """The point (2,) pulled toward the polygon's centroid until it is ``margin_m`` inside (clockwise polygon (h, 2))."""
+    if polygon_margin(polygon, point) >= margin_m:
+        return point
+    centre = polygon.mean(axis=0)
+    low, high = 0.0, 1.0
+    for _ in range(12):
+        middle = 0.5 * (low + high)
+        if polygon_margin(polygon, centre + middle * (point - centre)) >= margin_m:
+            low = middle
+        else:
+            high = middle
+    return np.asarray(centre + low * (point - centre))
+
+
+def tilt_error(measured: FloatArray, planned: FloatArray) -> FloatArray:
+    """(2,) rad: the roll and pitch (world x, y) that turn the planned orientation (3, 3) into the measured one."""
+    error = measured @ planned.T
+    return 0.5 * np.array([error[2, 1] - error[1, 2], error[0, 2] - error[2, 0]])
+
+
+class Stabilizer:
+    """Each sole's twist relative to the base that keeps the robot balanced with both soles flat.
+
+    Example:
+        >>> stabilizer = Stabilizer(scene, robot)
+        >>> twists = stabilizer.step(soles, hand_wrenches, (imu, planned), com_planned, dt_s=0.002)
+
+    """
+
+    def __init__(self, scene: Scene, robot: NominalRobot, glued_feet: bool = False) -> None:
+        self.robot = robot
+        self.glued_feet = glued_feet  # welded soles: no admittance (their sensors read the welds)
+        (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
+        self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
+        self._com: FloatArray | None = None
+        self._velocity = np.zeros(2)
+        self.zmp_desired = np.zeros(2)
+
+    def _polygon(self) -> FloatArray:
+        """The support polygon (h, 2) the soles make where the robot believes they are."""
+        points = np.hstack([(self.robot.pose(f) @ self._corners)[:2] for f in self.robot.soles]).T
+        return convex_hull_clockwise(points)
+
+    def _desired_zmp(self, reference: FloatArray, dt_s: float) -> FloatArray:
+        """The ZMP (2,) that brings the DCM back to its reference."""
+        com = self.robot.com()
+        if self._com is not None:
+            blend = dt_s / (VELOCITY_FILTER_S + dt_s)
+            self._velocity += blend * ((com[:2] - self._com) / dt_s - self._velocity)
+        self._com = com[:2].copy()
+        omega = np.sqrt(-GRAVITY[2] / max(float(com[2]), 0.1))
+        dcm = com[:2] + self._velocity / omega
+        desired = reference + (1.0 + K_DCM_PER_S / omega) * (dcm - reference)
+        return clamp_into(self._polygon(), desired, ZMP_MARGIN_M)
+
+    def step(
+        self,
+        soles: SoleReadings,
+        hand_wrenches: dict[str, FloatArray],
+        attitude: tuple[FloatArray, FloatArray],
+        com_planned: FloatArray,
+        dt_s: float,
+    ) -> list[FloatArray]:
+        """Each sole's twist (6,) relative to the base (world axes at the sole), the robot updated at its sensors.
+
+        Args:
+            soles: The soles' sensor readings.
+            hand_wrenches: Chain -> the table's measured wrench on its hand (6,), world axes at its contact frame.
+            attitude: The base's orientation (3, 3) as its IMU reads it, and as planned.
+            com_planned: (2,) the planned CoM's ground projection, m.
+            dt_s: The control period.
+
+        """
+        robot = self.robot
+        self.zmp_desired = self._desired_zmp(com_reference(robot, hand_wrenches, com_planned), dt_s)
+        if self.glued_feet:
+            return [np.zeros(6) for _ in robot.soles]
+        poses = [robot.pose(f) for f in robot.soles]
+        total = sum(
+            (pin.SE3(p).toDualActionMatrix() @ w for p, w in zip(poses, soles.wrenches, strict=True)), np.zeros(6)
+        )
+        desired = total.copy()
+        desired[3:5] = [self.zmp_desired[1] * total[2], -self.zmp_desired[0] * total[2]]  # its ZMP there
+        level = np.zeros(3)
+        level[:2] = np.clip(K_ATTITUDE_PER_S * tilt_error(*attitude), -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        twists = []
+        for pose, wrench, share in zip(poses, soles.wrenches, robot.sole_split(desired), strict=True):
+            excess = wrench - share
+            local = np.concatenate([K_FOOT_FORCE * excess[:3], K_FOOT_TORQUE * excess[3:]])
+            local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
+            # turning both soles by the base's tilt, relative to it, turns the base back
+            twists.append(np.concatenate([pose[:3, :3] @ local[:3], pose[:3, :3] @ local[3:] + level]))
+        return twists
