@@ -28,6 +28,7 @@ import enum
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from posegen.io import Route, SegmentType
 from posegen.physics.nominal import NominalRobot
@@ -43,6 +44,8 @@ GUARD_FORCE_N = 10.0
 TOUCH_FORCE_N = 3.0  # in contact: above this normal force
 UNLOAD_S = 0.1
 TARE_S = 0.1
+MAX_OFFSET_M = 0.05  # the search and the force control move the hand at most this far from the plan
+K_HOLD_PER_S = 5.0  # the hand's pose error to its target (the plan plus the admittance's offset) -> twist
 
 
 class Phase(enum.Enum):
@@ -99,7 +102,7 @@ class HandControl:
 
     Example:
         >>> hands = HandControl(robot, contact_times(route), force_n=30.0)
-        >>> twists = hands.step(route_time_s, wrists, dt_s=0.002)
+        >>> twists = hands.step(route_time_s, wrists, planned_hands, commanded, dt_s=0.002)
 
     """
 
@@ -125,16 +128,42 @@ class HandControl:
             return Phase.APPROACH
         return Phase.PRESS if t < contact.lift_s else Phase.RELEASE
 
-    def step(self, t: float, wrists: dict[str, FloatArray], dt_s: float) -> dict[str, FloatArray]:
-        """Each hand's twist (6,) (world axes at its contact frame) at route time ``t``.
+    def planned_push(self, chain: str, t: float) -> float:
+        """The force (N) the plan has a hand push on the table at route time ``t``: the target, ramped in and out."""
+        contact = self._current(chain, t)
+        if contact is None or t < contact.press_s:
+            return 0.0
+        if t < contact.lift_s:
+            return self.force_n * min((t - contact.press_s) / max(contact.hold_s - contact.press_s, 1e-3), 1.0)
+        return self.force_n * max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)
+
+    def step(
+        self,
+        t: float,
+        wrists: dict[str, FloatArray],
+        planned: dict[str, FloatArray],
+        commanded: FloatArray,
+        dt_s: float,
+    ) -> dict[str, FloatArray]:
+        """Each hand's twist (6,) relative to the base (world axes at its contact frame) at route time ``t``.
+
+        The twist holds the hand at its target in the world (the planned pose moved by the
+        admittance's offset), where the commanded angles put it on the base the IMU tilts:
+        the stabilizer's lean and the base's tilt do not carry it. (Closed on the commands,
+        not on the encoders: a joint that its effort limit or the table holds back does
+        not wind the loop up.)
 
         Args:
             t: Route time, s.
             wrists: Chain -> its wrist sensor's reading (6,).
+            planned: Chain -> its contact frame's planned world pose (4, 4).
+            commanded: The joint angles (nj,) rad last commanded.
             dt_s: Control period, s.
 
         """
         out = {}
+        frames = [self.robot.contact_frames[chain] for chain in self.hands]
+        at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True))
         for chain, hand in self.hands.items():
             contact = self._current(chain, t)
             compensated = wrists[chain] - self.robot.tool_wrench(chain)
@@ -146,10 +175,19 @@ class HandControl:
                 hand.tare_sum, hand.tare_count = np.zeros(6), 0
             wrench = self.robot.at_contact(chain, compensated - hand.tare)
             self.wrenches[chain] = wrench
-            twist = self._twist(chain, contact, t, wrench, hand)
-            hand.offset += twist * dt_s
-            out[chain] = twist
+            rate = self._twist(chain, contact, t, wrench, hand)
+            hand.offset += rate * dt_s
+            hand.offset[:3] = np.clip(hand.offset[:3], -MAX_OFFSET_M, MAX_OFFSET_M)
+            out[chain] = rate + K_HOLD_PER_S * self._error(planned[chain], hand.offset, at[chain])
         return out
+
+    @staticmethod
+    def _error(planned: FloatArray, offset: FloatArray, estimated: FloatArray) -> FloatArray:
+        """(6,) the hand's target pose less its commanded one (4, 4): translation, rotation vector (world axes)."""
+        target_rotation = pin.exp3(offset[3:]) @ planned[:3, :3]
+        return np.concatenate(
+            [planned[:3, 3] + offset[:3] - estimated[:3, 3], pin.log3(target_rotation @ estimated[:3, :3].T)]
+        )
 
     def _twist(self, chain: str, contact: ContactTimes | None, t: float, wrench: FloatArray, hand: _Hand) -> FloatArray:
         phase = self.phase(chain, t)

@@ -15,8 +15,12 @@ import numpy as np
 
 from posegen.physics.builder import Layout
 from posegen.physics.geometry import ShapeRole
+from posegen.physics.nominal import cross
 from posegen.physics.sensors import sensor_wrench
 from posegen.robot import FloatArray, convex_hull_clockwise, polygon_margin
+
+
+ZMP_EVERY = 10  # samples between two ZMP margins (50 Hz at the default rate: the polygon's hull costs)
 
 
 @dataclass(frozen=True)
@@ -35,7 +39,7 @@ class Truth:
 
     pelvis_z: FloatArray  # (n,) m
     soles_xy: FloatArray  # (n, 2, 2) m, each sole frame's origin
-    zmp_margin: FloatArray  # (n,) m, negative outside the polygon
+    zmp_margin: FloatArray  # (n,) m, negative outside the polygon; every ZMP_EVERY-th sample, NaN between
     torque_ratio: FloatArray  # (n,) the largest |torque| / effort
     worst_joint: np.ndarray  # (n,) its index (scene order)
     contact_force: dict[str, FloatArray]  # chain -> (n,) N, normal force on the table
@@ -91,7 +95,7 @@ class Monitor:
         for (rotation, origin), sensor in zip(soles, self.layout.soles.values(), strict=True):
             wrench = sensor_wrench(data, sensor)
             force = rotation @ wrench[:3]
-            total += np.concatenate([force, rotation @ wrench[3:] + np.cross(origin, force)])
+            total += np.concatenate([force, rotation @ wrench[3:] + cross(origin, force)])
             if force[2] > 1.0:  # a sole that carries the robot
                 corners.extend((self._corners @ rotation.T + origin)[:, :2])
         if total[2] <= 1.0 or not corners:
@@ -124,7 +128,7 @@ class Monitor:
         truth.pelvis_z[index] = data.xpos[self.layout.base_body][2]
         soles = self._sole_frames(data)
         truth.soles_xy[index] = [origin[:2] for _, origin in soles]
-        truth.zmp_margin[index] = self._zmp_margin(data, soles)
+        truth.zmp_margin[index] = self._zmp_margin(data, soles) if index % ZMP_EVERY == 0 else np.nan
         ratio = np.abs(data.actuator_force[self.layout.actuator]) / self._effort
         worst = int(np.argmax(ratio))
         truth.torque_ratio[index], truth.worst_joint[index] = ratio[worst], worst

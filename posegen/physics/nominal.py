@@ -19,6 +19,11 @@ from posegen.robot import FloatArray, Scene
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world
 
 
+def cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """The cross product of two 3-vectors (numpy's is slow on one pair)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 class NominalRobot:
     """The nominal model at the encoders' angles; call :meth:`update` first.
 
@@ -36,6 +41,10 @@ class NominalRobot:
         self.scene = scene
         self.model = scene.model
         self.data = self.model.createData()
+        self._scratch = self.model.createData()  # kinematics that must not disturb ``data``
+        self.imu: FloatArray | None = None
+        self.sole_poses: list[FloatArray] = []  # (4, 4) each, stance order: set by update()
+        self.sole_centres: list[FloatArray] = []  # (3,) each, the foot rectangles' centres
         self.tools = tools
         self._velocity = scene.velocity_indices()
         self.soles = [scene.frame_id(s) for s in scene.stance.sole_frames]
@@ -47,6 +56,21 @@ class NominalRobot:
         self._foot_centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # in a sole frame
         self.q = scene.configuration(scene.reference)
 
+    def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
+        """The configuration (nq,) the robot believes in: its anchor sole's origin at its place, the base tilted as the IMU says."""
+        q = self.scene.configuration(joints)
+        if imu is None:
+            return q
+        kinematic = pin.Quaternion(q[3:7]).toRotationMatrix()
+        yaw = np.arctan2(kinematic[1, 0], kinematic[0, 0]) - np.arctan2(imu[1, 0], imu[0, 0])
+        rotation = pin.rpy.rpyToMatrix(0.0, 0.0, yaw) @ imu
+        pin.forwardKinematics(self.model, self._scratch, q)
+        anchor_flat = pin.updateFramePlacement(self.model, self._scratch, self._anchor)
+        local = pin.XYZQUATToSE3(q[:7]).actInv(anchor_flat.translation)  # the anchor origin in the base frame
+        q[:3] = self.scene.sole_poses[self.scene.anchor_sole][:3, 3] - rotation @ local
+        q[3:7] = pin.Quaternion(rotation).coeffs()
+        return q
+
     def update(self, joints: FloatArray, imu: FloatArray | None = None) -> None:
         """Kinematics and Jacobians at these joint angles (nj,) rad, the base tilted as the IMU reads it.
 
@@ -57,21 +81,18 @@ class NominalRobot:
                 sole's origin kept at its place. None: the anchor sole flat.
 
         """
-        q = self.scene.configuration(joints)
-        if imu is not None:
-            kinematic = pin.Quaternion(q[3:7]).toRotationMatrix()
-            yaw = np.arctan2(kinematic[1, 0], kinematic[0, 0]) - np.arctan2(imu[1, 0], imu[0, 0])
-            rotation = pin.rpy.rpyToMatrix(0.0, 0.0, yaw) @ imu
-            pin.forwardKinematics(self.model, self.data, q)
-            anchor_flat = pin.updateFramePlacement(self.model, self.data, self._anchor)
-            anchor = self.scene.sole_poses[self.scene.anchor_sole][:3, 3]
-            base = pin.XYZQUATToSE3(q[:7])  # the flat estimate; moved so that its anchor origin stays put
-            local = base.actInv(anchor_flat.translation)  # the anchor origin in the base frame
-            q[:3] = anchor - rotation @ local
-            q[3:7] = pin.Quaternion(rotation).coeffs()
-        self.q = q
+        self.imu = imu
+        self.q = self._configuration(joints, imu)
         pin.computeJointJacobians(self.model, self.data, self.q)
         pin.updateFramePlacements(self.model, self.data)
+        self.sole_poses = [self.pose(sole) for sole in self.soles]
+        self.sole_centres = [pose[:3, :3] @ self._foot_centre + pose[:3, 3] for pose in self.sole_poses]
+
+    def commanded_poses(self, joints: FloatArray, frames: list[int]) -> list[FloatArray]:
+        """Frames' world poses (4, 4) at commanded angles (nj,), the base as :meth:`update` last estimated it."""
+        q = self._configuration(joints, self.imu)
+        pin.forwardKinematics(self.model, self._scratch, q)
+        return [np.asarray(pin.updateFramePlacement(self.model, self._scratch, f).homogeneous) for f in frames]
 
     def pose(self, frame: int) -> FloatArray:
         """World pose of a frame (4, 4)."""
@@ -104,7 +125,7 @@ class NominalRobot:
         tool = self.tools[chain]
         rotation = self.data.oMf[self.wrench_frames[chain]].rotation
         force = rotation.T @ (tool.mass_kg * GRAVITY)
-        return np.concatenate([force, np.cross(tool.com_m, force)])
+        return np.concatenate([force, cross(tool.com_m, force)])
 
     def at_contact(self, chain: str, wrench: FloatArray) -> FloatArray:
         """A wrench (6,) read in a chain's wrench frame, as world axes at its contact frame's origin."""
@@ -112,7 +133,7 @@ class NominalRobot:
         force = sensor.rotation @ wrench[:3]
         torque = sensor.rotation @ wrench[3:]
         lever = self.data.oMf[self.contact_frames[chain]].translation - sensor.translation
-        return np.concatenate([force, torque - np.cross(lever, force)])
+        return np.concatenate([force, torque - cross(lever, force)])
 
     def sole_split(self, total: FloatArray) -> list[FloatArray]:
         """A world wrench (6,) at the world origin, shared by the soles as flat feet share it: each (6,) LOCAL.
@@ -125,26 +146,33 @@ class NominalRobot:
         the soles' torques). Yaw is shared as the load.
         """
         force, moment = total[:3], total[3:]
-        poses = [self.pose(sole) for sole in self.soles]
-        centres = [pose[:3, :3] @ self._foot_centre + pose[:3, 3] for pose in poses]
+        first, second = self.sole_centres
+        span = second[:2] - first[:2]
         if force[2] <= 1e-9:
-            shares = [0.5, 0.5]
-            offset = np.zeros(2)
+            alpha, offset = 0.5, np.zeros(2)
         else:
             zmp = np.array([-moment[1], moment[0]]) / force[2]
-            span = centres[1][:2] - centres[0][:2]
-            alpha = float(np.clip((zmp - centres[0][:2]) @ span / (span @ span), 0.0, 1.0))
-            shares = [1.0 - alpha, alpha]
-            offset = zmp - (centres[0][:2] + alpha * span)
-        yaw = moment[2] - sum(
-            share * np.cross(np.append(c[:2] + offset, 0.0), force)[2] for share, c in zip(shares, centres, strict=True)
-        )
+            alpha = float(np.clip((zmp - first[:2]) @ span / (span @ span), 0.0, 1.0))
+            offset = zmp - (first[:2] + alpha * span)
+        shares = (1.0 - alpha, alpha)
+        points = [np.array([c[0] + offset[0], c[1] + offset[1], 0.0]) for c in self.sole_centres]  # the CoPs
+        yaw = moment[2] - sum(s * (p[0] * force[1] - p[1] * force[0]) for s, p in zip(shares, points, strict=True))
         out = []
-        for share, centre, pose in zip(shares, centres, poses, strict=True):
-            at = np.append(centre[:2] + offset, 0.0)
-            world = np.concatenate([share * force, np.cross(at, share * force) + np.array([0.0, 0.0, share * yaw])])
-            out.append(np.linalg.solve(pin.SE3(pose).toDualActionMatrix(), world))
+        for share, point, pose in zip(shares, points, self.sole_poses, strict=True):
+            part = share * force
+            torque = cross(point - pose[:3, 3], part)
+            torque[2] += share * yaw
+            out.append(np.concatenate([pose[:3, :3].T @ part, pose[:3, :3].T @ torque]))
         return out
+
+    def soles_total(self, wrenches: tuple[FloatArray, ...]) -> FloatArray:
+        """The soles' wrenches (6,) each, in their frames, as one world wrench (6,) at the world origin."""
+        total = np.zeros(6)
+        for pose, wrench in zip(self.sole_poses, wrenches, strict=True):
+            force = pose[:3, :3] @ wrench[:3]
+            total[:3] += force
+            total[3:] += pose[:3, :3] @ wrench[3:] + cross(pose[:3, 3], force)
+        return total
 
     def static_torques(self, hand: dict[str, FloatArray]) -> FloatArray:
         """Joint torques (nj,) N m that hold the posture: gravity, the hands' wrenches, the soles' shares.
@@ -157,7 +185,7 @@ class NominalRobot:
         for chain, wrench in hand.items():
             jacobian = pin.getFrameJacobian(self.model, self.data, self.contact_frames[chain], pin.LOCAL_WORLD_ALIGNED)
             gravity -= jacobian.T @ wrench
-        base = pin.SE3(self.data.oMi[1]).toDualActionMatrix() @ gravity[:6]  # base wrench -> world origin
+        base = self.data.oMi[1].toDualActionMatrix() @ gravity[:6]  # base wrench -> world origin
         for sole, wrench in zip(self.soles, self.sole_split(base), strict=True):
             gravity -= pin.getFrameJacobian(self.model, self.data, sole, pin.LOCAL).T @ wrench
         return gravity[self._velocity]

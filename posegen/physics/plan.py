@@ -3,7 +3,7 @@
 The commands follow the route's trajectory as a joint trajectory controller does (cubic
 Hermite through its points' positions and velocities), held at the route's first posture
 for ``rest_s`` before it starts and at its last for ``rest_s`` after it ends. The planned
-CoM and pelvis are the nominal model's at the commanded angles, its anchor sole at its place.
+CoM, pelvis and hands are the nominal model's at the commanded angles, its anchor sole at its place.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ class Plan:
     com: FloatArray  # (n, 2) m, the planned CoM's ground projection
     pelvis_z: FloatArray  # (n,) m, the planned height of the free base
     base_rotation: FloatArray  # (n, 3, 3) the free base's planned orientation
+    hands: dict[str, FloatArray]  # chain -> (n, 4, 4) its contact frame's planned world pose
 
 
 def hermite(times: FloatArray, positions: FloatArray, velocities: FloatArray, at: FloatArray) -> FloatArray:
@@ -85,9 +86,13 @@ def sample_plan(scene: Scene, route: Route, period_s: float, rest_s: float) -> P
     com = np.zeros((count, 2))
     pelvis = np.zeros(count)
     rotation = np.zeros((count, 3, 3))
+    frames = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.chains}
+    hands = {c: np.zeros((count, 4, 4)) for c in frames}
     for i, joints in enumerate(commanded):
         q = scene.configuration(joints)
-        com[i] = pin.centerOfMass(model, data, q, False)[:2]
+        com[i] = pin.centerOfMass(model, data, q, False)[:2]  # also the joints' placements
         pelvis[i] = q[2]
         rotation[i] = pin.Quaternion(q[3:7]).toRotationMatrix()
-    return Plan(times, rest_s, commanded, rates, com, pelvis, rotation)
+        for chain, frame in frames.items():
+            hands[chain][i] = pin.updateFramePlacement(model, data, frame).homogeneous
+    return Plan(times, rest_s, commanded, rates, com, pelvis, rotation, hands)

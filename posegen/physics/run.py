@@ -106,10 +106,13 @@ class Run:
         t_route = plan.times_s[index] - plan.route_start_s
         imu = self.sensors.imu(data)
         self.robot.update(encoders, imu)
-        hands = self.hands.step(t_route, wrists, self.period_s)
+        planned = {chain: poses[index] for chain, poses in plan.hands.items()}
+        commanded = plan.positions[index] + self.offsets.dq
+        hands = self.hands.step(t_route, wrists, planned, commanded, self.period_s)
         soles = SoleReadings(self.sensors.soles(data))
         attitude = (imu, plan.base_rotation[index])
-        feet = self.stabilizer.step(soles, self.hands.wrenches, attitude, plan.com[index], self.period_s)
+        pushes = {c: np.array([0.0, 0.0, self.hands.planned_push(c, t_route), 0, 0, 0]) for c in self.hands.hands}
+        feet = self.stabilizer.step(soles, pushes, attitude, plan.com[index], self.period_s)
         offset = self.offsets.step(feet, hands, self.period_s)
         target = np.clip(plan.positions[index] + offset, self.scene.lower, self.scene.upper)
         torque = self.robot.static_torques({})

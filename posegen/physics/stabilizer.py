@@ -8,13 +8,14 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
 * **DCM feedback.** The CoM ``c`` and its velocity are estimated on the nominal model
   from the encoders and the IMU (:class:`NominalRobot`); ``xi = c + c' / omega``,
   ``omega = sqrt(g / z_c)``. The desired ZMP is
-  ``p_d = c_ref + (1 + K_DCM / omega) (xi - c_ref)``, kept ``ZMP_MARGIN_M`` inside the
-  support polygon; ``c_ref`` is the planned CoM moved back by the moment the hands'
-  measured pushes put on the floor (:func:`com_reference`), so the ZMP stays where the
-  plan puts it while a hand presses on the table.
+  ``p_d = p_ref + (1 + K_DCM / omega) (xi - c_ref)``, kept ``ZMP_MARGIN_M`` inside the
+  support polygon. The references are static: without a push, the planned CoM; with
+  the hands' planned pushes on the table, the ZMP they move toward the hands, held the
+  config's CoM margin inside the polygon by moving the CoM away (:func:`references`).
 * **Foot admittance** (foot damping control). The desired ZMP's wrench is shared by the
   soles as flat feet share it (:meth:`NominalRobot.sole_split`); each sole moves, relative
-  to the base, at ``v = K (w - w_share)`` in its frame, forces and torques alike: a sole
+  to the base, at ``v = K (w - w_share)`` in its frame, along its normal and about its
+  horizontal axes (a sole never slides nor turns on the floor; the friction holds it): a sole
   on its edge turns flat, a leg the true kinematics makes long shortens, and together
   they lean the body to move the ZMP.
 * **Body attitude.** The base's roll and pitch, as the IMU reads them, are slowly
@@ -30,10 +31,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from posegen.physics.nominal import GRAVITY, NominalRobot
-from posegen.robot import FloatArray, Scene, convex_hull_clockwise, polygon_margin
+from posegen.robot import FloatArray, Scene, convex_hull_clockwise
 
 K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
 VELOCITY_FILTER_S = 0.02  # low-pass of the CoM velocity estimate
@@ -41,8 +41,10 @@ ZMP_MARGIN_M = 0.01  # the desired ZMP is kept this far inside the support polyg
 K_FOOT_FORCE = 1e-4  # m/s per N of excess force on a sole
 K_FOOT_TORQUE = 1e-3  # rad/s per N m of excess torque
 MAX_FOOT_SPEED = 0.02  # m/s and rad/s
+ADMITTED = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 0.0])  # a sole gives way along its normal and tilts, never slides
 K_ATTITUDE_PER_S = 0.5  # base tilt error -> both soles' turn relative to the base
 MAX_TURN_RAD_S = 0.05
+POLYGON_EVERY = 25  # control steps between two computations of the support polygon (the soles barely move)
 
 
 @dataclass(frozen=True)
@@ -52,30 +54,58 @@ class SoleReadings:
     wrenches: tuple[FloatArray, ...]  # in the stance's sole order
 
 
-def com_reference(robot: NominalRobot, hands: dict[str, FloatArray], com_planned: FloatArray) -> FloatArray:
-    """Where the CoM (2,) m must be for the static ZMP to stay at the planned CoM while the hands push.
+def references(
+    robot: NominalRobot, hands: dict[str, FloatArray], com_planned: FloatArray, polygon: Hull, margin_m: float
+) -> tuple[FloatArray, FloatArray]:
+    """The static ZMP and CoM references (2,) each, m, while the hands push on the table.
 
-    The floor carries the weight and what the hands push down (their measured forces,
-    world wrenches (6,) at their contact frames): the CoM moves back by the hands'
-    moment about the planned CoM over the weight.
+    A hand's push (the table's wrench on it (6,), world axes at its contact frame) moves
+    the ZMP toward the hand. Where that keeps it ``margin_m`` inside the support polygon,
+    the CoM stays where the plan puts it; otherwise the ZMP is held at that margin and the
+    CoM moves away from the hand by what it takes.
     """
     weight = robot.mass_kg * -GRAVITY[2]
-    moment = np.zeros(2)
+    moment, load = np.zeros(2), 0.0
     for chain, wrench in hands.items():
         down = max(float(wrench[2]), 0.0)  # the table pushes the hand up: the hand pushes the table down
-        moment += down * (robot.pose(robot.contact_frames[chain])[:2, 3] - com_planned)
-    return np.asarray(com_planned - moment / weight)
+        moment += down * robot.pose(robot.contact_frames[chain])[:2, 3]
+        load += down
+    free = (weight * com_planned + moment) / (weight + load)  # the static ZMP if the CoM stays
+    zmp = clamp_into(polygon, free, margin_m)
+    return zmp, np.asarray((zmp * (weight + load) - moment) / weight)
 
 
-def clamp_into(polygon: FloatArray, point: FloatArray, margin_m: float) -> FloatArray:
-    """The point (2,) pulled toward the polygon's centroid until it is ``margin_m`` inside (clockwise polygon (h, 2))."""
-    if polygon_margin(polygon, point) >= margin_m:
+@dataclass(frozen=True)
+class Hull:
+    """A convex polygon as its edges' inward normals and offsets: ``margin(p) = min(normals @ p - offsets)``."""
+
+    vertices: FloatArray  # (h, 2) clockwise
+    normals: FloatArray  # (h, 2) unit, inward
+    offsets: FloatArray  # (h,)
+
+    @classmethod
+    def of(cls, points: FloatArray) -> Hull:
+        """The convex hull of points (m, 2)."""
+        vertices = convex_hull_clockwise(points)
+        edges = np.roll(vertices, -1, axis=0) - vertices
+        normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # clockwise: the interior is on the right
+        normals /= np.linalg.norm(normals, axis=1)[:, None]
+        return cls(vertices, normals, np.einsum("ij,ij->i", normals, vertices))
+
+    def margin(self, point: FloatArray) -> float:
+        """Signed distance (m) of a point inside the polygon (negative outside)."""
+        return float(np.min(self.normals @ point - self.offsets))
+
+
+def clamp_into(hull: Hull, point: FloatArray, margin_m: float) -> FloatArray:
+    """The point (2,) pulled toward the polygon's centroid until it is ``margin_m`` inside."""
+    if hull.margin(point) >= margin_m:
         return point
-    centre = polygon.mean(axis=0)
+    centre = hull.vertices.mean(axis=0)
     low, high = 0.0, 1.0
     for _ in range(12):
         middle = 0.5 * (low + high)
-        if polygon_margin(polygon, centre + middle * (point - centre)) >= margin_m:
+        if hull.margin(centre + middle * (point - centre)) >= margin_m:
             low = middle
         else:
             high = middle
@@ -100,19 +130,24 @@ class Stabilizer:
     def __init__(self, scene: Scene, robot: NominalRobot, glued_feet: bool = False) -> None:
         self.robot = robot
         self.glued_feet = glued_feet  # welded soles: no admittance (their sensors read the welds)
+        self.margin_m = scene.margins.com_m  # the static ZMP is kept this far inside the polygon
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
         self._com: FloatArray | None = None
+        self._hull: Hull | None = None
+        self._steps = 0
         self._velocity = np.zeros(2)
         self.zmp_desired = np.zeros(2)
 
-    def _polygon(self) -> FloatArray:
-        """The support polygon (h, 2) the soles make where the robot believes they are."""
-        points = np.hstack([(self.robot.pose(f) @ self._corners)[:2] for f in self.robot.soles]).T
-        return convex_hull_clockwise(points)
+    def _polygon(self) -> Hull:
+        """The support polygon the soles make where the robot believes they are (renewed every ``POLYGON_EVERY`` steps)."""
+        if self._hull is None or self._steps % POLYGON_EVERY == 0:
+            points = np.hstack([(pose @ self._corners)[:2] for pose in self.robot.sole_poses]).T
+            self._hull = Hull.of(points)
+        return self._hull
 
-    def _desired_zmp(self, reference: FloatArray, dt_s: float) -> FloatArray:
-        """The ZMP (2,) that brings the DCM back to its reference."""
+    def _desired_zmp(self, zmp: FloatArray, reference: FloatArray, dt_s: float) -> FloatArray:
+        """The ZMP (2,) that brings the DCM back to its reference (the static ZMP ``zmp`` at the CoM ``reference``)."""
         com = self.robot.com()
         if self._com is not None:
             blend = dt_s / (VELOCITY_FILTER_S + dt_s)
@@ -120,7 +155,7 @@ class Stabilizer:
         self._com = com[:2].copy()
         omega = np.sqrt(-GRAVITY[2] / max(float(com[2]), 0.1))
         dcm = com[:2] + self._velocity / omega
-        desired = reference + (1.0 + K_DCM_PER_S / omega) * (dcm - reference)
+        desired = zmp + (1.0 + K_DCM_PER_S / omega) * (dcm - reference)
         return clamp_into(self._polygon(), desired, ZMP_MARGIN_M)
 
     def step(
@@ -142,20 +177,20 @@ class Stabilizer:
 
         """
         robot = self.robot
-        self.zmp_desired = self._desired_zmp(com_reference(robot, hand_wrenches, com_planned), dt_s)
+        self._steps += 1
+        zmp, reference = references(robot, hand_wrenches, com_planned, self._polygon(), self.margin_m)
+        self.zmp_desired = self._desired_zmp(zmp, reference, dt_s)
         if self.glued_feet:
             return [np.zeros(6) for _ in robot.soles]
-        poses = [robot.pose(f) for f in robot.soles]
-        total = sum(
-            (pin.SE3(p).toDualActionMatrix() @ w for p, w in zip(poses, soles.wrenches, strict=True)), np.zeros(6)
-        )
+        poses = robot.sole_poses
+        total = robot.soles_total(soles.wrenches)
         desired = total.copy()
         desired[3:5] = [self.zmp_desired[1] * total[2], -self.zmp_desired[0] * total[2]]  # its ZMP there
         level = np.zeros(3)
         level[:2] = np.clip(K_ATTITUDE_PER_S * tilt_error(*attitude), -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
         twists = []
         for pose, wrench, share in zip(poses, soles.wrenches, robot.sole_split(desired), strict=True):
-            excess = wrench - share
+            excess = (wrench - share) * ADMITTED  # along the normal, about the horizontal axes
             local = np.concatenate([K_FOOT_FORCE * excess[:3], K_FOOT_TORQUE * excess[3:]])
             local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
             # turning both soles by the base's tilt, relative to it, turns the base back
