@@ -33,7 +33,6 @@ from posegen.physics.gains import Gains
 from posegen.physics.geometry import Shape, add_shapes, sole_in_link
 from posegen.physics.tool import Tool
 from posegen.robot import FloatArray, Scene, kinematic_urdf
-from posegen.robot.description import resolve_path
 
 TIMESTEP_S = 0.002
 SPRING_DAMPING_S = 0.02  # a compliant joint's damping = stiffness x this (structural damping of the drive)
@@ -82,13 +81,9 @@ class Built:
     layout: Layout
 
 
-def _mjcf_urdf(urdf_text: str, package_dirs: tuple[str, ...]) -> str:
-    """The URDF without visual and collision elements, with MuJoCo's import settings."""
+def _mjcf_urdf(urdf_text: str) -> str:
+    """The URDF without visual and collision elements (the geoms are added from posegen's shapes), for MuJoCo."""
     root = ET.fromstring(kinematic_urdf(urdf_text))
-    for mesh in root.iter("mesh"):  # none is left; kept for a URDF with meshes elsewhere
-        name = mesh.get("filename", "")
-        if name.startswith("package://"):
-            mesh.set("filename", str(resolve_path(name, package_dirs)))
     extension = ET.SubElement(root, "mujoco")
     ET.SubElement(
         extension,
@@ -178,7 +173,7 @@ def build(
     Args:
         scene: The nominal scene (joints, frames, shapes, foot rectangle, table size).
         urdf_text: The robot's URDF (the nominal one, or a perturbed robot's), the config's
-            frames and posegen's contact frames declared in it as links.
+            frames declared in it as links.
         table_top: World pose of the table's top face centre, (4, 4).
         gains: The joint loops and rotor inertias, in the scene's joint order.
         tools: Chain -> where its wrist sensor sits (:func:`posegen.physics.tool.wrist_tool`).
@@ -193,7 +188,7 @@ def build(
 
     """
     try:
-        spec = mujoco.MjSpec.from_string(_mjcf_urdf(urdf_text, scene.files.package_dirs))
+        spec = mujoco.MjSpec.from_string(_mjcf_urdf(urdf_text))
     except ValueError as exc:
         raise ConfigError(f"MuJoCo cannot read the robot's URDF: {str(exc).strip()}") from exc
     _options(spec)

@@ -111,7 +111,7 @@ class HandControl:
         self.force_n = force_n
         self.contacts = {c: [k for k in contacts if k.chain == c] for c in robot.tools}
         self.hands = {c: _Hand(np.zeros(6), np.zeros(6), 0, np.zeros(6)) for c in robot.tools}
-        self.wrenches = {c: np.zeros(6) for c in robot.tools}  # the last compensated wrench, at the contact
+        self.wrenches: dict[str, FloatArray] = {c: np.zeros(6) for c in robot.tools}  # the last, at the contact
 
     def _current(self, chain: str, t: float) -> ContactTimes | None:
         for contact in self.contacts[chain]:
@@ -195,10 +195,10 @@ class HandControl:
             remaining = max(contact.free_s - t, 0.05)
             return -hand.offset / remaining  # back to the plan by the release's end
         if phase in (Phase.FREE, Phase.APPROACH):
-            excess = max(np.linalg.norm(wrench[:3]) - GUARD_FORCE_N, 0.0)
-            if not excess:
+            size = float(np.linalg.norm(wrench[:3]))
+            if size <= GUARD_FORCE_N:
                 return np.zeros(6) if phase == Phase.APPROACH else -hand.offset / 0.5
-            return self._give_way(wrench * excess / max(np.linalg.norm(wrench[:3]), 1e-9), 0.0, hand.offset)
+            return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset)
         target = self.force_n
         if phase == Phase.RELEASE and contact is not None:
             target *= max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)

@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from posegen.robot import FloatArray, Scene
 
-SATURATION_RAD = 0.05  # position error at which a joint loop reaches its effort limit
+SATURATION_RAD = 0.01  # position error at which a joint loop reaches its effort limit
 ARMATURE_PER_NM = 1e-3  # kg m^2 of reflected rotor inertia per N m of effort
 MIN_ARMATURE = 5e-3  # kg m^2
 DEFAULT_EFFORT_NM = 50.0  # sizes the loop of a joint the URDF gives no effort limit

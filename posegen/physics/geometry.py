@@ -106,7 +106,7 @@ def _add_robot_geom(spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, obj: p
 
 
 def _robot_shapes(spec: mujoco.MjSpec, scene: Scene) -> list[Shape]:
-    """posegen's collision shapes on their links, each touching the floor and the table unless exempt."""
+    """Posegen's collision shapes on their links, each touching the floor and the table unless exempt."""
     model = scene.model
     geometry = robot_geometry(model, scene.urdf_xml, scene.files.package_dirs, scene.config.collision, True)
     no_floor = _links_carrying(model, scene.stance.floor_contact_frames)

@@ -19,7 +19,6 @@ from posegen.physics.nominal import cross
 from posegen.physics.sensors import sensor_wrench
 from posegen.robot import FloatArray, convex_hull_clockwise, polygon_margin
 
-
 ZMP_EVERY = 10  # samples between two ZMP margins (50 Hz at the default rate: the polygon's hull costs)
 
 
@@ -91,7 +90,7 @@ class Monitor:
 
     def _zmp_margin(self, data: mujoco.MjData, soles: list[tuple[FloatArray, FloatArray]]) -> float:
         total = np.zeros(6)
-        corners = []
+        corners: list[FloatArray] = []
         for (rotation, origin), sensor in zip(soles, self.layout.soles.values(), strict=True):
             wrench = sensor_wrench(data, sensor)
             force = rotation @ wrench[:3]

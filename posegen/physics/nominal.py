@@ -57,7 +57,7 @@ class NominalRobot:
         self.q = scene.configuration(scene.reference)
 
     def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
-        """The configuration (nq,) the robot believes in: its anchor sole's origin at its place, the base tilted as the IMU says."""
+        """The configuration (nq,) the robot believes in: its anchor sole's origin at its place, as the IMU tilts it."""
         q = self.scene.configuration(joints)
         if imu is None:
             return q

@@ -54,7 +54,9 @@ class JointOffsets:
         """
         jacobian = self.robot.frame_jacobian(frame)[:, 6 + np.asarray(joints)]  # (6, n)
         if jacobian.shape[1] < 6:
-            return np.asarray(np.linalg.solve(jacobian.T @ jacobian + DAMPING * np.eye(len(joints)), jacobian.T @ twist))
+            return np.asarray(
+                np.linalg.solve(jacobian.T @ jacobian + DAMPING * np.eye(len(joints)), jacobian.T @ twist)
+            )
         inverse = jacobian.T @ np.linalg.inv(jacobian @ jacobian.T + DAMPING * np.eye(6))  # (n, 6)
         current = self.dq[joints]
         return np.asarray(inverse @ twist - (current - inverse @ (jacobian @ current)) / NULL_DECAY_S)

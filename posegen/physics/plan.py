@@ -87,7 +87,7 @@ def sample_plan(scene: Scene, route: Route, period_s: float, rest_s: float) -> P
     pelvis = np.zeros(count)
     rotation = np.zeros((count, 3, 3))
     frames = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.chains}
-    hands = {c: np.zeros((count, 4, 4)) for c in frames}
+    hands: dict[str, FloatArray] = {c: np.zeros((count, 4, 4)) for c in frames}
     for i, joints in enumerate(commanded):
         q = scene.configuration(joints)
         com[i] = pin.centerOfMass(model, data, q, False)[:2]  # also the joints' placements

@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 
 from posegen.physics.builder import Built, glue_feet
-from posegen.physics.contact_control import ContactTimes, HandControl, Phase
+from posegen.physics.contact_control import ContactTimes, HandControl
 from posegen.physics.gains import Gains
 from posegen.physics.monitor import Monitor, Truth
 from posegen.physics.nominal import NominalRobot
@@ -137,9 +137,9 @@ class Run:
         plan, data = self.plan, self.data
         samples = len(plan.times_s)
         soles_at_start: tuple[FloatArray, ...] = ()
-        start_index = int(round(plan.route_start_s / self.period_s))
+        start_index = round(plan.route_start_s / self.period_s)
         fell_at = None
-        every = max(int(round(PROGRESS_S / self.period_s)), 1)
+        every = max(round(PROGRESS_S / self.period_s), 1)
         total = int(np.ceil(plan.times_s[-1]))
         for index in range(samples):
             self._control(index)

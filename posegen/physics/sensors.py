@@ -72,7 +72,7 @@ class Sensors:
         }
 
     def imu(self, data: mujoco.MjData) -> FloatArray:
-        """The base's orientation (3, 3) in the world, as an IMU in the base reads it (roll and pitch are what it knows)."""
+        """The base's orientation (3, 3) in the world, as an IMU in the base reads it."""
         return np.array(data.xmat[self.layout.base_body].reshape(3, 3))
 
     def soles(self, data: mujoco.MjData) -> tuple[FloatArray, ...]:

@@ -137,10 +137,10 @@ class Stabilizer:
         self._hull: Hull | None = None
         self._steps = 0
         self._velocity = np.zeros(2)
-        self.zmp_desired = np.zeros(2)
+        self.zmp_desired: FloatArray = np.zeros(2)
 
     def _polygon(self) -> Hull:
-        """The support polygon the soles make where the robot believes they are (renewed every ``POLYGON_EVERY`` steps)."""
+        """The soles' support polygon where the robot believes they are (renewed every ``POLYGON_EVERY`` steps)."""
         if self._hull is None or self._steps % POLYGON_EVERY == 0:
             points = np.hstack([(pose @ self._corners)[:2] for pose in self.robot.sole_poses]).T
             self._hull = Hull.of(points)

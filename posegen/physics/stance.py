@@ -40,7 +40,9 @@ def _place_base(model: mujoco.MjModel, data: mujoco.MjData, anchor_site: int, ta
     mujoco.mj_kinematics(model, data)
 
 
-def put_down(scene: Scene, model: mujoco.MjModel, data: mujoco.MjData, layout: Layout, joints: FloatArray) -> FloatArray:
+def put_down(
+    scene: Scene, model: mujoco.MjModel, data: mujoco.MjData, layout: Layout, joints: FloatArray
+) -> FloatArray:
     """Set ``data`` to the robot standing at ``joints`` (nj,) rad, both soles flat; returns the angles it stands at.
 
     Raises:

@@ -80,14 +80,20 @@ def _subtree_mass(tree: _Tree, link: str, pose: FloatArray, angles: dict[str, fl
         step = _origin(joint.find("origin"))
         if joint.get("type") in ("revolute", "continuous"):
             axis_text = joint.find("axis")
-            axis = np.array([float(v) for v in (axis_text.get("xyz", "1 0 0") if axis_text is not None else "1 0 0").split()])
+            axis = np.array(
+                [float(v) for v in (axis_text.get("xyz", "1 0 0") if axis_text is not None else "1 0 0").split()]
+            )
             turn = np.eye(4)
             turn[:3, :3] = pin.exp3(axis * angles.get(str(joint.get("name")), 0.0))
             step = step @ turn
         elif joint.get("type") == "prismatic":
             axis_text = joint.find("axis")
-            axis = np.array([float(v) for v in (axis_text.get("xyz", "1 0 0") if axis_text is not None else "1 0 0").split()])
-            step = step @ np.block([[np.eye(3), (axis * angles.get(str(joint.get("name")), 0.0))[:, None]], [0, 0, 0, 1]])
+            axis = np.array(
+                [float(v) for v in (axis_text.get("xyz", "1 0 0") if axis_text is not None else "1 0 0").split()]
+            )
+            step = step @ np.block(
+                [[np.eye(3), (axis * angles.get(str(joint.get("name")), 0.0))[:, None]], [0, 0, 0, 1]]
+            )
         m, first = _subtree_mass(tree, child, pose @ step, angles)
         total += m
         moment = moment + first

@@ -28,14 +28,13 @@ import pinocchio as pin
 from posegen.calibrate import Perturbation, calibrated_robot, perturbed_robot
 from posegen.model import CalibrationModel, Parameter
 from posegen.robot import FloatArray, Scene, offset_matrix, parse_config, with_declared_frames
-from posegen.robot.description import augmented_urdf, locked_configuration
 
 
 @dataclass(frozen=True)
 class TrueRobot:
     """A perturbed robot: its URDF, its parameters and where its table is."""
 
-    urdf: str  # the robot's URDF, the config's frames and posegen's contact frames declared in it
+    urdf: str  # the robot's URDF, the config's frames declared in it
     model: CalibrationModel  # every chain of the config, one session
     x: FloatArray  # (nx,) true parameters of ``model``
     session: str
@@ -78,7 +77,7 @@ def _springs(model: CalibrationModel, x: FloatArray) -> dict[str, float]:
 
 
 def perturbed_urdf(scene: Scene, model: CalibrationModel, x: FloatArray) -> str:
-    """The URDF of a perturbed robot, with the config's frames and posegen's contact frames declared in it.
+    """The URDF of a perturbed robot, with the config's frames declared in it.
 
     The config's frames ride on the perturbed links, but a declared point frame, which
     takes its contact's offsets (:func:`posegen.calibrate.calibrated_config`).
@@ -86,11 +85,7 @@ def perturbed_urdf(scene: Scene, model: CalibrationModel, x: FloatArray) -> str:
     with tempfile.TemporaryDirectory() as folder:  # the export names the file; nothing is written
         text, config = calibrated_robot(scene.files.urdf_text(), model.contact, model.theta(x), Path(folder) / "t.urdf")
     frames = parse_config(config, "").frames
-    bare = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    declared = with_declared_frames(text, bare, frames)
-    declared_model = pin.buildModelFromXML(declared, pin.JointModelFreeFlyer())
-    held = locked_configuration(declared_model, scene.config.locked_joints)
-    return augmented_urdf(declared, declared_model, scene.config, held)
+    return with_declared_frames(text, pin.buildModelFromXML(text, pin.JointModelFreeFlyer()), frames)
 
 
 def draw_true_robot(scene: Scene, session: str, perturbation: Perturbation, seed: int) -> TrueRobot:
@@ -113,4 +108,36 @@ def draw_true_robot(scene: Scene, session: str, perturbation: Perturbation, seed
     kinds = {c: (scene.chain(c).contact_kind,) for c in chains}
     model, x = perturbed_robot(scene, chains, [session], perturbation, seed, kinds)
     plane = scene.sole_poses[scene.anchor_sole] @ plane_in_anchor(model, x, session)
-    return TrueRobot(perturbed_urdf(scene, model, x), model, x, session, table_top_pose(scene, plane), _springs(model, x))
+    return TrueRobot(
+        perturbed_urdf(scene, model, x), model, x, session, table_top_pose(scene, plane), _springs(model, x)
+    )
+
+
+def as_stood(robot: TrueRobot, soles: tuple[FloatArray, ...]) -> FloatArray:
+    """The true parameters (nx,) with the plane and the floor constants as the robot stood when the route started.
+
+    The table is where it was put; the soles are where the robot put them down (the
+    second leg closed on the floor, the run's settling): the plane's height, roll and
+    pitch are read in the anchor sole's frame, the second sole's x, y and yaw in the
+    anchor's, as :func:`posegen.calibrate.true_parameters` defines them.
+
+    Args:
+        robot: The true robot.
+        soles: Each true sole frame's world pose (4, 4), stance order, when the route starts.
+
+    """
+    model, x = robot.model, robot.x.copy()
+    anchor_inverse = np.linalg.inv(soles[0])
+    plane = anchor_inverse @ robot.table_top
+    normal, point = plane[:3, 2], plane[:3, 3]
+    contact = model.contact
+    values = {
+        "z": float(normal @ point / normal[2]),
+        "roll": float(-np.arcsin(normal[1])),
+        "pitch": float(np.arctan2(normal[0], normal[2])),
+    }
+    for name, value in values.items():
+        x[contact.column(Parameter.plane(robot.session, name))] = value
+    relative = anchor_inverse @ soles[1]
+    x[model.floor_columns(robot.session)] = (relative[0, 3], relative[1, 3], np.arctan2(relative[1, 0], relative[0, 0]))
+    return x
