@@ -12,9 +12,15 @@ A contact of the route runs, in route time:
   (a table higher than planned is met, not pushed);
 * **go-to-contact and hold**: force control along the table normal to the target force
   ``force_n``: ``dz/dt = K_FORCE (f - force_n)`` within ``MAX_SPEED_M_S`` once
-  touching, ``SEARCH_SPEED_M_S`` down before (a table lower than planned is searched
-  for, below the route's overshoot); in contact the hand also turns to zero roll and pitch torque
+  touching (still within ``FORCE_BAND`` of the target: the contact is measured with the
+  joints still), ``SEARCH_SPEED_M_S`` down before (a table lower than planned is searched
+  for, below the route's overshoot); the route waits at the end of its go-to-contact
+  until ``SETTLE_S`` after the force first reached its band (``REACHED``;
+  ``SEARCH_TIMEOUT_S`` at most), so that the
+  hold lasts the planned time in contact; in contact the hand also turns to zero roll and pitch torque
   about the contact frame's origin, so the fingertips settle flush and share the load;
+* an arm whose joint loop is at its effort limit (its tracking error past the loop's
+  saturation) neither presses further nor turns: the admittance does not wind up;
 * **release**: the target force falls to zero over ``UNLOAD_S`` as the route's release
   starts, then the hand's offset fades back to the plan over the rest of the release.
 
@@ -35,15 +41,21 @@ from posegen.physics.nominal import NominalRobot
 from posegen.robot import FloatArray
 
 K_FORCE = 1e-3  # m/s per N of normal force error
+FORCE_BAND = 0.3  # within this fraction of the target force, the hand stays where it is
+HOLD_BAND = 0.6  # and during the hold (only a force far from the target moves it: the contact is measured still)
 K_TORQUE = 0.01  # rad/s per N m of roll or pitch torque about the contact origin
+TORQUE_BAND_NM = 0.5  # roll and pitch torques below this leave the hand's tilt as it is
 MAX_TILT_RAD = 0.05  # the hand turns at most this far from the plan
-SEARCH_SPEED_M_S = 0.005
+SEARCH_SPEED_M_S = 0.01
 MAX_SPEED_M_S = 0.02
 MAX_TURN_RAD_S = 0.2
 GUARD_FORCE_N = 10.0
 TOUCH_FORCE_N = 3.0  # in contact: above this normal force
 UNLOAD_S = 0.1
 TARE_S = 0.1
+REACHED = 0.7  # a hold starts once the normal force is this fraction of the target (in the force band)
+SEARCH_TIMEOUT_S = 3.0  # the route waits at most this long for a contact before its hold
+SETTLE_S = 0.25  # and this long after the force first reached its band (the arm settles)
 MAX_OFFSET_M = 0.05  # the search and the force control move the hand at most this far from the plan
 K_HOLD_PER_S = 5.0  # the hand's pose error to its target (the plan plus the admittance's offset) -> twist
 
@@ -112,6 +124,9 @@ class HandControl:
         self.contacts = {c: [k for k in contacts if k.chain == c] for c in robot.tools}
         self.hands = {c: _Hand(np.zeros(6), np.zeros(6), 0, np.zeros(6)) for c in robot.tools}
         self.wrenches: dict[str, FloatArray] = {c: np.zeros(6) for c in robot.tools}  # the last, at the contact
+        self.waited_s: dict[str, float] = {}  # contact label -> how long the route waited for it
+        self.saturated: dict[str, bool] = {}  # chain -> an arm joint lags its command past its effort limit
+        self._settled: dict[str, float] = {}  # contact label -> time since its force first reached its band
 
     def _current(self, chain: str, t: float) -> ContactTimes | None:
         for contact in self.contacts[chain]:
@@ -127,6 +142,33 @@ class HandControl:
         if t < contact.press_s:
             return Phase.APPROACH
         return Phase.PRESS if t < contact.lift_s else Phase.RELEASE
+
+    def holds_back(self, t: float, t_next: float, dt_s: float) -> bool:
+        """Whether the route's clock waits at ``t`` rather than go on to ``t_next``.
+
+        A hold starts when its force is reached, as a robot's contact controller starts it:
+        the route waits, at the end of its go-to-contact, while the hand searches for the
+        table, for at most ``SEARCH_TIMEOUT_S``.
+        """
+        for chain in self.hands:
+            contact = self._current(chain, t)
+            if contact is None or not t < contact.hold_s <= t_next:
+                continue
+            waited = self.waited_s.get(contact.label, 0.0)
+            settled = self._settled.get(contact.label)  # since the force first reached its band
+            force = self.wrenches[chain][2]
+            at_limit = self.saturated.get(chain, False) and force > GUARD_FORCE_N  # pressing as hard as it can
+            if settled is not None or force >= REACHED * self.force_n or at_limit:
+                settled = (settled or 0.0) + dt_s
+                self._settled[contact.label] = settled
+            if (settled is None or settled < SETTLE_S) and waited < SEARCH_TIMEOUT_S:
+                self.waited_s[contact.label] = waited + dt_s
+                return True
+        return False
+
+    def in_contact(self, t: float) -> bool:
+        """Whether a hand is at the table at route time ``t`` (go-to-contact, hold or release)."""
+        return any(self.phase(chain, t) in (Phase.PRESS, Phase.RELEASE) for chain in self.hands)
 
     def planned_push(self, chain: str, t: float) -> float:
         """The force (N) the plan has a hand push on the table at route time ``t``: the target, ramped in and out."""
@@ -147,9 +189,12 @@ class HandControl:
     ) -> dict[str, FloatArray]:
         """Each hand's twist (6,) relative to the base (world axes at its contact frame) at route time ``t``.
 
-        The twist holds the hand at its target in the world (the planned pose moved by the
-        admittance's offset), where the commanded angles put it on the base the IMU tilts:
-        the stabilizer's lean and the base's tilt do not carry it. (Closed on the commands,
+        Away from the table, the twist holds the hand at its target in the world (the planned
+        pose moved by the admittance's offset), where the commanded angles put it on the base
+        the IMU tilts: the stabilizer's lean and the base's tilt do not carry it. While a hand
+        is in contact (go-to-contact, hold, release) the table holds it and only its
+        admittance moves it; the other hand stays still (a contact is measured with every
+        joint still). (Closed on the commands,
         not on the encoders: a joint that its effort limit or the table holds back does
         not wind the loop up.)
 
@@ -164,6 +209,7 @@ class HandControl:
         out = {}
         frames = [self.robot.contact_frames[chain] for chain in self.hands]
         at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True))
+        hold = not self.in_contact(t)  # in contact, every hand stays still
         for chain, hand in self.hands.items():
             contact = self._current(chain, t)
             compensated = wrists[chain] - self.robot.tool_wrench(chain)
@@ -178,7 +224,7 @@ class HandControl:
             rate = self._twist(chain, contact, t, wrench, hand)
             hand.offset += rate * dt_s
             hand.offset[:3] = np.clip(hand.offset[:3], -MAX_OFFSET_M, MAX_OFFSET_M)
-            out[chain] = rate + K_HOLD_PER_S * self._error(planned[chain], hand.offset, at[chain])
+            out[chain] = rate + (K_HOLD_PER_S * self._error(planned[chain], hand.offset, at[chain]) if hold else 0.0)
         return out
 
     @staticmethod
@@ -198,14 +244,19 @@ class HandControl:
             size = float(np.linalg.norm(wrench[:3]))
             if size <= GUARD_FORCE_N:
                 return np.zeros(6) if phase == Phase.APPROACH else -hand.offset / 0.5
-            return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset)
+            return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset, 0.0)
         target = self.force_n
         if phase == Phase.RELEASE and contact is not None:
             target *= max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)
-        return self._give_way(wrench, target, hand.offset)
+        band = HOLD_BAND if contact is not None and contact.hold_s <= t < contact.lift_s else FORCE_BAND
+        twist = self._give_way(wrench, target, hand.offset, band)
+        if self.saturated.get(chain, False):  # anti-windup: an arm at its effort limit pushes no further
+            twist[2] = max(twist[2], 0.0)
+            twist[3:] = 0.0
+        return twist
 
     @staticmethod
-    def _give_way(wrench: FloatArray, target_n: float, offset: FloatArray) -> FloatArray:
+    def _give_way(wrench: FloatArray, target_n: float, offset: FloatArray, band: float = FORCE_BAND) -> FloatArray:
         """The admittance twist (6,): along the normal to the target force, roll and pitch to zero torque.
 
         The tangent and the yaw are held (the fingertips' friction holds them; the
@@ -215,8 +266,12 @@ class HandControl:
         if wrench[2] <= TOUCH_FORCE_N:  # not touching: search down (or stay, when unloaded)
             twist[2] = -SEARCH_SPEED_M_S if target_n > TOUCH_FORCE_N else 0.0
             return twist
-        twist[2] = np.clip(K_FORCE * (wrench[2] - target_n), -MAX_SPEED_M_S, MAX_SPEED_M_S)
-        turn = np.clip(K_TORQUE * wrench[3:5], -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        error = wrench[2] - target_n
+        if abs(error) <= band * target_n:  # close enough: the hand stays still (a contact is measured still)
+            return twist
+        twist[2] = np.clip(K_FORCE * error, -MAX_SPEED_M_S, MAX_SPEED_M_S)
+        torque = np.where(np.abs(wrench[3:5]) > TORQUE_BAND_NM, wrench[3:5], 0.0)
+        turn = np.clip(K_TORQUE * torque, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
         blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD
         twist[3:5] = np.where(blocked & (np.sign(turn) == np.sign(offset[3:5])), 0.0, turn)
         return twist

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from posegen.io import Route, SegmentType
 from posegen.physics.contact_control import ContactTimes
@@ -32,36 +33,35 @@ def _worst(values: FloatArray, low: bool) -> float:
 
 
 def segment_figures(
-    route: Route, plan: Plan, truth: Truth, joint_names: tuple[str, ...], fell_at_s: float | None
+    route: Route, plan: Plan, truth: Truth, route_index: NDArray[np.int64], joint_names: tuple[str, ...]
 ) -> tuple[SegmentFigures, ...]:
     """The figures of each route segment the run reached (route times; samples at the control rate).
 
     Args:
         route: The route that was run.
-        plan: Its sampled plan (the run's clock: ``route_start_s`` before the route's time 0).
+        plan: Its sampled plan (``route_start_s`` before the route's time 0).
         truth: The run's ground truth, one entry per sample run.
+        route_index: (n,) the plan's sample each sample ran (the route's clock waits for the contacts).
         joint_names: The scene's joints (names the worst torque's joint).
-        fell_at_s: Run time of a fall, or None.
 
     """
-    samples = len(truth.pelvis_z)
     period = float(plan.times_s[1] - plan.times_s[0])
-    start = round(plan.route_start_s / period)
-    slip = np.linalg.norm(truth.soles_xy - truth.soles_xy[min(start, samples - 1)], axis=2) * 1e3  # (n, 2) mm
-    pelvis = np.abs(truth.pelvis_z - plan.pelvis_z[:samples])
+    route_time = plan.times_s[route_index] - plan.route_start_s  # (n,)
+    started = np.flatnonzero(route_time >= 0.0)
+    origin = truth.soles_xy[started[0] if len(started) else 0]
+    slip = np.linalg.norm(truth.soles_xy - origin, axis=2) * 1e3  # (n, 2) mm
+    pelvis = np.abs(truth.pelvis_z - plan.pelvis_z[route_index])
     out = []
     for k, segment in enumerate(route.segments):
-        first = start + round(segment.start_s / period)
-        stop = min(start + round(segment.end_s / period) + 1, samples)
-        if first >= samples:
+        rows = np.flatnonzero((route_time >= segment.start_s - 1e-9) & (route_time <= segment.end_s + 1e-9))
+        if not len(rows):
             break
-        rows = slice(first, stop)
         force = truth.contact_force[segment.chain][rows] if segment.chain in truth.contact_force else np.zeros(1)
-        worst = first + int(np.argmax(truth.torque_ratio[rows]))
+        worst = rows[int(np.argmax(truth.torque_ratio[rows]))]
         touched = tuple(
-            UnwantedContact(round(t.time_s - plan.route_start_s, 3), t.link, t.obstacle, round(1e3 * t.depth_m, 3))
+            UnwantedContact(round(t.time_s, 3), t.link, t.obstacle, round(1e3 * t.depth_m, 3))
             for t in truth.touches
-            if segment.start_s <= t.time_s - plan.route_start_s <= segment.end_s
+            if rows[0] <= round(t.time_s / period) <= rows[-1]
         )
         out.append(
             SegmentFigures(
@@ -116,17 +116,18 @@ def physics_report(
     route: Route,
     plan: Plan,
     truth: Truth,
+    route_index: NDArray[np.int64],
     joint_names: tuple[str, ...],
     contacts: tuple[ContactTimes, ...],
     fell_at_s: float | None,
 ) -> PhysicsReport:
-    """The report of a run (``physics.yaml``); a fall's time is given in route time.
+    """The report of a run (``physics.yaml``); a fall's time is given on the run's clock.
 
     Example:
-        >>> report = physics_report(prov, route, plan, result.truth, scene.joint_names, contacts, result.fell_at_s)
+        >>> report = physics_report(prov, route, plan, result.truth, result.route_index, names, contacts, None)
 
     """
-    segments = segment_figures(route, plan, truth, joint_names, fell_at_s)
-    fell = None if fell_at_s is None else round(fell_at_s - plan.route_start_s, 3)
+    segments = segment_figures(route, plan, truth, route_index, joint_names)
+    fell = None if fell_at_s is None else round(fell_at_s, 3)
     duration = float(len(truth.pelvis_z) * (plan.times_s[1] - plan.times_s[0]))
     return PhysicsReport(provenance, summarize(segments, contacts, fell, duration), segments)

@@ -17,7 +17,7 @@ from posegen.physics.nominal import NominalRobot
 from posegen.robot import FloatArray, Scene
 
 DAMPING = 1e-4  # of the least-squares solves (m^2: a few centimetres of damping near singularities)
-NULL_DECAY_S = 1.0  # an arm's offset that moves no task decays back to the plan
+NULL_DECAY_S = 10.0  # an arm's offset that moves no task decays back to the plan (slowly: a hold stays still)
 
 
 def arm_joints(scene: Scene) -> dict[str, list[int]]:
@@ -46,7 +46,7 @@ class JointOffsets:
         self.legs = [[j for j in scene.leg_joints(s) if not scene.locked[j]] for s in scene.stance.sole_frames]
         self.arms = arm_joints(scene)
 
-    def _solve(self, frame: int, joints: list[int], twist: FloatArray) -> FloatArray:
+    def _solve(self, frame: int, joints: list[int], twist: FloatArray, decay: bool = True) -> FloatArray:
         """Joint rates (len(joints),) that move a frame by ``twist`` (6,) relative to the base.
 
         Damped least squares; a redundant chain's offset that moves no task decays toward zero
@@ -58,16 +58,22 @@ class JointOffsets:
                 np.linalg.solve(jacobian.T @ jacobian + DAMPING * np.eye(len(joints)), jacobian.T @ twist)
             )
         inverse = jacobian.T @ np.linalg.inv(jacobian @ jacobian.T + DAMPING * np.eye(6))  # (n, 6)
+        if not decay:
+            return np.asarray(inverse @ twist)
         current = self.dq[joints]
         return np.asarray(inverse @ twist - (current - inverse @ (jacobian @ current)) / NULL_DECAY_S)
 
-    def step(self, soles: list[FloatArray], hands: dict[str, FloatArray], dt_s: float) -> FloatArray:
+    def step(
+        self, soles: list[FloatArray], hands: dict[str, FloatArray], dt_s: float, decay: bool = True
+    ) -> FloatArray:
         """Advance the offset by one control period; the robot updated at the encoders' angles.
 
         Args:
             soles: Each sole's twist (6,) relative to the base, world axes at the sole (stance order).
             hands: Chain -> its hand's twist (6,) relative to the base, world axes at its contact frame.
             dt_s: Control period, s.
+            decay: Let the arms' unused offsets decay (not while a hand is at the table: a
+                contact is measured with every joint still).
 
         Returns:
             The joint offset (nj,) rad to add to the planned angles.
@@ -79,6 +85,6 @@ class JointOffsets:
                 self.dq[leg] += dt_s * self._solve(frame, leg, twist)
         for chain, twist in hands.items():
             arm = self.arms[chain]
-            if np.any(twist) or np.any(self.dq[arm]):
-                self.dq[arm] += dt_s * self._solve(robot.contact_frames[chain], arm, twist)
+            if np.any(twist) or (decay and np.any(self.dq[arm])):
+                self.dq[arm] += dt_s * self._solve(robot.contact_frames[chain], arm, twist, decay)
         return self.dq

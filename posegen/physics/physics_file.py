@@ -27,7 +27,7 @@ PHYSICS_FILE = "physics.yaml"
 class UnwantedContact:
     """A robot link that touched the floor or the table (other than the soles and the tips)."""
 
-    time_s: float  # route time
+    time_s: float  # on the run's clock (the recording's)
     link: str
     obstacle: str  # floor or table
     depth_mm: float
@@ -58,7 +58,7 @@ class PhysicsSummary:
     """The whole run's worst figures and what it achieved."""
 
     completed: bool  # the route ran to its end without a fall
-    fell_at_s: float | None  # route time of the fall, if any
+    fell_at_s: float | None  # the fall's time on the run's clock (the recording's), if any
     duration_s: float  # robot time simulated
     contacts: int  # the route's contacts
     holds_in_range: int  # contacts whose hold force stayed within the range below

@@ -15,8 +15,10 @@ sensors are recorded every ``stride`` steps (the recording rate). Each control p
 The robot starts at the route's first posture, its anchor sole flat at its place and its
 second leg closed on the floor (the robot put down on its feet: the second leg's angles
 solved on the true robot, the stabilizer's offset starting there), and rests
-``rest_s`` before the route starts and after it ends. A fall (the base lower than
-planned by ``FALL_M``) ends the run.
+``rest_s`` before the route starts and after it ends. The route's clock waits at the end
+of a go-to-contact until the hand's force is reached (:meth:`HandControl.holds_back`): the
+recording is that much longer than the plan. A fall (the base lower than planned by
+``FALL_M``) ends the run.
 """
 
 from __future__ import annotations
@@ -25,10 +27,11 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from numpy.typing import NDArray
 
 from posegen.physics.builder import Built, glue_feet
-from posegen.physics.contact_control import ContactTimes, HandControl
-from posegen.physics.gains import Gains
+from posegen.physics.contact_control import SEARCH_TIMEOUT_S, ContactTimes, HandControl
+from posegen.physics.gains import SATURATION_RAD, Gains
 from posegen.physics.monitor import Monitor, Truth
 from posegen.physics.nominal import NominalRobot
 from posegen.physics.offsets import JointOffsets
@@ -41,6 +44,7 @@ from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene
 
 FALL_M = 0.2  # the base this far below its planned height: fallen
+LAGGING_RAD = 1.5 * SATURATION_RAD  # a joint this far from its command is held back by its effort limit
 PROGRESS_S = 1.0  # robot time between progress reports
 
 
@@ -60,8 +64,10 @@ class RunResult:
     recorded: Recorded
     truth: Truth
     plan: Plan
-    fell_at_s: float | None  # None: the run completed
+    route_index: NDArray[np.int64]  # (n,) the plan's sample each recorded sample ran (the route's clock waits)
+    fell_at_s: float | None  # run time of a fall; None: the run completed
     soles_at_start: tuple[FloatArray, ...]  # (4, 4) each true sole frame's world pose when the route starts
+    waited_s: dict[str, float]  # contact label -> how long the route waited for its force
 
 
 class Run:
@@ -90,30 +96,34 @@ class Run:
         self.force_n = force_n
         self.stride = stride
         self.period_s = stride * self.model.opt.timestep
-        samples = len(plan.times_s)
+        samples = len(plan.times_s) + len(contacts) * int(np.ceil(SEARCH_TIMEOUT_S / self.period_s) + 1)
         self.monitor = Monitor(self.model, self.layout, samples, (scene.stance.foot_x_m, scene.stance.foot_y_m))
         self.encoders = np.zeros((samples, len(scene.joint_names)))
         self.wrists = {c: np.zeros((samples, 6)) for c in self.layout.wrists}
+        self.route_index = np.zeros(samples, dtype=np.int64)
 
-    def _control(self, index: int) -> None:
-        """Read the sensors of sample ``index``, record them, and set the joint loops' commands."""
+    def _control(self, sample: int, index: int) -> None:
+        """Read the sensors of ``sample``, record them, and set the joint loops' commands at the plan's ``index``."""
         data, plan = self.data, self.plan
         encoders = self.sensors.encoders(data)
         wrists = self.sensors.wrists(data)
-        self.encoders[index] = encoders
+        self.encoders[sample] = encoders
+        self.route_index[sample] = index
         for chain, reading in wrists.items():
-            self.wrists[chain][index] = reading
+            self.wrists[chain][sample] = reading
         t_route = plan.times_s[index] - plan.route_start_s
         imu = self.sensors.imu(data)
         self.robot.update(encoders, imu)
         planned = {chain: poses[index] for chain, poses in plan.hands.items()}
         commanded = plan.positions[index] + self.offsets.dq
+        lag = np.abs(commanded - encoders)
+        for chain, arm in self.offsets.arms.items():
+            self.hands.saturated[chain] = bool(np.any(lag[arm] > LAGGING_RAD))
         hands = self.hands.step(t_route, wrists, planned, commanded, self.period_s)
         soles = SoleReadings(self.sensors.soles(data))
         attitude = (imu, plan.base_rotation[index])
-        pushes = {c: np.array([0.0, 0.0, self.hands.planned_push(c, t_route), 0, 0, 0]) for c in self.hands.hands}
-        feet = self.stabilizer.step(soles, pushes, attitude, plan.com[index], self.period_s)
-        offset = self.offsets.step(feet, hands, self.period_s)
+        feet = self.stabilizer.step(soles, self.hands.wrenches, attitude, plan.com[index], self.period_s)
+        offset = self.offsets.step(feet, hands, self.period_s, decay=not self.hands.in_contact(t_route))
         target = np.clip(plan.positions[index] + offset, self.scene.lower, self.scene.upper)
         torque = self.robot.static_torques({})
         gains = self.gains
@@ -135,26 +145,39 @@ class Run:
         """
         self.start()
         plan, data = self.plan, self.data
-        samples = len(plan.times_s)
         soles_at_start: tuple[FloatArray, ...] = ()
         start_index = round(plan.route_start_s / self.period_s)
         fell_at = None
         every = max(round(PROGRESS_S / self.period_s), 1)
         total = int(np.ceil(plan.times_s[-1]))
-        for index in range(samples):
-            self._control(index)
-            self.monitor.record(data, index, float(plan.times_s[index]))
-            if index == start_index:
+        sample, index = 0, 0
+        while index < len(plan.times_s) and sample < len(self.route_index):
+            self._control(sample, index)
+            time_s = sample * self.period_s
+            self.monitor.record(data, sample, time_s)
+            if index == start_index and not soles_at_start:
                 soles_at_start = self._sole_poses()
-            if self.monitor.truth.pelvis_z[index] < plan.pelvis_z[index] - FALL_M:
-                fell_at = float(plan.times_s[index])
-                samples = index + 1
+            if self.monitor.truth.pelvis_z[sample] < plan.pelvis_z[index] - FALL_M:
+                fell_at = time_s
+                sample += 1
                 break
             for _ in range(self.stride):
                 mujoco.mj_step(self.model, data)
-            if index % every == 0:
-                progress(Progress(min(int(plan.times_s[index]), total), total, "second"))
-        return RunResult(self._recorded(samples), self._truth(samples), plan, fell_at, soles_at_start)
+            now, then = (plan.times_s[min(k, len(plan.times_s) - 1)] - plan.route_start_s for k in (index, index + 1))
+            if not self.hands.holds_back(now, then, self.period_s):
+                index += 1
+            if sample % every == 0:
+                progress(Progress(min(int(plan.times_s[index - 1]), total), total, "second"))
+            sample += 1
+        return RunResult(
+            self._recorded(sample),
+            self._truth(sample),
+            plan,
+            self.route_index[:sample].copy(),
+            fell_at,
+            soles_at_start,
+            dict(self.hands.waited_s),
+        )
 
     def _sole_poses(self) -> tuple[FloatArray, ...]:
         poses = []
@@ -166,7 +189,7 @@ class Run:
         return tuple(poses)
 
     def _recorded(self, samples: int) -> Recorded:
-        times = self.plan.times_s[:samples]
+        times = np.arange(samples) * self.period_s
         return Recorded(times, self.encoders[:samples], {c: w[:samples] for c, w in self.wrists.items()})
 
     def _truth(self, samples: int) -> Truth:

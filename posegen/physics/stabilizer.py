@@ -15,7 +15,9 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
 * **Foot admittance** (foot damping control). The desired ZMP's wrench is shared by the
   soles as flat feet share it (:meth:`NominalRobot.sole_split`); each sole moves, relative
   to the base, at ``v = K (w - w_share)`` in its frame, along its normal and about its
-  horizontal axes (a sole never slides nor turns on the floor; the friction holds it): a sole
+  horizontal axes (a sole never slides nor turns on the floor; the friction holds it), an
+  excess within ``BAND`` leaving it still (the robot rests near equilibrium, so that a
+  contact is measured with its joints still): a sole
   on its edge turns flat, a leg the true kinematics makes long shortens, and together
   they lean the body to move the ZMP.
 * **Body attitude.** The base's roll and pitch, as the IMU reads them, are slowly
@@ -42,6 +44,7 @@ K_FOOT_FORCE = 1e-4  # m/s per N of excess force on a sole
 K_FOOT_TORQUE = 1e-3  # rad/s per N m of excess torque
 MAX_FOOT_SPEED = 0.02  # m/s and rad/s
 ADMITTED = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 0.0])  # a sole gives way along its normal and tilts, never slides
+BAND = np.array([20.0, 20.0, 20.0, 3.0, 3.0, 3.0])  # N, N m: a sole's excess below this leaves it where it is
 K_ATTITUDE_PER_S = 0.5  # base tilt error -> both soles' turn relative to the base
 MAX_TURN_RAD_S = 0.05
 POLYGON_EVERY = 25  # control steps between two computations of the support polygon (the soles barely move)
@@ -110,6 +113,11 @@ def clamp_into(hull: Hull, point: FloatArray, margin_m: float) -> FloatArray:
         else:
             high = middle
     return np.asarray(centre + low * (point - centre))
+
+
+def _beyond(values: FloatArray, band: FloatArray) -> FloatArray:
+    """Each value less its band toward zero; zero within the band (a deadband: the soles rest near equilibrium)."""
+    return np.asarray(np.sign(values) * np.maximum(np.abs(values) - band, 0.0))
 
 
 def tilt_error(measured: FloatArray, planned: FloatArray) -> FloatArray:
@@ -190,7 +198,7 @@ class Stabilizer:
         level[:2] = np.clip(K_ATTITUDE_PER_S * tilt_error(*attitude), -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
         twists = []
         for pose, wrench, share in zip(poses, soles.wrenches, robot.sole_split(desired), strict=True):
-            excess = (wrench - share) * ADMITTED  # along the normal, about the horizontal axes
+            excess = _beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
             local = np.concatenate([K_FOOT_FORCE * excess[:3], K_FOOT_TORQUE * excess[3:]])
             local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
             # turning both soles by the base's tilt, relative to it, turns the base back

@@ -185,7 +185,9 @@ def simulate_physics_bag(
         result, truth = _run(scene, route, options, perturbation, stride, progress)
         wall = time.perf_counter() - started
         prov = _provenance(scene, route_path, options)
-        report = physics_report(prov, route, result.plan, result.truth, scene.joint_names, contacts, result.fell_at_s)
+        report = physics_report(
+            prov, route, result.plan, result.truth, result.route_index, scene.joint_names, contacts, result.fell_at_s
+        )
         recorded = result.recorded
         joints = JointStates(scene.joint_names, recorded.times_s, recorded.encoders)
         wrenches = {
