@@ -15,7 +15,8 @@ are), on a free base, with the geoms of :mod:`posegen.physics.geometry`. Added t
 * with glued feet, a weld of each sole's link to the world (set from the initial state
   by :func:`glue_feet`).
 
-Solver: fixed step ``TIMESTEP_S`` with ``implicitfast`` and elliptic friction cones.
+Solver: fixed step ``TIMESTEP_S`` with ``implicitfast``, elliptic friction cones and the
+noslip pass (without it, MuJoCo's soft friction lets a loaded sole creep).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from posegen.physics.tool import Tool
 from posegen.robot import FloatArray, Scene, kinematic_urdf
 
 TIMESTEP_S = 0.002
+NOSLIP_ITERATIONS = 5  # MuJoCo's soft friction lets a loaded sole creep (0.1 mm/s); its noslip pass stops it
 SPRING_DAMPING_S = 0.02  # a compliant joint's damping = stiffness x this (structural damping of the drive)
 SPRING_ARMATURE = 1e-3  # kg m^2 on a spring joint (numerical: keeps its dof from being massless)
 FT_SITE = "ft:{}"  # a chain's wrist sensor site, and its sensors (force, torque)
@@ -132,7 +134,7 @@ def _add_springs(spec: mujoco.MjSpec, springs: Mapping[str, float]) -> list[str]
         spring = body.add_joint(name=f"spring:{name}", type=mujoco.mjtJoint.mjJNT_HINGE)
         spring.axis = joint.axis
         spring.pos = joint.pos
-        spring.stiffness = stiffness
+        spring.stiffness = [stiffness, 0.0, 0.0]  # a 3-vector in MuJoCo 4.0: linear term first
         spring.damping = [stiffness * SPRING_DAMPING_S, 0.0, 0.0]
         spring.armature = SPRING_ARMATURE
         names.append(spring.name)
@@ -156,6 +158,7 @@ def _options(spec: mujoco.MjSpec) -> None:
     spec.option.timestep = TIMESTEP_S
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.noslip_iterations = NOSLIP_ITERATIONS
     spec.option.gravity = [0.0, 0.0, -9.81]
 
 

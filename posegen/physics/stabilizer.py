@@ -47,6 +47,7 @@ ADMITTED = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 0.0])  # a sole gives way along it
 BAND = np.array([20.0, 20.0, 20.0, 3.0, 3.0, 3.0])  # N, N m: a sole's excess below this leaves it where it is
 K_ATTITUDE_PER_S = 0.5  # base tilt error -> both soles' turn relative to the base
 MAX_TURN_RAD_S = 0.05
+ATTITUDE_BAND_RAD = 0.003  # a tilt error below this is left as it is (the robot rests still)
 POLYGON_EVERY = 25  # control steps between two computations of the support polygon (the soles barely move)
 
 
@@ -195,7 +196,8 @@ class Stabilizer:
         desired = total.copy()
         desired[3:5] = [self.zmp_desired[1] * total[2], -self.zmp_desired[0] * total[2]]  # its ZMP there
         level = np.zeros(3)
-        level[:2] = np.clip(K_ATTITUDE_PER_S * tilt_error(*attitude), -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        tilt = _beyond(tilt_error(*attitude), np.full(2, ATTITUDE_BAND_RAD))
+        level[:2] = np.clip(K_ATTITUDE_PER_S * tilt, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
         twists = []
         for pose, wrench, share in zip(poses, soles.wrenches, robot.sole_split(desired), strict=True):
             excess = _beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
