@@ -207,9 +207,9 @@ class HandControl:
 
         """
         out = {}
-        frames = [self.robot.contact_frames[chain] for chain in self.hands]
-        at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True))
         hold = not self.in_contact(t)  # in contact, every hand stays still
+        frames = [self.robot.contact_frames[chain] for chain in self.hands]
+        at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True)) if hold else {}
         for chain, hand in self.hands.items():
             contact = self._current(chain, t)
             compensated = wrists[chain] - self.robot.tool_wrench(chain)

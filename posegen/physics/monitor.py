@@ -19,6 +19,8 @@ from posegen.physics.nominal import cross
 from posegen.physics.sensors import sensor_wrench
 from posegen.robot import FloatArray, convex_hull_clockwise, polygon_margin
 
+_CODES = {role: k for k, role in enumerate(ShapeRole)}
+_TIP, _BODY = _CODES[ShapeRole.TIP], _CODES[ShapeRole.BODY]
 ZMP_EVERY = 10  # samples between two ZMP margins (50 Hz at the default rate: the polygon's hull costs)
 
 
@@ -74,7 +76,7 @@ class Monitor:
         )
         (x0, x1), (y0, y1) = foot
         self._corners = np.array([[x, y, 0.0] for x in (x0, x1) for y in (y0, y1)])  # (4, 3) in a sole frame
-        self._roles = np.array([s.role.value for s in layout.shapes])
+        self._role_codes = np.array([_CODES[s.role] for s in layout.shapes])
         self._tip_chain = [s.chain for s in layout.shapes]
         self._effort = layout.effort
         self._last_touch: dict[tuple[str, str], float] = {}
@@ -105,21 +107,21 @@ class Monitor:
     def _contacts(self, data: mujoco.MjData, index: int, time_s: float) -> None:
         for chain in self.truth.contact_force:
             self.truth.contact_force[chain][index] = 0.0
-        for k in range(data.ncon):
-            contact = data.contact[k]
-            pair = (int(contact.geom[0]), int(contact.geom[1]))
-            roles = [self._roles[g] for g in pair]
-            if ShapeRole.TIP.value in roles:
-                tip = pair[roles.index(ShapeRole.TIP.value)]
-                mujoco.mj_contactForce(self.model, data, k, self._wrench)
-                self.truth.contact_force[self._tip_chain[tip]][index] += abs(self._wrench[0])
-            elif ShapeRole.BODY.value in roles:
-                body = pair[roles.index(ShapeRole.BODY.value)]
-                other = pair[1 - roles.index(ShapeRole.BODY.value)]
-                link, obstacle = self.layout.shapes[body].link, self.layout.shapes[other].name
-                if time_s - self._last_touch.get((link, obstacle), -np.inf) > 0.1:  # one report per episode
-                    self.truth.touches.append(Touch(time_s, link, obstacle, float(-contact.dist)))
-                self._last_touch[(link, obstacle)] = time_s
+        if not data.ncon:
+            return
+        pairs = data.contact.geom[: data.ncon]  # (ncon, 2)
+        roles = self._role_codes[pairs]  # (ncon, 2)
+        for k in np.flatnonzero((roles == _TIP).any(axis=1)):
+            tip = pairs[k][int(roles[k][1] == _TIP)]
+            mujoco.mj_contactForce(self.model, data, int(k), self._wrench)
+            self.truth.contact_force[self._tip_chain[tip]][index] += abs(self._wrench[0])
+        for k in np.flatnonzero((roles == _BODY).any(axis=1)):
+            side = int(roles[k][1] == _BODY)
+            body, other = int(pairs[k][side]), int(pairs[k][1 - side])
+            link, obstacle = self.layout.shapes[body].link, self.layout.shapes[other].name
+            if time_s - self._last_touch.get((link, obstacle), -np.inf) > 0.1:  # one report per episode
+                self.truth.touches.append(Touch(time_s, link, obstacle, float(-data.contact.dist[k])))
+            self._last_touch[(link, obstacle)] = time_s
 
     def record(self, data: mujoco.MjData, index: int, time_s: float) -> None:
         """Record sample ``index`` from the simulator's current state."""

@@ -57,11 +57,11 @@ class JointOffsets:
             return np.asarray(
                 np.linalg.solve(jacobian.T @ jacobian + DAMPING * np.eye(len(joints)), jacobian.T @ twist)
             )
-        inverse = jacobian.T @ np.linalg.inv(jacobian @ jacobian.T + DAMPING * np.eye(6))  # (n, 6)
+        gram = jacobian @ jacobian.T + DAMPING * np.eye(6)
         if not decay:
-            return np.asarray(inverse @ twist)
-        current = self.dq[joints]
-        return np.asarray(inverse @ twist - (current - inverse @ (jacobian @ current)) / NULL_DECAY_S)
+            return np.asarray(jacobian.T @ np.linalg.solve(gram, twist))
+        decaying = self.dq[joints] / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
+        return np.asarray(jacobian.T @ np.linalg.solve(gram, twist + jacobian @ decaying) - decaying)
 
     def step(
         self, soles: list[FloatArray], hands: dict[str, FloatArray], dt_s: float, decay: bool = True

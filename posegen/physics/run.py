@@ -44,6 +44,7 @@ from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene
 
 FALL_M = 0.2  # the base this far below its planned height: fallen
+FEED_FORWARD_EVERY = 5  # control periods between two computations of the static feed-forward
 LAGGING_RAD = 1.5 * SATURATION_RAD  # a joint this far from its command is held back by its effort limit
 PROGRESS_S = 1.0  # robot time between progress reports
 
@@ -101,6 +102,7 @@ class Run:
         self.encoders = np.zeros((samples, len(scene.joint_names)))
         self.wrists = {c: np.zeros((samples, 6)) for c in self.layout.wrists}
         self.route_index = np.zeros(samples, dtype=np.int64)
+        self._torque: FloatArray = np.zeros(len(scene.joint_names))
 
     def _control(self, sample: int, index: int) -> None:
         """Read the sensors of ``sample``, record them, and set the joint loops' commands at the plan's ``index``."""
@@ -125,7 +127,9 @@ class Run:
         feet = self.stabilizer.step(soles, self.hands.wrenches, attitude, plan.com[index], self.period_s)
         offset = self.offsets.step(feet, hands, self.period_s, decay=not self.hands.in_contact(t_route))
         target = np.clip(plan.positions[index] + offset, self.scene.lower, self.scene.upper)
-        torque = self.robot.static_torques({})
+        if sample % FEED_FORWARD_EVERY == 0:  # the posture's statics change slowly
+            self._torque = self.robot.static_torques({})
+        torque = self._torque
         gains = self.gains
         data.ctrl[self.layout.actuator] = target + (torque + gains.kd * plan.velocities[index]) / gains.kp
 
