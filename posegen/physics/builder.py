@@ -39,6 +39,8 @@ TIMESTEP_S = 0.002
 NOSLIP_ITERATIONS = 5  # MuJoCo's soft friction lets a loaded sole creep (0.1 mm/s); its noslip pass stops it
 SPRING_DAMPING_S = 0.02  # a compliant joint's damping = stiffness x this (structural damping of the drive)
 SPRING_ARMATURE = 1e-3  # kg m^2 on a spring joint (numerical: keeps its dof from being massless)
+MIN_INERTIA = 1e-6  # kg m^2: the least principal inertia MuJoCo is given
+SPECK_KG = 1e-6  # the mass a massless moving link is given
 FT_SITE = "ft:{}"  # a chain's wrist sensor site, and its sensors (force, torque)
 SOLE_SITE = "sole_ft:{}"
 
@@ -83,9 +85,57 @@ class Built:
     layout: Layout
 
 
+def _positive_inertias(root: ET.Element) -> None:
+    """Make every link's inertia positive definite (eigenvalues at least ``MIN_INERTIA``), as MuJoCo requires.
+
+    Some descriptions carry a singular inertia on a light link (iCub's base); pinocchio
+    accepts it, MuJoCo does not. Masses and centres of mass are left as they are.
+    """
+    for inertia in root.iter("inertia"):
+        names = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+        xx, xy, xz, yy, yz, zz = (float(inertia.get(n, "0")) for n in names)
+        matrix = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+        values, vectors = np.linalg.eigh(matrix)
+        if values.min() >= MIN_INERTIA:
+            continue
+        fixed = vectors @ np.diag(np.maximum(values, MIN_INERTIA)) @ vectors.T
+        for name, (i, j) in zip(names, ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)), strict=True):
+            inertia.set(name, repr(float(fixed[i, j])))
+
+
+def _weighted_moving_links(root: ET.Element) -> None:
+    """Give a massless link that a moving joint moves a speck of mass (``SPECK_KG``), as MuJoCo requires.
+
+    (A link lighter than the speck is given the speck instead.)
+
+    A description may split a ball joint into three hinges through massless links (the
+    drafted human); the joints' rotor inertia carries their dynamics.
+    """
+    moving = {
+        str(child.get("link"))
+        for joint in root.findall("joint")
+        if joint.get("type") in ("revolute", "continuous", "prismatic") and (child := joint.find("child")) is not None
+    }
+    speck = repr(SPECK_KG * 1e-4)
+    for link in root.findall("link"):
+        if link.get("name") not in moving:
+            continue
+        inertial = link.find("inertial")
+        mass = None if inertial is None else inertial.find("mass")
+        if mass is not None and float(mass.get("value", "0")) >= SPECK_KG:
+            continue
+        if inertial is not None:
+            link.remove(inertial)
+        inertial = ET.SubElement(link, "inertial")
+        ET.SubElement(inertial, "mass", value=repr(SPECK_KG))
+        ET.SubElement(inertial, "inertia", ixx=speck, ixy="0", ixz="0", iyy=speck, iyz="0", izz=speck)
+
+
 def _mjcf_urdf(urdf_text: str) -> str:
     """The URDF without visual and collision elements (the geoms are added from posegen's shapes), for MuJoCo."""
     root = ET.fromstring(kinematic_urdf(urdf_text))
+    _positive_inertias(root)
+    _weighted_moving_links(root)
     extension = ET.SubElement(root, "mujoco")
     ET.SubElement(
         extension,

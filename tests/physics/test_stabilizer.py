@@ -26,7 +26,7 @@ def standing_plan(scene: Scene, seconds: float, period_s: float = 0.002) -> Plan
     data = scene.model.createData()
     com = pin.centerOfMass(scene.model, data, q)[:2]
     pin.framesForwardKinematics(scene.model, data, q)
-    hands = {c.name: data.oMf[scene.frame_id(c.contact_frame)].homogeneous for c in scene.chains}
+    hands = {c.name: data.oMf[scene.frame_id(c.frame(c.contact_kind))].homogeneous for c in scene.chains}
     return Plan(
         np.arange(count) * period_s,
         0.0,
