@@ -3,9 +3,10 @@
 The stabilizer asks each sole, and the contact controllers each hand, to move relative
 to the base by a twist; the offset ``dq`` (nj,) rad added to the planned angles is
 integrated from them on the nominal model's Jacobians at the encoders' angles: a sole's
-twist by its leg's joints (from the sole up to the joint both legs hang from), a hand's
-by its arm's own joints (its chain's, less the legs' and those another chain shares:
-the torso stays as planned). Locked joints never move.
+twist by its leg's joints (from the sole up to the joint both legs hang from), both
+hands' together by the upper body's joints (every chain's, less the legs': the torso and
+the arms; an arm alone, near the end of its reach, cannot move its hand along the table's
+normal). Locked joints never move.
 """
 
 from __future__ import annotations
@@ -31,6 +32,13 @@ def arm_joints(scene: Scene) -> dict[str, list[int]]:
     return out
 
 
+def upper_body(scene: Scene) -> list[int]:
+    """The joints that move the hands and not the soles: every chain's, less the legs' (torso and arms)."""
+    legs = set(scene.stance_leg_joints())
+    joints = {j for c in scene.chains for j in ChainModel(scene, c.name).joint_indices}
+    return sorted(j for j in joints - legs if not scene.locked[j])
+
+
 class JointOffsets:
     """Integrates the joint offset ``dq`` from the soles' and the hands' twists relative to the base.
 
@@ -45,19 +53,20 @@ class JointOffsets:
         self.dq = np.zeros(len(scene.joint_names))
         self.legs = [[j for j in scene.leg_joints(s) if not scene.locked[j]] for s in scene.stance.sole_frames]
         self.arms = arm_joints(scene)
+        self.upper = upper_body(scene)
 
-    def _solve(self, frame: int, joints: list[int], twist: FloatArray, decay: bool = True) -> FloatArray:
-        """Joint rates (len(joints),) that move a frame by ``twist`` (6,) relative to the base.
+    def _solve(self, frames: list[int], joints: list[int], twist: FloatArray, decay: bool = True) -> FloatArray:
+        """Joint rates (len(joints),) that move frames by ``twist`` (6 per frame,) relative to the base.
 
         Damped least squares; a redundant chain's offset that moves no task decays toward zero
         (its self-motion would otherwise drift).
         """
-        jacobian = self.robot.frame_jacobian(frame)[:, 6 + np.asarray(joints)]  # (6, n)
-        if jacobian.shape[1] < 6:
-            return np.asarray(
-                np.linalg.solve(jacobian.T @ jacobian + DAMPING * np.eye(len(joints)), jacobian.T @ twist)
-            )
-        gram = jacobian @ jacobian.T + DAMPING * np.eye(6)
+        jacobian = np.vstack([self.robot.frame_jacobian(f)[:, 6 + np.asarray(joints)] for f in frames])  # (6k, n)
+        rows = jacobian.shape[0]
+        if jacobian.shape[1] < rows:
+            gram = jacobian.T @ jacobian + DAMPING * np.eye(len(joints))
+            return np.asarray(np.linalg.solve(gram, jacobian.T @ twist))
+        gram = jacobian @ jacobian.T + DAMPING * np.eye(rows)
         if not decay:
             return np.asarray(jacobian.T @ np.linalg.solve(gram, twist))
         decaying = self.dq[joints] / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
@@ -82,9 +91,9 @@ class JointOffsets:
         robot = self.robot
         for frame, leg, twist in zip(robot.soles, self.legs, soles, strict=True):
             if np.any(twist):
-                self.dq[leg] += dt_s * self._solve(frame, leg, twist)
-        for chain, twist in hands.items():
-            arm = self.arms[chain]
-            if np.any(twist) or (decay and np.any(self.dq[arm])):
-                self.dq[arm] += dt_s * self._solve(robot.contact_frames[chain], arm, twist, decay)
+                self.dq[leg] += dt_s * self._solve([frame], leg, twist)
+        twist = np.concatenate([hands[chain] for chain in self.arms])
+        if np.any(twist) or (decay and np.any(self.dq[self.upper])):
+            frames = [robot.contact_frames[chain] for chain in self.arms]
+            self.dq[self.upper] += dt_s * self._solve(frames, self.upper, twist, decay)
         return self.dq
