@@ -24,9 +24,9 @@ from posegen.calibrate.contact_windows import (
     Window,
     find_windows,
     match_windows,
-    wrist_force,
 )
 from posegen.calibrate.simulated_recording import Motion, SensorSettings, route_motion, simulate_recording
+from posegen.calibrate.tool_gravity import ToolGravity, wrist_forces
 from posegen.calibrate.workflow import check_compliance, contact_noise_record, perturbation_of, truth_record
 from posegen.errors import ArgumentError, InputError, unknown_name
 from posegen.io import (
@@ -69,6 +69,7 @@ class Measured:
     rejected: tuple[Rejection, ...]
     wrench_topics: dict[str, str]  # chain -> topic ({} when measured on joint speed alone)
     duration_s: float  # of the joint states
+    tools: tuple[ToolGravity, ...] = ()  # per wrist: the tool's weight removed from its readings
 
 
 def _sha256(path: str | Path) -> str:
@@ -280,14 +281,17 @@ def measure_bag(
     with claim_output(output):
         joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
         columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
-        forces = None
-        if use_wrench:
-            pairs = zip(topics, wrenches, strict=True)
-            forces = {c: wrist_force(joints.times_s, w.times_s, w.forces) for c, w in pairs}
+        base = np.where(scene.locked, scene.locked_values, scene.reference)
         settings = scene.config.recording
+        forces: dict[str, FloatArray] | None = None
+        tools: tuple[ToolGravity, ...] = ()
+        if use_wrench:
+            angles = np.repeat(base[None, :], len(joints.times_s), axis=0)  # (n, nj) in the robot order
+            angles[:, columns] = joints.positions
+            by_chain = dict(zip(topics, wrenches, strict=True))
+            forces, tools = wrist_forces(scene, joints.times_s, angles, by_chain, settings.force_threshold_n)
         windows, rejected = find_windows(joints.times_s, joints.positions, forces, settings)
         duration = float(joints.times_s[-1] - joints.times_s[0])
-        base = np.where(scene.locked, scene.locked_values, scene.reference)
         if planned_motion is not None:
             planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
             heights = None if use_wrench else _heights(scene, windows, planned_motion, columns, base)
@@ -313,13 +317,24 @@ def measure_bag(
             "route_sha256": _sha256(route_path) if route_path else None,
             "joint_states": {"samples": len(joints.times_s), "duration_s": duration},
             "joints_not_recorded": absent,
+            "tool_gravity": {tool.chain: _tool_fields(tool) for tool in tools},
         }
         data = measurements_to_dict(scene, contacts, prov)
         for entry, window in zip(data["contacts"], accepted, strict=True):
             entry.update(_window_fields(window))
         data["rejected"] = [{"start_s": r.start_s, "end_s": r.end_s, "reason": r.reason} for r in rejected]
         write_yaml(output, data)
-        return Measured(Path(output), tuple(accepted), tuple(rejected), topics, duration)
+        return Measured(Path(output), tuple(accepted), tuple(rejected), topics, duration, tools)
+
+
+def _tool_fields(tool: ToolGravity) -> dict[str, Any]:
+    return {
+        "fitted": tool.fitted,
+        "mass_kg": round(tool.mass_kg, 4),
+        "com_distance_m": round(tool.com_distance_m, 4),
+        "free_fraction": round(tool.free_fraction, 4),
+        "note": tool.note,
+    }
 
 
 def _window_fields(window: Window) -> dict[str, Any]:

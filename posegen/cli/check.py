@@ -58,4 +58,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {status} {worst.invariant.value:<13} violations {worst.violations:>4}  ({worst.detail})")
         for example in worst.examples[1:] if worst.examples[:1] == (worst.detail,) else worst.examples:
             print(f"         {example}")
+    if result.efforts:
+        print("  worst holding torque per joint (x its effort limit):")
+        for effort in sorted(result.efforts, key=lambda e: -e.ratio):
+            print(
+                f"    {effort.joint:<24} {effort.ratio:6.3f}  ({effort.torque_nm:7.2f} of {effort.limit_nm:g} N m, "
+                f"point {effort.point})"
+            )
     return 0 if result.ok else EXIT_VIOLATIONS

@@ -43,6 +43,8 @@ def run(args: argparse.Namespace) -> int:
         f"measure: {len(measured.windows)} contacts in {measured.duration_s:.1f} s ({source}), "
         f"{len(measured.rejected)} windows left out -> {measured.output}"
     )
+    for tool in measured.tools:
+        print(f"  {tool.chain} wrist: {tool.note}")
     for rejected in measured.rejected:
         print(f"  left out {rejected.start_s:.2f}-{rejected.end_s:.2f} s: {rejected.reason}")
     return 0

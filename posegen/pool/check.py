@@ -19,7 +19,17 @@ from posegen.errors import BackendError
 from posegen.io import Posture
 from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
-from posegen.robot import CollisionChecker, Config, Invariant, Scene, Verification, WorstSoFar, assess
+from posegen.robot import (
+    Assessment,
+    CollisionChecker,
+    Config,
+    Invariant,
+    Scene,
+    Statics,
+    Verification,
+    WorstSoFar,
+    assess,
+)
 
 CHUNK = 16  # postures per unit of work
 Measured = tuple[dict[Invariant, float], dict[Invariant, str]]  # excess and what was measured, per invariant
@@ -36,19 +46,34 @@ def _checker(config: Config, model_sha256: str) -> tuple[Scene, CollisionChecker
     return scene, CollisionChecker(scene, convex=False)
 
 
+def torque_detail(scene: Scene, found: Assessment) -> str:
+    """The worst holding torque of a posture, as a short text."""
+    if not found.effort_joint:
+        return "no effort limit in the URDF: torques not checked"
+    force = scene.route.contact_force_n
+    return (
+        f"holding torque {found.effort_ratio:.3f} x the effort limit at {found.effort_joint} "
+        f"(hand unloaded and pressing {force:g} N)"
+    )
+
+
 def _measure(state: tuple[Scene, CollisionChecker], postures: Sequence[Posture]) -> list[Measured]:
     scene, meshes = state
+    statics = Statics(scene)
     margin = scene.margins.collision_m
     out = []
     for posture in postures:
         joints = np.array(posture.joints, dtype=float)
-        found = assess(scene, None, joints, posture.chain)
+        found = assess(scene, None, joints, posture.chain, statics)
         excess = found.excess(scene)
         details = {
             Invariant.SOLE: f"sole {found.sole_position_error_m:.2e} m, {found.sole_angle_error_rad:.2e} rad",
             Invariant.CONTACT: found.contact_detail(),
             Invariant.COM: f"CoM margin {found.com_margin_m:.4f} m",
             Invariant.JOINT_LIMITS: f"joint-limit margin {found.joint_limit_margin_rad:.4f} rad",
+            Invariant.ZMP: f"centre of pressure {found.pressed_zmp_margin_m:.4f} m inside, the hand pressing "
+            f"{scene.route.contact_force_n:g} N",
+            Invariant.TORQUE: torque_detail(scene, found),
         }
         hits = meshes.colliding_pairs(scene.configuration(joints), posture.chain, margin)
         if hits:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posegen.io import Posture
-from posegen.robot import CollisionChecker, FloatArray, Invariant, Projector, Scene, Spot, assess
+from posegen.robot import CollisionChecker, FloatArray, Invariant, Projector, Scene, Spot, Statics, assess
 
 
 class Rejection(str, enum.Enum):
@@ -28,6 +28,8 @@ class Rejection(str, enum.Enum):
     COM = "com"
     JOINT_LIMITS = "joint_limits"
     COLLISION = "collision"
+    ZMP = "zmp"
+    TORQUE = "torque"
 
 
 _INVARIANT_REJECTION = {
@@ -36,6 +38,8 @@ _INVARIANT_REJECTION = {
     Invariant.COM: Rejection.COM,
     Invariant.JOINT_LIMITS: Rejection.JOINT_LIMITS,
     Invariant.COLLISION: Rejection.COLLISION,
+    Invariant.ZMP: Rejection.ZMP,
+    Invariant.TORQUE: Rejection.TORQUE,
 }
 
 
@@ -55,7 +59,13 @@ class Draw:
 
 
 def draw(scene: Scene, seed: int, index: int) -> Draw:
-    """The random sample number ``index`` of ``seed``."""
+    """The random sample number ``index`` of ``seed``.
+
+    Every joint is drawn uniformly within its limits (less the margin), then the joints
+    idle at this contact (another arm, a head: :meth:`posegen.robot.Scene.idle_joints`)
+    are set to the reference posture: they carry no information on the chain, and an
+    arm held out at random costs balance, torque and collisions, here and on the route.
+    """
     rng = np.random.default_rng([seed, index])
     margin = scene.margins.joint_limit_rad
     joints = rng.uniform(scene.lower + margin, scene.upper - margin)
@@ -63,6 +73,8 @@ def draw(scene: Scene, seed: int, index: int) -> Draw:
     chain = chains[int(rng.integers(len(chains)))].name
     spots = [s for s in scene.spots if chain in s.chains]
     spot = spots[int(rng.integers(len(spots)))]
+    idle = scene.idle_joints(chain)
+    joints[idle] = scene.reference[idle]
     return Draw(joints=joints, chain=chain, spot=spot)
 
 
@@ -74,6 +86,7 @@ class PostureSampler:
         self.seed = seed
         self.projector = Projector(scene)
         self.checker = CollisionChecker(scene, convex=True)
+        self.statics = Statics(scene)
 
     def evaluate(self, index: int) -> Posture | Rejection:
         """Turn sample ``index`` into a feasible posture, or say why it is not one."""
@@ -82,7 +95,7 @@ class PostureSampler:
         result = self.projector.project(sample.joints, sample.chain, scene.spot_world(sample.spot))
         if not result.converged:
             return Rejection.NOT_CONVERGED
-        found = assess(scene, None, result.joints, sample.chain)  # kinematics first: cheap
+        found = assess(scene, None, result.joints, sample.chain, self.statics)  # kinematics first: cheap
         violations = found.violations(scene)
         if violations:
             return _INVARIANT_REJECTION[next(k for k in Invariant if k in violations)]

@@ -10,6 +10,14 @@ Internal: scripts use the public API at ``posegen.`` (stable, documented with ex
 names here are its plumbing and may change between versions.
 """
 
+from posegen.robot.balance import (
+    Balance,
+    FloorWrenches,
+    centres_of_pressure,
+    pressed_zmp_margin,
+    stretch_for_margin,
+    zmp_margins,
+)
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
@@ -60,7 +68,16 @@ from posegen.robot.geometry import (
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for, scene_for_postures
 from posegen.robot.stance_space import StanceSpace
-from posegen.robot.statics import MOMENT_ARM_M, gravity_torques
+from posegen.robot.statics import (
+    MOMENT_ARM_M,
+    LinearTorques,
+    Statics,
+    effort_ratios,
+    gravity_torques,
+    holding_torques,
+    linear_torques,
+    worst_effort_ratio,
+)
 from posegen.robot.transforms import (
     offset_derivatives,
     offset_matrix,
@@ -73,7 +90,15 @@ from posegen.robot.transforms import (
     translation_matrix,
 )
 from posegen.robot.validation import check_for_planning
-from posegen.robot.verification import EXAMPLES, Verification, Worst, WorstSoFar, summarize, worst_case
+from posegen.robot.verification import (
+    EXAMPLES,
+    JointEffort,
+    Verification,
+    Worst,
+    WorstSoFar,
+    summarize,
+    worst_case,
+)
 
 __all__ = [
     "DEFAULT_KIND",
@@ -85,6 +110,7 @@ __all__ = [
     "SOLE_POSITION_TOL_M",
     "TABLE",
     "Assessment",
+    "Balance",
     "CalibrationConfig",
     "CandidateConfig",
     "ChainConfig",
@@ -93,9 +119,12 @@ __all__ = [
     "ContactKind",
     "Draft",
     "FloatArray",
+    "FloorWrenches",
     "GeometryCoverage",
     "Indices",
     "Invariant",
+    "JointEffort",
+    "LinearTorques",
     "MarginConfig",
     "PairSurvey",
     "PriorConfig",
@@ -111,20 +140,25 @@ __all__ = [
     "Spot",
     "StanceConfig",
     "StanceSpace",
+    "Statics",
     "TableConfig",
     "Verification",
     "Worst",
     "WorstSoFar",
     "assess",
+    "centres_of_pressure",
     "check_for_planning",
     "contact_in_table",
     "contact_placement",
     "convex_hull_clockwise",
+    "effort_ratios",
     "flatten_on_floor",
     "geometry_coverage",
     "gravity_torques",
+    "holding_torques",
     "kind_named",
     "kinematic_urdf",
+    "linear_torques",
     "load_config",
     "offset_derivatives",
     "offset_matrix",
@@ -133,12 +167,14 @@ __all__ = [
     "placement_derivatives",
     "placement_matrix",
     "polygon_margin",
+    "pressed_zmp_margin",
     "registered_kinds",
     "robot_geometry",
     "rpy_derivatives",
     "rpy_matrix",
     "scene_for",
     "scene_for_postures",
+    "stretch_for_margin",
     "summarize",
     "survey_config_pairs",
     "tilt_angles",
@@ -147,6 +183,8 @@ __all__ = [
     "translation_matrix",
     "with_declared_frames",
     "worst_case",
+    "worst_effort_ratio",
     "write_draft",
     "yaw_rotation",
+    "zmp_margins",
 ]

@@ -33,6 +33,14 @@ class ChainConfig:
     point_radius_m: float = 0.0  # the tip's rounding: its centre stays this far above the table
     point_cone_deg: float = 30.0  # largest tilt of the point frame's z from the table normal
     touching_links: tuple[str, ...] = ()  # links that may touch the table too at this chain's contact (fingers)
+    wrench_frame: str = ""  # the wrist force/torque sensor's frame, its wrench expressed in it ("": gripper_frame)
+    tool_mass_kg: float | None = None  # what the sensor carries (None: fitted from each recording by measure)
+    tool_com_m: tuple[float, float, float] | None = None  # its CoM in the sensor frame (with tool_mass_kg)
+
+    @property
+    def sensor_frame(self) -> str:
+        """The frame the wrist's force/torque sensor measures in (``wrench_frame``, else ``gripper_frame``)."""
+        return self.wrench_frame or self.gripper_frame
 
     def frame(self, kind: ContactKind) -> str:
         """The frame whose pose a contact of this kind constrains."""
@@ -51,6 +59,13 @@ CHAIN_DEFAULTS = {
     "point_cone_deg": 30.0,
     "touching_links": (),
 }
+
+
+def _point(ch: Reader, key: str) -> tuple[float, float, float] | None:
+    if ch.raw(key, None) is None:
+        return None
+    x, y, z = ch.numbers(key, 3)
+    return (x, y, z)
 
 
 def read_chain(ch: Reader, name: str) -> ChainConfig:
@@ -77,7 +92,12 @@ def read_chain(ch: Reader, name: str) -> ChainConfig:
         point_radius_m=ch.number("point_radius_m", 0.0, minimum=0.0),
         point_cone_deg=cone,
         touching_links=ch.texts("touching_links", []),
+        wrench_frame=ch.text("wrench_frame") if ch.raw("wrench_frame", "") else "",
+        tool_mass_kg=ch.number("tool_mass_kg", minimum=0.0) if ch.raw("tool_mass_kg", None) is not None else None,
+        tool_com_m=_point(ch, "tool_com_m"),
     )
+    if (chain.tool_mass_kg is None) != (chain.tool_com_m is None):
+        raise ConfigError(f"chains.{name}: give tool_mass_kg and tool_com_m together (or neither: measure fits them)")
     for each in registered_kinds():
         each.check(chain, planned=each == kind)
     return chain

@@ -28,6 +28,14 @@ from posegen.robot.additions import (
 from posegen.robot.calibration_config import CalibrationConfig, calibration_to_dict, parse_calibration
 from posegen.robot.chain_config import CHAIN_DEFAULTS, ChainConfig, read_chain
 from posegen.robot.config_reader import Reader
+from posegen.robot.config_sections import (
+    MarginConfig,
+    SamplingConfig,
+    TableConfig,
+    read_margins,
+    read_sampling,
+    read_table,
+)
 
 PACKAGE_URI = "package://"
 
@@ -61,37 +69,6 @@ class StanceConfig:
 
 
 @dataclass(frozen=True)
-class TableConfig:
-    """A flat table: box whose top face holds the contact spots."""
-
-    top_center_m: tuple[float, float, float]  # world position of the top face's centre
-    yaw_deg: float
-    size_m: tuple[float, float, float]  # length (x), width (y), thickness (z)
-    spots_x_m: tuple[float, ...]  # grid of target spots, table frame
-    spots_y_m: tuple[float, ...]
-    approach_standoff_m: float
-
-
-@dataclass(frozen=True)
-class MarginConfig:
-    """Safety margins of feasibility."""
-
-    com_m: float  # CoM ground projection inside the support polygon by at least this
-    collision_m: float  # minimum distance between bodies that must not touch
-    joint_limit_rad: float  # distance kept from every joint limit
-
-
-@dataclass(frozen=True)
-class SamplingConfig:
-    """Settings of the Gauss-Newton projection of random samples."""
-
-    soft_iterations: int  # iterations with every task soft
-    hard_iterations: int  # iterations with feet and contact hard
-    spot_tolerance_m: float  # accepted distance of the contact point from its target spot
-    chunk_size: int  # samples per unit of work (checkpointing and parallelism)
-
-
-@dataclass(frozen=True)
 class RouteConfig:
     """How the contact postures are visited."""
 
@@ -105,6 +82,7 @@ class RouteConfig:
     waypoint_step_rad: float = 0.02  # largest joint change between checked waypoints
     planning_checks: float = 4000  # OMPL budget per free motion, in state checks (repeatable, unlike seconds)
     return_to_start: bool = True  # end the route at the start posture
+    contact_force_n: float = 30.0  # normal force the force-controlled contact holds (torques, physics)
 
 
 @dataclass(frozen=True)
@@ -170,6 +148,11 @@ class Config:
                     del fields[key]  # a flush-only chain saves as before
             if not chain.touching_links:
                 del fields["touching_links"]
+            if not chain.wrench_frame:
+                del fields["wrench_frame"]
+            for key in ("tool_mass_kg", "tool_com_m"):
+                if fields[key] is None:
+                    del fields[key]
             chains[fields.pop("name")] = fields
         stance = dataclasses.asdict(self.stance)
         if not stance["reference_joints"]:
@@ -296,53 +279,6 @@ def read_chains(top: Reader) -> tuple[ChainConfig, ...]:
     if not isinstance(chains_raw, dict) or not chains_raw:
         raise ConfigError("chains: expected a mapping chain name -> chain settings")
     return tuple(read_chain(top.sub("chains").sub(str(name)), str(name)) for name in chains_raw)
-
-
-def read_table(tb: Reader, chains: tuple[ChainConfig, ...]) -> TableConfig:
-    """The ``table`` section: every spot on the table and served by a chain.
-
-    Raises:
-        ConfigError: A size not positive, a spot off the table or one no chain's ``spot_y_range_m`` covers.
-
-    """
-    size = tb.numbers("size_m", 3)
-    if min(size) <= 0:
-        raise ConfigError("table.size_m: every dimension must be positive")
-    top_center = tb.numbers("top_center_m", 3)
-    table = TableConfig(
-        top_center_m=(top_center[0], top_center[1], top_center[2]),
-        yaw_deg=tb.number("yaw_deg", 0.0),
-        size_m=(size[0], size[1], size[2]),
-        spots_x_m=tb.numbers("spots_x_m"),
-        spots_y_m=tb.numbers("spots_y_m"),
-        approach_standoff_m=tb.number("approach_standoff_m", minimum=0.0),
-    )
-    for value, half, axis in ((table.spots_x_m, size[0] / 2, "x"), (table.spots_y_m, size[1] / 2, "y")):
-        if any(abs(v) > half for v in value):
-            raise ConfigError(f"table.spots_{axis}_m: spots must lie on the table (|{axis}| <= {half} m)")
-    for spot_y in table.spots_y_m:
-        if not any(c.spot_y_range_m[0] <= spot_y <= c.spot_y_range_m[1] for c in chains):
-            raise ConfigError(f"table.spots_y_m: no chain's spot_y_range_m covers y = {spot_y} m")
-    return table
-
-
-def read_margins(mg: Reader) -> MarginConfig:
-    """The ``margins`` section (every margin >= 0)."""
-    return MarginConfig(
-        com_m=mg.number("com_m", minimum=0.0),
-        collision_m=mg.number("collision_m", minimum=0.0),
-        joint_limit_rad=mg.number("joint_limit_rad", minimum=0.0),
-    )
-
-
-def read_sampling(sp: Reader) -> SamplingConfig:
-    """The ``sampling`` section."""
-    return SamplingConfig(
-        soft_iterations=sp.integer("soft_iterations"),
-        hard_iterations=sp.integer("hard_iterations"),
-        spot_tolerance_m=sp.number("spot_tolerance_m", minimum=0.0),
-        chunk_size=sp.integer("chunk_size", maximum=10_000),
-    )
 
 
 def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:

@@ -43,7 +43,7 @@ from posegen.robot.draft_geometry import (
     skeleton,
     vertices,
 )
-from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, velocity_placeholders
+from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, missing_efforts, velocity_placeholders
 from posegen.robot.draft_source import DraftSource, load_draft_source
 from posegen.robot.draft_stance import Sole, floor_height, foot_box
 from posegen.robot.draft_table import Table, arm_length, place_table
@@ -127,6 +127,12 @@ def draft_robot(
     speeds, urdf_speed = velocity_placeholders(model, body.kept)
     if speeds:
         found += (f"{len(speeds)} joints have no plausible URDF velocity limit: placeholders of 1 rad/s",)
+    no_effort = missing_efforts(model, body.kept, set(body.locked))
+    if no_effort:
+        found += (
+            f"{len(no_effort)} joints have no URDF effort limit ({', '.join(no_effort[:3])}"
+            f"{', ...' if len(no_effort) > 3 else ''}): their holding torques are not checked (pool, route, check)",
+        )
     table, reach = table_for(model, data, geometry, body, chains[0])
     found += (f"the table is a guess from the arm's reach ({reach:.2f} m): put it where yours is",)
     soles = body.legs.soles

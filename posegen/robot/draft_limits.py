@@ -25,6 +25,16 @@ def velocity_placeholders(model: pin.Model, kept: set[int]) -> tuple[dict[str, f
     return speeds, urdf_speed
 
 
+def missing_efforts(model: pin.Model, kept: set[int], locked: set[str]) -> list[str]:
+    """The kept, unlocked 1-dof joints whose URDF gives no effort limit (0): their torques go unchecked."""
+    out = []
+    for j in sorted(kept - {1}):
+        name = str(model.names[j])
+        if model.joints[j].nq == 1 and name not in locked and not model.effortLimit[model.joints[j].idx_v] > 0:
+            out.append(name)
+    return out
+
+
 def limits(model: pin.Model, joint: int) -> tuple[float, float]:
     """A 1-dof joint's limits (rad)."""
     i = model.joints[joint].idx_q

@@ -12,16 +12,19 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from posegen.robot.balance import pressed_zmp_margin
 from posegen.robot.collision import CollisionChecker, Proximity
 from posegen.robot.contact_kinds import DEFAULT_KIND, ContactKind
 from posegen.robot.geometry import FloatArray, tilt_angles
 from posegen.robot.scene import Scene
+from posegen.robot.statics import Statics, worst_effort_ratio
 
 SOLE_POSITION_TOL_M = 1e-4
 SOLE_ANGLE_TOL_RAD = 1e-3
 CONTACT_HEIGHT_TOL_M = 1e-4
 CONTACT_ANGLE_TOL_RAD = 1e-3
 JOINT_LIMIT_TOL_RAD = 1e-9
+EFFORT_RATIO_TOL = 1e-6  # on the effort ratio: float32 storage of the angles moves a torque by ~1e-5 N m
 
 
 class Invariant(str, enum.Enum):
@@ -32,6 +35,8 @@ class Invariant(str, enum.Enum):
     COM = "com"  # CoM projection inside the support polygon with margin
     JOINT_LIMITS = "joint_limits"  # within the limits shrunk by the margin
     COLLISION = "collision"  # no pair closer than the collision margin
+    ZMP = "zmp"  # the soles' centre of pressure with the hand pressing the contact force, inside by margins.zmp_m
+    TORQUE = "torque"  # holding torques (hand unloaded and pressing) within the effort limits times the margin
 
 
 @dataclass(frozen=True)
@@ -51,10 +56,14 @@ class Assessment:
     contact_kind: ContactKind = DEFAULT_KIND
     contact_tilt_rad: float = 0.0  # angle between the contact frame's z and the table normal
     cone_rad: float = 0.0  # a point contact's largest tilt (not used by a flush one)
+    pressed_zmp_margin_m: float = np.inf  # signed: the centre of pressure, the hand pressing, inside the polygon
+    effort_ratio: float = 0.0  # largest holding torque / URDF effort limit (0: no joint has a limit)
+    effort_joint: str = ""  # the joint of that ratio
 
     def excess(self, scene: Scene) -> dict[Invariant, float]:
         """Each measured invariant's excess over its bound (> 0: violated), in its unit."""
         margins = scene.margins
+        torque = self.effort_ratio - margins.effort_ratio - EFFORT_RATIO_TOL if self.effort_joint else -1.0
         found = {
             Invariant.SOLE: max(
                 self.sole_position_error_m - SOLE_POSITION_TOL_M,
@@ -63,6 +72,8 @@ class Assessment:
             Invariant.CONTACT: self._contact_excess(),
             Invariant.COM: margins.com_m - self.com_margin_m,
             Invariant.JOINT_LIMITS: margins.joint_limit_rad - self.joint_limit_margin_rad - JOINT_LIMIT_TOL_RAD,
+            Invariant.ZMP: margins.zmp_m - self.pressed_zmp_margin_m,
+            Invariant.TORQUE: torque,
         }
         if self.closest is not None:
             found[Invariant.COLLISION] = margins.collision_m - self.closest.distance_m
@@ -90,7 +101,9 @@ def contact_in_table(scene: Scene, data: pin.Data, chain: str) -> pin.SE3:
     return pin.SE3(scene.table_pose).actInv(data.oMf[frame])
 
 
-def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, chain: str) -> Assessment:
+def assess(
+    scene: Scene, checker: CollisionChecker | None, joints: FloatArray, chain: str, statics: Statics | None = None
+) -> Assessment:
     """Measure every invariant of a posture whose ``chain`` touches the table.
 
     Args:
@@ -98,6 +111,7 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
         checker: Collision checker measuring the closest pair; None to skip collisions.
         joints: Actuated joint angles (rad), shape (nj,).
         chain: Name of the chain in contact.
+        statics: A statics workspace to reuse for the holding torques (one is made if None).
 
     """
     q = scene.configuration(joints)
@@ -112,6 +126,10 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
     roll, pitch = tilt_angles(contact.rotation)
     limit_margin = float(scene.limit_margin(joints))  # locked joints may sit on a limit: not counted
     closest = checker.closest(q, chain) if checker is not None else None
+    ratio, joint = worst_effort_ratio(scene, joints, chain, statics)
+    com_margin = scene.com_margin(q, data)  # data.com[0], data.mass[0] hold the CoM and the mass
+    hand = data.oMf[scene.frame_id(config.frame(config.contact_kind))].translation
+    pressed = pressed_zmp_margin(scene, data.com[0], float(data.mass[0]), hand, scene.route.contact_force_n)
     return Assessment(
         sole_position_error_m=float(np.linalg.norm(sole_error.translation)),
         sole_angle_error_rad=float(np.linalg.norm(pin.log3(sole_error.rotation))),
@@ -120,10 +138,13 @@ def assess(scene: Scene, checker: CollisionChecker | None, joints: FloatArray, c
         contact_pitch_rad=pitch,
         contact_xy_table_m=(float(contact.translation[0]), float(contact.translation[1])),
         contact_yaw_rad=float(np.arctan2(contact.rotation[1, 0], contact.rotation[0, 0])),
-        com_margin_m=scene.com_margin(q, data),
+        com_margin_m=com_margin,
         joint_limit_margin_rad=limit_margin,
         closest=closest,
         contact_kind=config.contact_kind,
         contact_tilt_rad=float(np.arccos(np.clip(contact.rotation[2, 2], -1.0, 1.0))),
         cone_rad=float(np.deg2rad(config.point_cone_deg)),
+        pressed_zmp_margin_m=pressed,
+        effort_ratio=ratio,
+        effort_joint=scene.joint_names[joint] if joint >= 0 else "",
     )

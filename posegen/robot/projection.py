@@ -1,7 +1,10 @@
 """Gauss-Newton projection of a joint sample onto balanced table contact (placo).
 
 The problem: both soles at their fixed poses, the CoM ground projection inside the
-support polygon with margin, one chain's contact on the table near a target spot (flush:
+support polygon with margin, the joint torques that hold the posture within the effort
+limits (with the hand unloaded and pressing the contact force: linearised at every
+iteration, :mod:`posegen.robot.statics`, for the joints near their limit), one chain's
+contact on the table near a target spot (flush:
 the contact frame's height, roll, pitch zero, yaw free; point: the tip's centre at its
 radius above the table, its tilt only weakly pulled upright and checked against a cone
 afterwards), joint limits shrunk by a margin, and the sample itself as a weak posture
@@ -22,6 +25,7 @@ import placo
 from posegen.robot.description import kinematic_urdf
 from posegen.robot.geometry import FloatArray
 from posegen.robot.scene import Scene
+from posegen.robot.statics import Statics
 
 FOOT_WEIGHT = 100.0
 CONTACT_WEIGHT = 100.0
@@ -35,6 +39,10 @@ CONVERGED_M = 2e-6  # equality errors below this end the hard phase
 CONVERGED_RAD = 2e-5
 COM_BUFFER_M = 1e-3  # solved inside the configured margin, so the re-check has slack
 LIMIT_BUFFER_RAD = 1e-4
+PRESSED_BUFFER_M = 1e-3  # the pressed centre of pressure solved this much inside its margin
+TORQUE_ACTIVE = 0.7  # a joint's torque above this fraction of its allowed torque is constrained
+TORQUE_BUFFER = 0.005  # solved this fraction of the effort limit inside the allowed ratio
+TORQUE_WEIGHT = 1.0  # the torque rows in the soft phase (N m)
 CYCLE_TOLERANCE = 1e-2  # relative: errors repeating this closely with period 1 or 2 never converge
 
 
@@ -74,6 +82,11 @@ class _ChainProblem:
         self.lift_m = self.kind.lift_m(config)  # e.g. a point contact's tip centre
         com = self.solver.add_com_polygon_constraint(scene.support_polygon, scene.margins.com_m + COM_BUFFER_M)
         com.configure("com", "hard", 1.0)
+        self.pressed = self.solver.add_com_polygon_constraint(scene.support_polygon, 0.0)  # set per iteration
+        self.pressed.configure("pressed", "hard", 1.0)
+        self.torque = self.solver.add_joint_space_half_spaces_constraint(
+            np.zeros((1, robot.model.nq)), np.ones(1)
+        )  # A q <= b, rows set at every iteration (see Projector._limit_torques)
         self.posture = self.solver.add_joints_task()
         self.posture.configure("posture", "soft", POSTURE_WEIGHT)
         self.solver.add_regularization_task(REGULARIZATION)
@@ -81,6 +94,7 @@ class _ChainProblem:
 
     def harden(self, hard: bool) -> None:
         mode = "hard" if hard else "soft"
+        self.torque.configure("torque", mode, TORQUE_WEIGHT)
         for k, task in enumerate(self.feet):
             task.configure(f"foot_{k}", mode, FOOT_WEIGHT)
         self.height.configure("height", mode, CONTACT_WEIGHT)
@@ -101,6 +115,13 @@ class Projector:
         self._problems = {c.name: _ChainProblem(self.robot, scene, c.name) for c in scene.chains}
         self._soles = [(frame, pose[:3, 3].tolist(), pose[:3, :3].tolist()) for frame, pose in scene.sole_poses.items()]
         self._normal = scene.table_pose[:3, 2].tolist()
+        self._statics = Statics(scene)
+        weight = float(np.linalg.norm(scene.model.gravity.linear)) * sum(i.mass for i in scene.model.inertias)
+        self._pressing_share = scene.route.contact_force_n / weight  # of the weight the table carries (vertical)
+        allowed = (scene.margins.effort_ratio - TORQUE_BUFFER) * scene.effort_limit  # (nj,) N m, nan: no limit
+        self._allowed = np.where(scene.locked, np.nan, allowed)  # a locked joint does not move here
+        self._nq = scene.model.nq
+        self._joint_q = scene.velocity_indices() + 1  # (nj,) 1-dof joints: q index = v index + 1 (free flyer 7 vs 6)
 
     def _set_joints(self, joints: FloatArray) -> None:
         for name, value in zip(self.scene.joint_names, joints, strict=True):
@@ -160,6 +181,8 @@ class Projector:
             problem.harden(hard)
             errors: list[tuple[float, float]] = []
             for _ in range(budget):
+                self._limit_torques(problem, chain, hard)
+                self._press(problem)
                 try:
                     problem.solver.solve(True)
                 except RuntimeError:
@@ -175,6 +198,46 @@ class Projector:
                 if _cycling(errors):
                     return Projection(self._joints(), False, iterations)
         return Projection(self._joints(), False, iterations)
+
+    def _press(self, problem: _ChainProblem) -> None:
+        """The CoM's polygon that keeps the centre of pressure inside by ``margins.zmp_m`` with the hand pressing.
+
+        A vertical force ``F`` on the hand at ``h`` moves the soles' centre of pressure
+        from the CoM ``c`` to ``(c - a h) / (1 - a)``, ``a = F / (m g)``: it is inside the
+        polygon ``P`` by ``d`` exactly when ``c`` is inside ``a h + (1 - a) P`` by ``(1 - a) d``.
+        """
+        share = self._pressing_share
+        hand = np.array(self.robot.get_T_world_frame(problem.contact))[:2, 3]
+        problem.pressed.polygon = share * hand[None, :] + (1.0 - share) * self.scene.support_polygon
+        problem.pressed.margin = (1.0 - share) * (self.scene.margins.zmp_m + PRESSED_BUFFER_M)
+
+    def _limit_torques(self, problem: _ChainProblem, chain: str, hard: bool) -> None:
+        """Linearise the holding torques near their limits (unloaded and pressing) as rows of ``A q <= b``."""
+        if not hard:
+            problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
+            return
+        joints = self._joints()
+        force = self.scene.route.contact_force_n
+        rows: list[FloatArray] = []
+        bounds: list[float] = []
+        allowed = self._allowed
+        for load in (None, chain):
+            torques = self._statics.torques(joints, load, force)
+            with np.errstate(invalid="ignore"):
+                active = np.flatnonzero(np.abs(torques) > TORQUE_ACTIVE * allowed)  # nan: never
+            if not len(active):
+                continue
+            linear = self._statics.linear(joints, load, force)
+            for j in active:
+                sign = float(np.sign(torques[j]))
+                row = np.zeros(self._nq)
+                row[self._joint_q] = sign * linear.jacobian[j]
+                rows.append(row)
+                bounds.append(float(allowed[j] - sign * torques[j] + sign * linear.jacobian[j] @ joints))
+        if rows:
+            problem.torque.A, problem.torque.b = np.array(rows), np.array(bounds)
+        else:
+            problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
 
     def _joints(self) -> FloatArray:
         return np.array([self.robot.get_joint(n) for n in self.scene.joint_names])

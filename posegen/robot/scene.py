@@ -47,6 +47,7 @@ class Scene:
         joint_names: The actuated (1-dof) joints, in model order.
         lower, upper: Joint limits (rad), shape (nj,).
         velocity_limit: Joint velocity limits (rad/s), shape (nj,).
+        effort_limit: The URDF's joint effort limits (N m), shape (nj,); nan where it gives none.
         reference: The reference posture's joint angles (rad), shape (nj,).
         sole_poses: World pose of each sole, shape (4, 4) each.
         support_polygon: Clockwise support polygon in the floor plane (m), shape (h, 2).
@@ -82,6 +83,7 @@ class Scene:
         self.joint_names = joints.names
         self._q_index, self._v_index = joints.q_index, joints.v_index
         self.lower, self.upper, self.velocity_limit = joints.lower, joints.upper, joints.velocity_limit
+        self.effort_limit = joints.effort_limit  # (nj,) N m, nan where the URDF gives none
         self.locked, self.locked_values = joints.locked, joints.locked_values  # (nj,) held during sampling, rad
         self._data = self.model.createData()  # scratch space of configuration()
         self._closing: tuple[int, list[int], np.ndarray] | None = None  # see close_stance
@@ -240,6 +242,22 @@ class Scene:
             joint = self.model.parents[joint]
         return out
 
+    def moving_joints(self, frame: str) -> list[int]:
+        """Indices (in :attr:`joint_names`) of the actuated joints that move ``frame`` relative to the root."""
+        joint = self.model.frames[self.frame_id(frame)].parentJoint
+        out = []
+        while joint > 1:  # 0: the universe, 1: the floating base
+            if self.model.joints[joint].nq == 1:
+                out.append(self.joint_index(str(self.model.names[joint])))
+            joint = self.model.parents[joint]
+        return out
+
+    def idle_joints(self, chain: str) -> list[int]:
+        """Free joints that move neither ``chain``'s contact frame nor a sole (another arm, a head), sorted."""
+        config = self.chain(chain)
+        busy = set(self.moving_joints(config.frame(config.contact_kind))) | set(self.stance_leg_joints())
+        return [i for i in range(len(self.joint_names)) if i not in busy and not self.locked[i]]
+
     @cached_property
     def _stance_ancestors(self) -> frozenset[int]:
         """The joints both soles hang from (their common ancestors, the universe and the floating base included)."""
@@ -285,7 +303,7 @@ class Scene:
             if np.linalg.norm(error) < 1e-10:
                 return out
             jac = pin.getFrameJacobian(self.model, data, frame_id, pin.LOCAL)[:, columns]
-            out[leg] += np.linalg.lstsq(jac, error, rcond=None)[0]
+            out[leg] += _least_squares(jac, error)
             if np.any(out[leg] < self.lower[leg]) or np.any(out[leg] > self.upper[leg]):
                 return None
         return None
@@ -293,6 +311,16 @@ class Scene:
     def velocity_indices(self) -> IntArray:
         """Indices of the actuated joints in the velocity vector. Shape (nj,)."""
         return self._v_index.copy()
+
+
+def _least_squares(matrix: FloatArray, rhs: FloatArray) -> FloatArray:
+    """The least-squares solution of ``matrix x = rhs`` (a square one solved directly: 3x faster)."""
+    if matrix.shape[0] == matrix.shape[1]:
+        try:
+            return np.asarray(np.linalg.solve(matrix, rhs))
+        except np.linalg.LinAlgError:
+            pass
+    return np.asarray(np.linalg.lstsq(matrix, rhs, rcond=None)[0])
 
 
 def scene_for(recorded: dict[str, Any], config_path: str | None) -> Scene:

@@ -70,6 +70,7 @@ class Joints:
     locked: npt.NDArray[np.bool_]  # (nj,) held during sampling
     locked_values: FloatArray  # (nj,) rad, where locked (0 elsewhere)
     velocity_limit: FloatArray  # (nj,) rad/s
+    effort_limit: FloatArray  # (nj,) N m, the URDF's; nan where it gives none (0)
 
     def index(self, name: str, field: str) -> int:
         """Index of joint ``name``.
@@ -123,6 +124,7 @@ def check_names(model: pin.Model, config: Config) -> None:
             ("fingertip_frames", chain.fingertip_frames),
             ("point_frame", [chain.point_frame] if chain.point_frame else []),
             ("touching_links", chain.touching_links),
+            ("wrench_frame", [chain.wrench_frame] if chain.wrench_frame else []),
         ):
             for frame in frames:
                 _named_frame(model, frame, f"chains.{chain.name}.{field}")
@@ -171,7 +173,9 @@ def actuated_joints(model: pin.Model, config: Config) -> Joints:
         locked[i] = True
         locked_values[i] = value
     limit = velocity_limits(model.velocityLimit[v_index], names, locked, config.velocity_limits)
-    return Joints(names, q_index, v_index, lower, upper, locked, locked_values, limit)
+    effort = np.array(model.effortLimit[v_index], dtype=float)
+    effort[~(np.isfinite(effort) & (effort > 0))] = np.nan  # a URDF without an effort gives 0
+    return Joints(names, q_index, v_index, lower, upper, locked, locked_values, limit, effort)
 
 
 def velocity_limits(

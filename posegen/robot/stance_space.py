@@ -15,6 +15,7 @@ import numpy as np
 from posegen.robot.collision import CollisionChecker
 from posegen.robot.geometry import FloatArray
 from posegen.robot.scene import Scene
+from posegen.robot.statics import Statics
 
 
 class StanceSpace:
@@ -38,6 +39,9 @@ class StanceSpace:
         self.lower = scene.lower[self.coordinates] + margin
         self.upper = scene.upper[self.coordinates] - margin
         self._data = scene.model.createData()
+        self._statics = Statics(scene)
+        self._allowed = scene.margins.effort_ratio * scene.effort_limit  # (nj,) N m; nan: no limit
+        self._limited = np.isfinite(self._allowed)
 
     def coordinates_of(self, joints: FloatArray) -> FloatArray:
         """Planning coordinates of full joint angles. Shape (nc,)."""
@@ -54,8 +58,24 @@ class StanceSpace:
         joints[self.coordinates] = x
         return self.scene.close_stance(joints)
 
+    def holds(self, joints: FloatArray, pressing: str | None) -> bool:
+        """Whether every holding torque is within ``margins.effort_ratio`` of its effort limit.
+
+        Args:
+            joints: (nj,) rad.
+            pressing: The chain whose hand presses the table with ``route.contact_force_n``, or None.
+
+        """
+        if not np.any(self._limited):
+            return True
+        torques = self._statics.torques(joints, pressing, self.scene.route.contact_force_n)
+        return bool(np.all(np.abs(torques[self._limited]) <= self._allowed[self._limited]))
+
     def is_valid(self, joints: FloatArray, contact_chain: str | None, collision_margin_m: float | None = None) -> bool:
-        """Limits (with margin), CoM inside the polygon with margin, no collision with margin.
+        """Limits (with margin), CoM inside the polygon with margin, torques, no collision with margin.
+
+        The holding torques are those of the hand unloaded (a state the planner moves
+        through; a contact's go-to-contact is checked pressing, :meth:`holds_pressing`).
 
         Args:
             joints: (nj,) joint angles with both soles closed.
@@ -69,6 +89,8 @@ class StanceSpace:
             return False
         q = scene.configuration(joints)
         if scene.com_margin(q, self._data) < margins.com_m:
+            return False
+        if not self.holds(joints, None):
             return False
         margin = margins.collision_m if collision_margin_m is None else collision_margin_m
         return not self.checker.collides(q, contact_chain, margin)

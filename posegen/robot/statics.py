@@ -1,14 +1,25 @@
-"""Joint torques that hold a standing posture against gravity.
+"""Joint torques that hold a standing posture still: gravity, and the hand's contact force.
 
 With both soles on the floor the robot is a closed chain: the floor's wrenches on the
-two soles balance the weight (six equations) and the split between the feet is not
-determined by statics alone. posegen takes the split of least size (forces in N and
-moments in N m over a ``MOMENT_ARM_M`` lever weighed alike), the usual choice when
-nothing is known about the feet. The arm in contact is taken as unloaded: the
-force-controlled contact presses with a small force that is not recorded.
+two soles balance the weight and the hand's contact force (six equations), and the
+split between the feet is not determined by statics alone. posegen takes the split of
+least size (forces in N and moments in N m over a ``MOMENT_ARM_M`` lever weighed alike),
+the usual choice when nothing is known about the feet.
+
+Two loads are modelled:
+
+* :func:`gravity_torques`: the weight alone (the arm in contact unloaded), what the
+  compliance model of the calibration deflects the joints with;
+* :func:`holding_torques`: the weight and, where a chain's hand is in contact, the
+  table's normal reaction of ``force_n`` newtons on its contact frame (the force the
+  force-controlled contact holds, ``route.contact_force_n``): what the actuators must
+  hold, checked against the URDF's effort limits (:func:`effort_ratios`).
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -19,8 +30,126 @@ from posegen.robot.scene import Scene
 MOMENT_ARM_M = 0.1  # a moment of 1 N m weighs like a force of 10 N in the wrench split
 
 
+@dataclass(frozen=True)
+class LinearTorques:
+    """Holding torques of one posture and their derivative with the soles on the floor."""
+
+    torques: FloatArray  # (nj,) N m
+    jacobian: FloatArray  # (nj, nj) d torque / d joints, N m/rad (the floating base following the anchor sole)
+
+
+class Statics:
+    """The statics of a scene's robot standing on both soles (pinocchio workspace reused between postures).
+
+    Example:
+        >>> statics = Statics(scene)
+        >>> tau = statics.torques(scene.reference, "left", 30.0)  # (nj,) N m
+
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        self.model = scene.model
+        self.data = scene.model.createData()
+        self.soles = [scene.frame_id(frame) for frame in scene.stance.sole_frames]
+        self.weight = np.tile([1.0, 1.0, 1.0, MOMENT_ARM_M, MOMENT_ARM_M, MOMENT_ARM_M], len(self.soles))
+        self.normal = np.array(scene.table_pose, dtype=float)[:3, 2]  # the table's normal in the world
+        self.hands = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.config.chains}
+        self.velocity = scene.velocity_indices()
+        self.anchor = scene.frame_id(scene.anchor_sole)
+
+    def torques(self, joints: FloatArray, chain: str | None, force_n: float) -> FloatArray:
+        """Holding torques (nj,) N m of one posture (see :func:`holding_torques`)."""
+        q = self.scene.configuration(joints)
+        return self._wrenches(q, chain, force_n)[0][self.velocity]
+
+    def _wrenches(
+        self, q: FloatArray, chain: str | None, force_n: float
+    ) -> tuple[FloatArray, list[tuple[int, pin.Force]]]:
+        """Generalized torques (nv,) and the wrenches on the robot, (frame, wrench in its frame), hand first."""
+        model, data = self.model, self.data
+        load = pin.computeGeneralizedGravity(model, data, q)  # (nv,) generalized forces the torques balance
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        wrenches: list[tuple[int, pin.Force]] = []
+        if chain is not None and force_n != 0.0:
+            hand = self.hands[chain]
+            force = pin.Force(data.oMf[hand].rotation.T @ (force_n * self.normal), np.zeros(3))
+            wrenches.append((hand, force))  # the table pushes the hand along its normal
+            load = load - pin.getFrameJacobian(model, data, hand, pin.LOCAL).T @ force.vector
+        contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in self.soles])  # (6 k, nv)
+        split = contact[:, :6].T * self.weight[None, :]  # (6, 6 k) free-flyer rows, acting on the scaled wrenches
+        soles = _least_size(split, load[:6]) * self.weight  # least-size wrenches balancing the load
+        wrenches.extend((f, pin.Force(soles[6 * k : 6 * k + 6])) for k, f in enumerate(self.soles))
+        return load - contact.T @ soles, wrenches
+
+    def linear(self, joints: FloatArray, chain: str | None, force_n: float) -> LinearTorques:
+        """Holding torques and their first-order change with the joints (see :func:`linear_torques`)."""
+        model, data = self.model, self.data
+        q = self.scene.configuration(joints)
+        generalized, wrenches = self._wrenches(q, chain, force_n)
+        external = [pin.Force.Zero() for _ in range(model.njoints)]
+        for frame, wrench in wrenches:
+            parent = model.frames[frame].parentJoint
+            external[parent] = external[parent] + model.frames[frame].placement.act(wrench)
+        derivative = pin.computeStaticTorqueDerivatives(model, data, q, external)  # (nv, nv), wrenches fixed in frames
+        if chain is not None and force_n != 0.0:  # the hand's force is fixed in the world: it turns in the hand's frame
+            hand, force = wrenches[0]
+            jacobian = pin.getFrameJacobian(model, data, hand, pin.LOCAL)  # (6, nv)
+            derivative -= jacobian[:3].T @ pin.skew(force.linear) @ jacobian[3:]
+        anchor = pin.getFrameJacobian(model, data, self.anchor, pin.LOCAL)  # (6, nv)
+        base = -np.linalg.solve(anchor[:, :6], anchor[:, 6:])  # (6, nv - 6) base velocity per joint velocity
+        total = derivative[:, 6:] + derivative[:, :6] @ base  # (nv, nv - 6), the soles' wrenches held
+        total -= self._split_change(total[:6], wrenches[-len(self.soles) :])
+        out = total[np.ix_(self.velocity, self.velocity - 6)]  # (nj, nj)
+        return LinearTorques(generalized[self.velocity], out)
+
+    def _split_change(self, base_rows: FloatArray, soles: list[tuple[int, pin.Force]]) -> FloatArray:
+        """(nv, nv - 6) the generalized torques' change by the change of the soles' least-size wrenches.
+
+        The split solves ``B s = r`` (``B``: the soles' free-flyer rows, scaled; ``r``: the
+        load on the base) at least size. ``B`` depends on the legs only: a sole's free-flyer
+        columns are the adjoint of the base in the sole, ``A``, whose change with a joint
+        moving the sole by ``z`` (sole frame) is ``-ad(z) A``.
+        """
+        model, data = self.model, self.data
+        jacobians = [pin.getFrameJacobian(model, data, f, pin.LOCAL) for f, _ in soles]  # (6, nv) each
+        split = np.hstack([jac[:, :6].T for jac in jacobians]) * self.weight[None, :]  # (6, 6 k)
+        wrench = np.concatenate([w.vector for _, w in soles])  # (6 k,) the split now
+        scaled = wrench / self.weight
+        pseudo = split.T @ np.linalg.inv(split @ split.T)  # (6 k, 6) B^+
+        n = base_rows.shape[1]
+        d_split = np.zeros((n, 6, 6 * len(soles)))  # d B / d joint k
+        for s, jac in enumerate(jacobians):
+            adjoint = jac[:, :6]
+            for k in np.flatnonzero(np.abs(jac[:, 6:]).max(axis=0) > 0):
+                d_split[k, :, 6 * s : 6 * s + 6] = (-_ad(jac[:, 6 + k]) @ adjoint).T
+        d_split *= self.weight[None, None, :]
+        d_load = base_rows + np.einsum("kij,j->ik", d_split, scaled)  # (6, n): the base load's change
+        projector = np.eye(len(scaled)) - pseudo @ split
+        load = split @ scaled
+        d_scaled = np.einsum("ij,kjl,l->ik", -pseudo, d_split, scaled) + pseudo @ d_load  # -B^+ dB s + B^+ dr
+        d_scaled += projector @ np.einsum("kji,j->ik", d_split, np.linalg.solve(split @ split.T, load))
+        d_wrench = d_scaled * self.weight[:, None]  # (6 k, n)
+        contact = np.vstack(jacobians)  # (6 k, nv)
+        return np.asarray(contact.T @ d_wrench)
+
+
+def _ad(motion: FloatArray) -> FloatArray:
+    """The 6x6 matrix of the spatial cross product ``motion x`` (linear first)."""
+    out = np.zeros((6, 6))
+    out[:3, :3] = out[3:, 3:] = pin.skew(motion[3:])
+    out[:3, 3:] = pin.skew(motion[:3])
+    return out
+
+
+def _least_size(matrix: FloatArray, rhs: FloatArray) -> FloatArray:
+    """The least-norm solution of ``matrix x = rhs`` (full row rank)."""
+    return np.asarray(matrix.T @ np.linalg.solve(matrix @ matrix.T, rhs))
+
+
 def gravity_torques(scene: Scene, joints: FloatArray) -> FloatArray:
-    """Joint torques (N m) that hold each posture still, both soles loaded.
+    """Joint torques (N m) that hold each posture still against gravity, both soles loaded.
 
     Args:
         scene: Scene (its model has the URDF's masses and inertias).
@@ -29,22 +158,104 @@ def gravity_torques(scene: Scene, joints: FloatArray) -> FloatArray:
     Returns:
         (n, nj) torques in the scene's joint order, N m (positive about each joint's axis).
 
+    Example:
+        >>> tau = gravity_torques(scene, scene.reference[None, :])  # (1, nj) N m
+
     """
-    model = scene.model
-    data = model.createData()
-    soles = [scene.frame_id(frame) for frame in scene.stance.sole_frames]
-    velocity = scene.velocity_indices()
-    weight = np.tile([1.0, 1.0, 1.0, MOMENT_ARM_M, MOMENT_ARM_M, MOMENT_ARM_M], len(soles))  # wrench = weight * scaled
     joints = np.atleast_2d(joints)
+    return holding_torques(scene, joints, [None] * len(joints), 0.0)
+
+
+def holding_torques(
+    scene: Scene, joints: FloatArray, contacts: Sequence[str | None], force_n: float | FloatArray
+) -> FloatArray:
+    """Joint torques (N m) that hold each posture still under gravity and its hand's contact force.
+
+    Args:
+        scene: Scene.
+        joints: (n, nj) joint angles, rad.
+        contacts: Per posture, the chain whose hand presses on the table, or None (no contact).
+        force_n: The table's normal reaction on that hand, N: one value or (n,).
+
+    Returns:
+        (n, nj) torques in the scene's joint order, N m.
+
+    Example:
+        >>> tau = holding_torques(scene, pool_joints, ["left"] * len(pool_joints), 30.0)
+
+    """
+    joints = np.atleast_2d(joints)
+    forces = np.broadcast_to(np.asarray(force_n, dtype=float), (len(joints),))
+    statics = Statics(scene)
     out = np.zeros((joints.shape[0], len(scene.joint_names)))
     for i, posture in enumerate(joints):
-        q = scene.configuration(posture)
-        gravity = pin.computeGeneralizedGravity(model, data, q)  # (nv,)
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in soles])  # (6 k, nv)
-        base = contact[:, :6].T * weight[None, :]  # free-flyer rows, acting on the scaled wrenches
-        scaled = np.linalg.lstsq(base, gravity[:6], rcond=None)[0]  # least-size wrenches balancing the weight
-        torque = gravity - contact.T @ (scaled * weight)
-        out[i] = torque[velocity]
+        out[i] = statics.torques(posture, contacts[i], float(forces[i]))
     return out
+
+
+def linear_torques(scene: Scene, joints: FloatArray, chain: str | None, force_n: float) -> LinearTorques:
+    """Holding torques (:func:`holding_torques`) and their first-order change with the joints.
+
+    The floating base follows the joints so that the anchor sole stays on the floor (its
+    motion is eliminated through the anchor sole's Jacobian) and the hand's force keeps its
+    direction in the world: pinocchio's static torque derivatives, plus the change of the
+    weight's split between the feet (the least-size split differentiated), which the leg
+    joints carry.
+
+    Args:
+        scene: Scene.
+        joints: (nj,) rad.
+        chain: The chain whose hand presses on the table, or None.
+        force_n: The table's normal reaction on that hand, N.
+
+    Example:
+        >>> lin = linear_torques(scene, scene.reference, "left", 30.0)
+        >>> lin.torques + lin.jacobian @ step  # the torques after a small step (nj,) of the joints
+
+    """
+    return Statics(scene).linear(np.asarray(joints, dtype=float), chain, force_n)
+
+
+def effort_ratios(scene: Scene, torques: FloatArray) -> FloatArray:
+    """Each torque as a fraction of its joint's URDF effort limit; nan where the URDF gives none.
+
+    Args:
+        scene: Scene.
+        torques: (..., nj) N m.
+
+    Returns:
+        (..., nj) |torque| / effort limit.
+
+    Example:
+        >>> ratio = effort_ratios(scene, holding_torques(scene, joints, chains, 30.0))
+
+    """
+    return np.abs(np.asarray(torques, dtype=float)) / scene.effort_limit
+
+
+def worst_effort_ratio(
+    scene: Scene, joints: FloatArray, chain: str | None, statics: Statics | None = None
+) -> tuple[float, int]:
+    """The largest effort ratio of one posture, and its joint (index; -1 when no joint has a limit).
+
+    A posture in contact (``chain`` given) is held both unloaded (at the approach and
+    release, the hand above the table) and pressing ``route.contact_force_n``: the worse counts.
+
+    Args:
+        scene: Scene.
+        joints: (nj,) rad.
+        chain: The chain whose hand is on the table, or None.
+        statics: A workspace to reuse (one is made if None).
+
+    Example:
+        >>> ratio, joint = worst_effort_ratio(scene, posture, "left")
+
+    """
+    statics = statics or Statics(scene)
+    loads = [None] if chain is None else [None, chain]
+    torques = np.array([statics.torques(joints, load, scene.route.contact_force_n) for load in loads])
+    ratio = np.nan_to_num(effort_ratios(scene, torques), nan=-1.0).max(axis=0)  # (nj,)
+    if not np.any(ratio >= 0.0):
+        return 0.0, -1
+    j = int(np.argmax(ratio))
+    return float(ratio[j]), j

@@ -37,12 +37,24 @@ class Worst:
 
 
 @dataclass(frozen=True)
+class JointEffort:
+    """The worst holding torque of one joint over the checked postures or points."""
+
+    joint: str
+    ratio: float  # |torque| / URDF effort limit
+    torque_nm: float
+    limit_nm: float
+    point: int  # where (posture or route point index)
+
+
+@dataclass(frozen=True)
 class Verification:
     """Result of re-checking postures."""
 
     checked: int
     worst: tuple[Worst, ...]  # one per invariant
     geometry: GeometryCoverage | None = None  # what the collisions were checked with
+    efforts: tuple[JointEffort, ...] = ()  # each joint with an effort limit: its worst holding torque (routes)
 
     @property
     def ok(self) -> bool:

@@ -21,7 +21,9 @@ in one line. Here, on what it accepts, for this robot:
   (twice the 2^-20 rad/s step velocities are stored on);
 * **rest**: zero velocity at the first and last points, in every hold, and where every
   go-to-contact starts (force control takes over there);
-* **sole**, **CoM** and **collision** at every point (:mod:`posegen.route.pose_check`).
+* **sole**, **CoM** and **collision** at every point (:mod:`posegen.route.pose_check`);
+* **torque** and **zmp** at every point: the holding torques within the effort limits,
+  the ZMP at the stored timing inside the support polygon (:mod:`posegen.route.load_check`).
 
 Every violation is named: point index, time, joint (or pair), value and limit.
 """
@@ -36,6 +38,7 @@ from posegen.io import MAX_DURATION_S, Route, Segment, SegmentType
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import Scene, Verification, Worst, worst_case
+from posegen.route.load_check import check_loads
 from posegen.route.pose_check import check_poses
 
 MIN_DT_S = 1e-3  # default smallest time step between two points
@@ -87,7 +90,9 @@ def verify_route(
     worst.append(_rest(scene, route.segments, times, v))
     finite = np.ones(len(times), dtype=bool)  # the reader refuses any other value
     worst.extend(check_poses(scene, route.segments, times, q, finite, workers, progress))
-    return Verification(checked=len(times), worst=tuple(worst))
+    loads, efforts = check_loads(scene, route.segments, times, q, v, a)
+    worst.extend(loads)
+    return Verification(checked=len(times), worst=tuple(worst), efforts=efforts)
 
 
 def _at(times: np.ndarray, k: int) -> str:

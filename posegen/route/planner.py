@@ -15,6 +15,10 @@ their inputs and a loaded robot:
   each via path found is timed so, and the fastest is kept. The robot stops only in
   contact and at the pre-contact pose, where go-to-contact starts.
 
+Every timed piece is then slowed down where its speed would carry the ZMP out of the
+support polygon (:mod:`posegen.route.balancing`). Every state passes the robot's holding
+torques (hand unloaded; pressing on the way to contact) as well as balance and collisions.
+
 Each job's result depends only on its inputs (the seed is one of them), so jobs can run
 on any worker in any order (a :class:`posegen.parallel.Job`).
 """
@@ -29,11 +33,12 @@ import numpy as np
 
 from posegen.errors import InfeasibleError
 from posegen.io import SegmentType
-from posegen.robot import CollisionChecker, Config, FloatArray, Projector, Scene, StanceSpace
+from posegen.robot import Balance, CollisionChecker, Config, FloatArray, Projector, Scene, StanceSpace
+from posegen.route.balancing import GRID_SLACK_M, ZmpConstraint, timed_in_balance
 from posegen.route.free_motion import FreeMotion, Method, free_motions, raised_midpoints, stream_of, via_sequences
 from posegen.route.motion import vertical_paths
 from posegen.route.smoothing import blend_corners, shortcut
-from posegen.route.timing import Timed, parameterize
+from posegen.route.timing import Timed
 from posegen.route.unplanned import Unplanned, UnplannedCause
 
 START = -1  # the node id of the start posture
@@ -71,6 +76,8 @@ class Planner:
         self.scene = scene
         self.seed = seed
         self.space = StanceSpace(scene, CollisionChecker(scene, convex=True))
+        self.balance = Balance(scene)
+        self.zmp = ZmpConstraint(scene, self.balance, scene.margins.zmp_m + GRID_SLACK_M)
         self.start = start_posture(scene) if start is None else np.array(start, dtype=float)
 
     @functools.cached_property
@@ -101,9 +108,13 @@ def plan_stop(planner: Planner, request: tuple[int, tuple[float, ...], str]) -> 
     vertical = vertical_paths(planner.space, planner.projector, np.array(joints, dtype=float), chain)
     if vertical is None:
         return Unplanned(UnplannedCause.NO_VERTICAL)
+    for point in vertical.go_to_contact:
+        if not planner.space.holds(np.asarray(point), chain):
+            return Unplanned(UnplannedCause.TORQUE)
     limit = scene.velocity_limit * scene.route.velocity_scale_contact
     try:
-        timed = parameterize(np.array(vertical.go_to_contact), limit, _acceleration(scene))
+        path = np.array(vertical.go_to_contact)  # the hand presses at rest (the pool keeps that balanced)
+        timed = timed_in_balance(scene, planner.balance, planner.zmp, path, limit, _acceleration(scene))
     except InfeasibleError as exc:
         return Unplanned(UnplannedCause.NO_TIMING, f"go-to-contact: {exc}")
     return Stop(node, chain, np.array(vertical.approach), timed, vertical.clearance)
@@ -151,7 +162,8 @@ def _timed_transfer(
         SegmentType.RELEASE: scene.velocity_limit * route.velocity_scale_near,
         SegmentType.APPROACH: scene.velocity_limit * route.velocity_scale_near,
     }
-    timed = parameterize(np.array(path), np.array([speed[k] for k in kinds]), _acceleration(scene))
+    limits = np.array([speed[k] for k in kinds])  # the force is released at rest, before the release moves
+    timed = timed_in_balance(scene, planner.balance, planner.zmp, np.array(path), limits, _acceleration(scene))
     if len(timed.times) != len(path):
         raise RuntimeError("a transfer has repeated waypoints")  # a blend or shortcut never repeats a state
     return Transfer(timed, tuple(kinds), found.method)

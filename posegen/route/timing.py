@@ -14,6 +14,7 @@ stops only at its two ends. Between two waypoints the lower of their limits hold
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,13 +49,21 @@ def hold(position: FloatArray, duration_s: float) -> Timed:
     return Timed(np.array([0.0, duration_s]), positions, zeros, zeros.copy())
 
 
-def parameterize(waypoints: FloatArray, velocity_limit: FloatArray, acceleration_limit: FloatArray) -> Timed:
+def parameterize(
+    waypoints: FloatArray,
+    velocity_limit: FloatArray,
+    acceleration_limit: FloatArray,
+    constraints: Sequence[toppra.constraint.Constraint] = (),
+) -> Timed:
     """Fastest rest-to-rest timing of a path within the limits.
 
     Args:
         waypoints: (m, nj) rad; consecutive duplicates are dropped.
         velocity_limit: (nj,) rad/s, or (m, nj): the limit at each waypoint.
         acceleration_limit: (nj,) rad/s^2.
+        constraints: More toppra constraints on the path (e.g. balance:
+            :class:`posegen.route.balancing.ZmpConstraint`); a path of two waypoints is
+            timed without them (checked afterwards by the caller).
 
     Raises:
         InfeasibleError: toppra finds no timing of the path (seen on paths that wind
@@ -93,11 +102,12 @@ def parameterize(waypoints: FloatArray, velocity_limit: FloatArray, acceleration
     )  # waypoint interval of each grid point
     grid_limit = SAFETY * np.minimum(vlim[interval], vlim[interval + 1])  # (grid, nj)
     bounds = {float(g): np.column_stack([-v, v]) for g, v in zip(grid, grid_limit, strict=True)}
-    constraints = [
+    checks: list[toppra.constraint.Constraint] = [
         toppra.constraint.JointVelocityConstraintVarying(lambda x: bounds[float(x)]),
         toppra.constraint.JointAccelerationConstraint(np.column_stack([-a, a])),
+        *constraints,
     ]
-    instance = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
+    instance = toppra.algorithm.TOPPRA(checks, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
     sdd, sd, _ = instance.compute_parameterization(0, 0)
     if sd is None or sdd is None:
         raise InfeasibleError(f"toppra found no parameterisation of a path of {len(positions)} waypoints")

@@ -17,6 +17,7 @@ class UnplannedCause(str, enum.Enum):
     NO_VERTICAL = "no balanced, collision-free vertical approach above the contact"  # a stop
     NO_FREE_MOTION = "no free motion"  # a transfer: straight line, vias and OMPL all failed
     NO_TIMING = "no time parameterisation of the planned path"  # toppra found none (a stop or a transfer)
+    TORQUE = "the go-to-contact exceeds the effort limits pressing the contact force"  # a stop
 
 
 @dataclass(frozen=True)

@@ -86,7 +86,8 @@ def test_malformed_config_yaml(tmp_path, capsys):
 
 def test_check_flags_a_tampered_pool(small_pool, tmp_path, capsys):
     data = small_pool.to_dict()
-    data["postures"][3]["joints"][0] += 0.05  # a left-leg joint: the right sole no longer fits
+    hip = data["joint_names"].index("leg_left_3_joint")
+    data["postures"][3]["joints"][hip] += 0.05  # a left hip pitch: the right sole and the hand leave their places
     path = tmp_path / "tampered.yaml"
     write_yaml(path, data)
     code, stdout, _ = run(["check", str(path), "-q"], capsys)

@@ -52,3 +52,57 @@ def test_the_floor_carries_the_whole_weight(scene, postures):
         assert contact.T @ wrench == pytest.approx(gravity - full, abs=1e-7)  # torques and wrenches balance
         vertical = sum((data.oMf[f].rotation @ wrench[6 * k : 6 * k + 3])[2] for k, f in enumerate(soles))
         assert vertical == pytest.approx(mass * 9.81, rel=1e-6)
+
+
+def test_linear_torques_match_finite_differences(scene, postures):
+    """Every row, legs included (the split of the weight between the feet changes too), pressing and not."""
+    from posegen.robot.statics import holding_torques, linear_torques
+
+    joints = scene.close_stance(postures[0])
+    step = 1e-6
+    for chain, force in ((None, 0.0), ("left", 30.0)):
+        lin = linear_torques(scene, joints, chain, force)
+        assert lin.torques == pytest.approx(holding_torques(scene, joints[None], [chain], force)[0], abs=1e-9)
+        numeric = np.zeros_like(lin.jacobian)
+        for k in range(len(joints)):
+            d = np.zeros(len(joints))
+            d[k] = step
+            plus = holding_torques(scene, (joints + d)[None], [chain], force)[0]
+            minus = holding_torques(scene, (joints - d)[None], [chain], force)[0]
+            numeric[:, k] = (plus - minus) / (2 * step)
+        assert np.abs(lin.jacobian - numeric).max() < 1e-5 * np.abs(numeric).max()
+
+
+def test_the_table_carries_the_hand_force(scene, postures):
+    """Pressing F on the hand: the torques balance the weight, F along the table normal at the hand, and sole
+    wrenches whose vertical forces add up to m g - F."""
+    from posegen.robot.statics import holding_torques
+
+    model, data = scene.model, scene.model.createData()
+    mass = pin.computeTotalMass(model)
+    hand = scene.frame_id(scene.chain("left").contact_frame)
+    for posture in postures:
+        tau = holding_torques(scene, posture[None], ["left"], 30.0)[0]
+        q = scene.configuration(posture)
+        gravity = pin.computeGeneralizedGravity(model, data, q)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        pushed = gravity - pin.getFrameJacobian(model, data, hand, pin.LOCAL_WORLD_ALIGNED)[:3].T @ [0, 0, 30.0]
+        soles = [scene.frame_id(f) for f in scene.stance.sole_frames]
+        contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in soles])
+        full = np.zeros(model.nv)
+        full[scene.velocity_indices()] = tau
+        wrench = np.linalg.lstsq(contact.T, pushed - full, rcond=None)[0]
+        assert contact.T @ wrench == pytest.approx(pushed - full, abs=1e-7)
+        vertical = sum((data.oMf[f].rotation @ wrench[6 * k : 6 * k + 3])[2] for k, f in enumerate(soles))
+        assert vertical == pytest.approx(mass * 9.81 - 30.0, rel=1e-6)
+
+
+def test_effort_ratio_names_the_worst_joint(scene, postures):
+    from posegen.robot.statics import effort_ratios, holding_torques, worst_effort_ratio
+
+    ratio, joint = worst_effort_ratio(scene, postures[0], "left")
+    loads = [holding_torques(scene, postures[:1], [c], scene.route.contact_force_n)[0] for c in (None, "left")]
+    ratios = np.nanmax([effort_ratios(scene, t) for t in loads], axis=0)
+    assert ratio == pytest.approx(np.nanmax(ratios))
+    assert joint == int(np.nanargmax(ratios))

@@ -157,10 +157,10 @@ def test_a_via_state_equal_to_an_end_is_dropped_not_repeated(detour):
 
 
 def test_a_path_toppra_cannot_time_is_a_planning_failure_not_a_crash(detour, example_pool, monkeypatch):
-    import posegen.route.planner as planner_module
+    import posegen.route.balancing as timing_module  # the planner times every path through it
 
     planner, (a, b) = detour
-    timed = planner_module.parameterize
+    timed = timing_module.parameterize
     calls = []
 
     def first_fails(*args, **kwargs):
@@ -169,14 +169,14 @@ def test_a_path_toppra_cannot_time_is_a_planning_failure_not_a_crash(detour, exa
             raise InfeasibleError("toppra found no parameterisation of a path of 9 waypoints")
         return timed(*args, **kwargs)
 
-    monkeypatch.setattr(planner_module, "parameterize", first_fails)
+    monkeypatch.setattr(timing_module, "parameterize", first_fails)
     transfer = plan_transfer(planner, (a, b))  # two via paths: the second is timed
-    assert not isinstance(transfer, Unplanned) and len(calls) == 2
+    assert not isinstance(transfer, Unplanned) and len(calls) in (2, 3)  # the second: again with the ZMP, if needed
 
     def never(*args, **kwargs):
         raise InfeasibleError("toppra found no parameterisation of a path of 9 waypoints")
 
-    monkeypatch.setattr(planner_module, "parameterize", never)
+    monkeypatch.setattr(timing_module, "parameterize", never)
     untimed = plan_transfer(planner, (a, b))
     assert isinstance(untimed, Unplanned) and untimed.cause is UnplannedCause.NO_TIMING
     assert str(untimed) == (

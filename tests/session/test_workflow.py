@@ -133,8 +133,8 @@ def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
 def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, tmp_path):
     assert standing_posture(started / "batch_001" / ROUTE_FILE) is None  # back at the start posture
     route = read_route(started / "batch_001" / ROUTE_FILE)
-    approach = next(s for s in reversed(route.segments) if s.type == SegmentType.APPROACH)
-    standoff = route.positions[approach.first_point]  # above the last contact
+    approach = next(s for s in route.segments if s.type == SegmentType.APPROACH)
+    standoff = route.positions[approach.first_point]  # above a contact
     pool = load_pool(read_index(started).pool).to_dict()
     two = tmp_path / "two.yaml"
     write_yaml(two, {**pool, "postures": pool["postures"][:2]})

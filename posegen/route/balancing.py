@@ -1,0 +1,153 @@
+"""Balance at the planned speed: the ZMP kept inside the support polygon by ``margins.zmp_m``.
+
+toppra times a path within joint velocity and acceleration limits; at that speed the
+whole body's motion moves the soles' centre of pressure (the ZMP, from the robot's
+inverse dynamics: :mod:`posegen.robot.balance`) tens of millimetres away from the CoM's
+ground projection on a fast reach. Two pieces keep it inside:
+
+* :class:`ZmpConstraint`, a toppra second-order constraint: the floor's wrench is affine
+  in the path acceleration and the squared path speed (``a s'' + b s'^2 + c``), and the
+  centre of pressure lies inside the polygon shrunk by the margin exactly when that
+  wrench satisfies one linear inequality per edge (``F w <= 0``). toppra then times the
+  path as fast as the joints and the balance allow together: slow only where balance
+  binds (leaving and reaching a leaning posture), not over the whole segment.
+* :func:`balanced`, the check at every timed point afterwards (toppra enforces its
+  constraints on its grid): where the margin is still not kept, the whole segment is
+  slowed down uniformly by the least stretch that keeps it (its accelerations fall as
+  its square).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+import toppra.constraint
+
+from posegen.errors import InfeasibleError
+from posegen.robot import Balance, FloatArray, Scene, stretch_for_margin
+from posegen.route.timing import Timed, parameterize
+
+LOG = logging.getLogger(__name__)
+
+GRID_SLACK_M = 0.002  # toppra keeps this much more margin on its grid, for the points between grid points
+MIN_FLOOR_FORCE_N = 1.0  # the feet stay loaded
+
+
+class ZmpConstraint(toppra.constraint.SecondOrderConstraint):
+    """toppra constraint: the ZMP inside the support polygon by ``margin_m`` (hand unloaded).
+
+    The constrained vector ``w`` is the floor's wrench on the robot (world frame, about
+    the origin; :class:`posegen.robot.Balance`). For an edge of the clockwise polygon with
+    inward normal ``n`` through point ``p``, the centre of pressure ``(-M_y, M_x) / f_z``
+    is at least ``d`` inside when ``(d + n.p) f_z - n_y M_x + n_x M_y <= 0``.
+
+    Example:
+        >>> constraint = ZmpConstraint(scene, Balance(scene), scene.margins.zmp_m)
+        >>> toppra.algorithm.TOPPRA([velocity, acceleration, constraint], path)
+
+    """
+
+    def __init__(self, scene: Scene, balance: Balance, margin_m: float) -> None:
+        rows = []
+        polygon = scene.support_polygon
+        for i in range(len(polygon)):
+            a, b = polygon[i], polygon[(i + 1) % len(polygon)]
+            edge = b - a
+            inward = np.array([edge[1], -edge[0]]) / np.linalg.norm(edge)  # clockwise: interior on the right
+            rows.append([0.0, 0.0, margin_m + inward @ a, -inward[1], inward[0], 0.0])
+        rows.append([0.0, 0.0, -1.0, 0.0, 0.0, 0.0])  # f_z >= MIN_FLOOR_FORCE_N
+        matrix = np.array(rows)  # (h + 1, 6)
+        bound = np.zeros(len(rows))
+        bound[-1] = -MIN_FLOOR_FORCE_N
+        dof = len(scene.joint_names)
+        super().__init__(self._wrench, lambda _q: matrix, lambda _q: bound, dof)
+        self.balance = balance
+
+    def _wrench(self, q: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
+        static, dynamic = self.balance.point(q, v, a, None, 0.0)
+        return np.asarray(static + dynamic)
+
+    def compute_constraint_params(self, path: Any, gridpoints: FloatArray) -> tuple[Any, ...]:
+        """a, b, c of ``a s'' + b s'^2 + c = w`` at every grid point: two inverse dynamics each (not toppra's three)."""
+        positions, first, second = path(gridpoints), path(gridpoints, 1), path(gridpoints, 2)
+        zero = np.zeros(positions.shape[1])
+        c = np.zeros((len(gridpoints), 6))
+        a, b = np.zeros_like(c), np.zeros_like(c)
+        for k, (q, qs, qss) in enumerate(zip(positions, first, second, strict=True)):
+            c[k], a[k] = self.balance.point(q, zero, qs, None, 0.0)  # the dynamic part of (v 0, acc p') is a
+            _, b[k] = self.balance.point(q, qs, qss, None, 0.0)
+        matrix = self.constraint_F(positions[0])
+        bound = self.constraint_g(positions[0])
+        count = len(gridpoints)
+        matrices, bounds = np.repeat(matrix[None], count, axis=0), np.repeat(bound[None], count, axis=0)
+        return toppra.constraint.canlinear_colloc_to_interpolate(a, b, c, matrices, bounds, None, None, gridpoints)
+
+
+def timed_in_balance(
+    scene: Scene,
+    balance: Balance,
+    zmp: ZmpConstraint,
+    waypoints: FloatArray,
+    velocity_limit: FloatArray,
+    acceleration_limit: FloatArray,
+) -> Timed:
+    """The fastest timing of a path that keeps the joints' limits and the ZMP's margin.
+
+    toppra times the path within the joint limits first; only when that timing misses
+    the ZMP's margin is it timed again with :class:`ZmpConstraint` (its inverse dynamics
+    at every grid point cost 3-4 times the plain timing), and then checked (:func:`balanced`).
+
+    Args:
+        scene: Scene.
+        balance: The inverse dynamics workspace.
+        zmp: The ZMP constraint (its margin a little above ``margins.zmp_m``).
+        waypoints: (m, nj) rad.
+        velocity_limit: (nj,) or (m, nj) rad/s.
+        acceleration_limit: (nj,) rad/s^2.
+
+    Raises:
+        InfeasibleError: No timing (toppra's, or the ZMP outside even at rest).
+
+    Example:
+        >>> timed = timed_in_balance(scene, balance, zmp, path, scene.velocity_limit * 0.5, accelerations)
+
+    """
+    timed = parameterize(waypoints, velocity_limit, acceleration_limit)
+    if len(timed.times) < 2:
+        return timed
+    wrenches = balance.floor_wrenches(timed.positions, timed.velocities, timed.accelerations, [None] * len(timed.times))
+    if stretch_for_margin(scene.support_polygon, wrenches, scene.margins.zmp_m) == 1.0:
+        return timed
+    return balanced(scene, balance, parameterize(waypoints, velocity_limit, acceleration_limit, [zmp]))
+
+
+def balanced(scene: Scene, balance: Balance, timed: Timed) -> Timed:
+    """``timed`` slowed down uniformly just enough to keep the ZMP inside the polygon by the margin.
+
+    The hand is unloaded: where it presses the table, it does so at rest (the force builds
+    and is released while the robot holds still), and the pool keeps the posture's centre
+    of pressure inside by the margin then (:func:`posegen.robot.pressed_zmp_margin`).
+
+    Args:
+        scene: Scene (its support polygon and ``margins.zmp_m``).
+        balance: The inverse dynamics workspace.
+        timed: A rest-to-rest segment.
+
+    Raises:
+        InfeasibleError: Even at rest (or ``MAX_STRETCH`` times slower) the ZMP is outside the margin.
+
+    """
+    if len(timed.times) < 2:
+        return timed
+    margin = scene.margins.zmp_m
+    chains = [None] * len(timed.times)
+    wrenches = balance.floor_wrenches(timed.positions, timed.velocities, timed.accelerations, chains)
+    stretch = stretch_for_margin(scene.support_polygon, wrenches, margin)
+    if not np.isfinite(stretch):
+        raise InfeasibleError(f"the ZMP leaves the support polygon by {margin} m even when slowed down")
+    if stretch == 1.0:
+        return timed
+    LOG.debug("slowed by %.3f to keep the ZMP %.3f m inside the support polygon", stretch, margin)
+    return Timed(timed.times * stretch, timed.positions, timed.velocities / stretch, timed.accelerations / stretch**2)
