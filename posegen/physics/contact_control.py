@@ -40,9 +40,9 @@ from posegen.io import Route, SegmentType
 from posegen.physics.nominal import NominalRobot
 from posegen.robot import FloatArray
 
-K_FORCE = 1e-3  # m/s per N of normal force error
-FORCE_BAND = 0.3  # within this fraction of the target force, the hand stays where it is
-HOLD_BAND = 0.6  # and during the hold (only a force far from the target moves it: the contact is measured still)
+K_FORCE = 3e-3  # m/s per N of normal force error
+FORCE_BAND = 0.1  # within this fraction of the target force, the hand stays where it is
+HOLD_BAND = 0.3  # and during the hold (only a force far from the target moves it: the contact is measured still)
 K_TORQUE = 0.01  # rad/s per N m of roll or pitch torque about the contact origin
 TORQUE_BAND_NM = 0.5  # roll and pitch torques below this leave the hand's tilt as it is
 MAX_TILT_RAD = 0.05  # the hand turns at most this far from the plan
@@ -53,7 +53,7 @@ GUARD_FORCE_N = 10.0
 TOUCH_FORCE_N = 3.0  # in contact: above this normal force
 UNLOAD_S = 0.1
 TARE_S = 0.1
-REACHED = 0.7  # a hold starts once the normal force is this fraction of the target (in the force band)
+REACHED = 0.9  # a hold starts once the normal force is this fraction of the target (in the force band)
 SEARCH_TIMEOUT_S = 3.0  # the route waits at most this long for a contact before its hold
 SETTLE_S = 0.25  # and this long after the force first reached its band (the arm settles)
 MAX_OFFSET_M = 0.05  # the search and the force control move the hand at most this far from the plan
@@ -169,6 +169,10 @@ class HandControl:
     def in_contact(self, t: float) -> bool:
         """Whether a hand is at the table at route time ``t`` (go-to-contact, hold or release)."""
         return any(self.phase(chain, t) in (Phase.PRESS, Phase.RELEASE) for chain in self.hands)
+
+    def holding(self, t: float) -> bool:
+        """Whether a hand holds a contact at route time ``t`` (its hold, as the route's clock has it)."""
+        return any(c.hold_s <= t < c.lift_s for contacts in self.contacts.values() for c in contacts)
 
     def planned_push(self, chain: str, t: float) -> float:
         """The force (N) the plan has a hand push on the table at route time ``t``: the target, ramped in and out."""

@@ -35,6 +35,9 @@ TIP_RADIUS_M = 0.005  # the sphere at each fingertip end (its lowest point is th
 SOLE_THICKNESS_M = 0.01  # the box sole, above the sole frame
 FLOOR_HALF_SIZE_M = 20.0
 FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional, rolling (MuJoCo's defaults)
+# the floor's contact: time constant (s), damping ratio. Stiff (two steps): with MuJoCo's
+# default (0.02 s) a loaded sole sinks 0.6 mm and a foot pressed on its edge rolls by centiradians
+FLOOR_SOLREF = (0.004, 1.0)
 
 
 class Touches(enum.IntFlag):
@@ -158,6 +161,7 @@ def _sole_shapes(spec: mujoco.MjSpec, scene: Scene) -> list[Shape]:
         geom.pos = in_link.act(np.array([(x0 + x1) / 2, (y0 + y1) / 2, SOLE_THICKNESS_M / 2]))
         geom.quat = pin.Quaternion(in_link.rotation).coeffs()[[3, 0, 1, 2]]
         _set_touches(geom, Touches.FLOOR)
+        geom.solref = FLOOR_SOLREF
         shapes.append(Shape(name, ShapeRole.SOLE, link, sole=sole))
     return shapes
 
@@ -228,6 +232,7 @@ def _world_shapes(spec: mujoco.MjSpec, scene: Scene, table_top: FloatArray) -> l
         geom.contype = int(bit)
         geom.conaffinity = 0
         geom.friction = FRICTION
+    floor.solref = FLOOR_SOLREF
     return [Shape("floor", ShapeRole.FLOOR, ""), Shape("table", ShapeRole.TABLE, "")]
 
 

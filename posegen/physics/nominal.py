@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from posegen.physics.sole_split import split_wrench
 from posegen.physics.tool import Tool
 from posegen.robot import FloatArray, Scene
 
@@ -54,6 +55,7 @@ class NominalRobot:
         self.mass_kg = float(pin.computeTotalMass(self.model))
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
         self._foot_centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # in a sole frame
+        self._foot_half = np.array([(x1 - x0) / 2, (y1 - y0) / 2])
         self.q = scene.configuration(scene.reference)
 
     def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
@@ -136,34 +138,8 @@ class NominalRobot:
         return np.concatenate([force, torque - cross(lever, force)])
 
     def sole_split(self, total: FloatArray) -> list[FloatArray]:
-        """A world wrench (6,) at the world origin, shared by the soles as flat feet share it: each (6,) LOCAL.
-
-        The ZMP distribution: the total's ZMP is projected on the segment between the soles'
-        centres (the foot rectangles' centres); the vertical load is shared by the lever
-        rule at that point (all on one sole beyond its centre), every force component in
-        the same shares, and both soles' centres of pressure sit the ZMP's offset from
-        that point away from their centres (the moment the shares cannot carry, borne by
-        the soles' torques). Yaw is shared as the load.
-        """
-        force, moment = total[:3], total[3:]
-        first, second = self.sole_centres
-        span = second[:2] - first[:2]
-        if force[2] <= 1e-9:
-            alpha, offset = 0.5, np.zeros(2)
-        else:
-            zmp = np.array([-moment[1], moment[0]]) / force[2]
-            alpha = float(np.clip((zmp - first[:2]) @ span / (span @ span), 0.0, 1.0))
-            offset = zmp - (first[:2] + alpha * span)
-        shares = (1.0 - alpha, alpha)
-        points = [np.array([c[0] + offset[0], c[1] + offset[1], 0.0]) for c in self.sole_centres]  # the CoPs
-        yaw = moment[2] - sum(s * (p[0] * force[1] - p[1] * force[0]) for s, p in zip(shares, points, strict=True))
-        out = []
-        for share, point, pose in zip(shares, points, self.sole_poses, strict=True):
-            part = share * force
-            torque = cross(point - pose[:3, 3], part)
-            torque[2] += share * yaw
-            out.append(np.concatenate([pose[:3, :3].T @ part, pose[:3, :3].T @ torque]))
-        return out
+        """A world wrench (6,) at the world origin, shared by the soles: each (6,) LOCAL (see :func:`split_wrench`)."""
+        return split_wrench(total, self.sole_poses, self._foot_centre, self._foot_half)
 
     def soles_total(self, wrenches: tuple[FloatArray, ...]) -> FloatArray:
         """The soles' wrenches (6,) each, in their frames, as one world wrench (6,) at the world origin."""

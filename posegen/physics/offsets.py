@@ -6,7 +6,9 @@ integrated from them on the nominal model's Jacobians at the encoders' angles: a
 twist by its leg's joints (from the sole up to the joint both legs hang from), both
 hands' together by the upper body's joints (every chain's, less the legs': the torso and
 the arms; an arm alone, near the end of its reach, cannot move its hand along the table's
-normal). Locked joints never move.
+normal), the torso's joints weighted ``SHARED_WEIGHT`` times an arm's (the arms move the
+hands; the torso, holding the whole upper body, often near its effort limit, helps only
+where they cannot). Locked joints never move.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from posegen.physics.nominal import NominalRobot
 from posegen.robot import FloatArray, Scene
 
 DAMPING = 1e-4  # of the least-squares solves (m^2: a few centimetres of damping near singularities)
+SHARED_WEIGHT = 100.0  # cost of a torso joint's motion relative to an arm joint's, in the hands' solve
 NULL_DECAY_S = 10.0  # an arm's offset that moves no task decays back to the plan (slowly: a hold stays still)
 
 
@@ -54,6 +57,14 @@ class JointOffsets:
         self.legs = [[j for j in scene.leg_joints(s) if not scene.locked[j]] for s in scene.stance.sole_frames]
         self.arms = arm_joints(scene)
         self.upper = upper_body(scene)
+        own = {j for arm in self.arms.values() for j in arm}
+        self.shared = [j for j in self.upper if j not in own]  # the torso
+        self._scale = np.ones(len(scene.joint_names))  # a joint's rate per unit of the solve's variable
+        self._scale[self.shared] = 1.0 / np.sqrt(SHARED_WEIGHT)
+
+    def moving(self, chain: str) -> list[int]:
+        """The joints that move a chain's hand: its arm's and the torso's."""
+        return self.arms[chain] + self.shared
 
     def _solve(self, frames: list[int], joints: list[int], twist: FloatArray, decay: bool = True) -> FloatArray:
         """Joint rates (len(joints),) that move frames by ``twist`` (6 per frame,) relative to the base.
@@ -61,16 +72,17 @@ class JointOffsets:
         Damped least squares; a redundant chain's offset that moves no task decays toward zero
         (its self-motion would otherwise drift).
         """
-        jacobian = np.vstack([self.robot.frame_jacobian(f)[:, 6 + np.asarray(joints)] for f in frames])  # (6k, n)
-        rows = jacobian.shape[0]
+        scale = self._scale[joints]  # (n,) weighted least squares: the solve's variable is dq / scale
+        jacobian = np.vstack([self.robot.frame_jacobian(f)[:, 6 + np.asarray(joints)] for f in frames]) * scale
+        rows = jacobian.shape[0]  # jacobian (6k, n)
         if jacobian.shape[1] < rows:
             gram = jacobian.T @ jacobian + DAMPING * np.eye(len(joints))
-            return np.asarray(np.linalg.solve(gram, jacobian.T @ twist))
+            return np.asarray(scale * np.linalg.solve(gram, jacobian.T @ twist))
         gram = jacobian @ jacobian.T + DAMPING * np.eye(rows)
         if not decay:
-            return np.asarray(jacobian.T @ np.linalg.solve(gram, twist))
-        decaying = self.dq[joints] / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
-        return np.asarray(jacobian.T @ np.linalg.solve(gram, twist + jacobian @ decaying) - decaying)
+            return np.asarray(scale * (jacobian.T @ np.linalg.solve(gram, twist)))
+        decaying = self.dq[joints] / scale / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
+        return np.asarray(scale * (jacobian.T @ np.linalg.solve(gram, twist + jacobian @ decaying) - decaying))
 
     def step(
         self, soles: list[FloatArray], hands: dict[str, FloatArray], dt_s: float, decay: bool = True

@@ -6,7 +6,8 @@ sensors are recorded every ``stride`` steps (the recording rate). Each control p
 1. the sensors are read (encoders, wrist and sole force/torque sensors);
 2. the nominal model is updated at the encoders' angles (:class:`NominalRobot`);
 3. the hands' contact controllers give their twists (:class:`HandControl`), the
-   stabilizer the soles' (:class:`Stabilizer`), and their joint offset is integrated
+   stabilizer the soles' (:class:`Stabilizer`; its references moved by the hands' planned
+   pushes, steady through a hold, not by their measured force), and their joint offset is integrated
    (:class:`JointOffsets`);
 4. each joint loop is sent the planned angle plus the offset, the planned velocity, and
    the static torque of the posture as feed-forward (gravity, both soles' shares; a
@@ -37,7 +38,7 @@ from posegen.physics.nominal import NominalRobot
 from posegen.physics.offsets import JointOffsets
 from posegen.physics.plan import Plan
 from posegen.physics.sensors import Sensors
-from posegen.physics.stabilizer import SoleReadings, Stabilizer
+from posegen.physics.stabilizer import Reference, SoleReadings, Stabilizer
 from posegen.physics.stance import put_down
 from posegen.physics.tool import Tool
 from posegen.progress import Progress, ProgressCallback, ignore_progress
@@ -119,12 +120,15 @@ class Run:
         planned = {chain: poses[index] for chain, poses in plan.hands.items()}
         commanded = plan.positions[index] + self.offsets.dq
         lag = np.abs(commanded - encoders)
-        for chain, arm in self.offsets.arms.items():
-            self.hands.saturated[chain] = bool(np.any(lag[arm] > LAGGING_RAD))
+        for chain in self.offsets.arms:
+            self.hands.saturated[chain] = bool(np.any(lag[self.offsets.moving(chain)] > LAGGING_RAD))
         hands = self.hands.step(t_route, wrists, planned, commanded, self.period_s)
         soles = SoleReadings(self.sensors.soles(data))
         attitude = (imu, plan.base_rotation[index])
-        feet = self.stabilizer.step(soles, self.hands.wrenches, attitude, plan.com[index], self.period_s)
+        reference = Reference(plan.com[index], plan.com_velocity[index], plan.zmp[index], float(plan.pelvis_z[index]))
+        pushes = {c: np.array([0.0, 0.0, self.hands.planned_push(c, t_route), 0.0, 0.0, 0.0]) for c in wrists}
+        holding = self.hands.holding(t_route)
+        feet = self.stabilizer.step(soles, pushes, attitude, reference, self.period_s, holding)
         offset = self.offsets.step(feet, hands, self.period_s, decay=not self.hands.in_contact(t_route))
         target = np.clip(plan.positions[index] + offset, self.scene.lower, self.scene.upper)
         if sample % FEED_FORWARD_EVERY == 0:  # the posture's statics change slowly

@@ -8,10 +8,12 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
 * **DCM feedback.** The CoM ``c`` and its velocity are estimated on the nominal model
   from the encoders and the IMU (:class:`NominalRobot`); ``xi = c + c' / omega``,
   ``omega = sqrt(g / z_c)``. The desired ZMP is
-  ``p_d = p_ref + (1 + K_DCM / omega) (xi - c_ref)``, kept ``ZMP_MARGIN_M`` inside the
-  support polygon. The references are static: without a push, the planned CoM; with
-  the hands' planned pushes on the table, the ZMP they move toward the hands, held the
-  config's CoM margin inside the polygon by moving the CoM away (:func:`references`).
+  ``p_d = p_ref + (1 + K_DCM / omega) (xi - xi_ref)``, kept ``ZMP_MARGIN_M`` inside the
+  support polygon, with ``xi_ref = c_ref + c_ref' / omega``. The references are the
+  plan's: its CoM and CoM velocity, and its ZMP (the commanded motion's, from the whole
+  robot's inverse dynamics); with the hands pushing on the table (as planned), the ZMP
+  they move away from the hands, held the config's ZMP margin inside the polygon by moving
+  the CoM toward them (:func:`references`).
 * **Foot admittance** (foot damping control). The desired ZMP's wrench is shared by the
   soles as flat feet share it (:meth:`NominalRobot.sole_split`); each sole moves, relative
   to the base, at ``v = K (w - w_share)`` in its frame, along its normal and about its
@@ -20,6 +22,21 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
   contact is measured with its joints still): a sole
   on its edge turns flat, a leg the true kinematics makes long shortens, and together
   they lean the body to move the ZMP.
+* **CoM position.** The CoM the encoders and the IMU put on the nominal model is brought
+  back to its reference by moving the base over the soles (both soles move alike,
+  relative to the base, along the floor: ``K_COM``, beyond ``COM_BAND_M``): the joint
+  loops' give under load (a leg carrying the whole robot) would otherwise leave the CoM
+  off its plan, and near the polygon's edge, where the plan may put the ZMP within a
+  centimetre, the feet's admittance alone is too slow to bring it back. Likewise the
+  base's height (the soles' admittance along their normals drifts it) is brought back to
+  the plan's (``K_HEIGHT``, beyond ``HEIGHT_BAND_M``).
+* **Light soles.** A sole carrying less than ``LIGHT_SHARE`` of the load does not turn: it
+  cannot make the torque its share asks for (its centre of pressure would leave the
+  rectangle), and its admittance would turn it on its edge.
+* **Holds.** While a hand holds a contact, the stabilizer rests (zero twists) as long as
+  the DCM is within ``REST_DCM_M`` of its reference and the measured ZMP
+  ``REST_MARGIN_M`` inside the polygon: the robot stands balanced in a static posture, and a
+  contact is measured with every joint still. Past either bound it acts as ever.
 * **Body attitude.** The base's roll and pitch, as the IMU reads them, are slowly
   levelled to the plan's by turning both soles alike relative to the base
   (``K_ATTITUDE``): the true legs tilt the body where the nominal ones would not.
@@ -39,15 +56,25 @@ from posegen.robot import FloatArray, Scene, convex_hull_clockwise
 
 K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
 VELOCITY_FILTER_S = 0.02  # low-pass of the CoM velocity estimate
-ZMP_MARGIN_M = 0.01  # the desired ZMP is kept this far inside the support polygon
+ZMP_MARGIN_M = (
+    0.004  # the desired ZMP is kept this far inside the support polygon (the feedback's authority at the edge)
+)
 K_FOOT_FORCE = 1e-4  # m/s per N of excess force on a sole
 K_FOOT_TORQUE = 1e-3  # rad/s per N m of excess torque
 MAX_FOOT_SPEED = 0.02  # m/s and rad/s
 ADMITTED = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 0.0])  # a sole gives way along its normal and tilts, never slides
 BAND = np.array([20.0, 20.0, 20.0, 3.0, 3.0, 3.0])  # N, N m: a sole's excess below this leaves it where it is
+K_COM_PER_S = 3.0  # CoM position error -> the base's motion over the soles
+COM_BAND_M = 0.003  # a CoM error below this is left as it is (the robot rests still)
+MAX_COM_SPEED = 0.05  # m/s
+K_HEIGHT_PER_S = 1.0  # the base's height error -> both soles' motion along the vertical
+HEIGHT_BAND_M = 0.002
+LIGHT_SHARE = 0.1  # of the vertical load: a sole carrying less does not turn
 K_ATTITUDE_PER_S = 0.5  # base tilt error -> both soles' turn relative to the base
 MAX_TURN_RAD_S = 0.05
 ATTITUDE_BAND_RAD = 0.003  # a tilt error below this is left as it is (the robot rests still)
+REST_DCM_M = 0.01  # during a hold the stabilizer rests while the DCM is this close to its reference
+REST_MARGIN_M = 0.01  # and the measured ZMP this far inside the support polygon
 POLYGON_EVERY = 25  # control steps between two computations of the support polygon (the soles barely move)
 
 
@@ -58,25 +85,41 @@ class SoleReadings:
     wrenches: tuple[FloatArray, ...]  # in the stance's sole order
 
 
-def references(
-    robot: NominalRobot, hands: dict[str, FloatArray], com_planned: FloatArray, polygon: Hull, margin_m: float
-) -> tuple[FloatArray, FloatArray]:
-    """The static ZMP and CoM references (2,) each, m, while the hands push on the table.
+@dataclass(frozen=True)
+class Reference:
+    """What the plan says of the robot's balance at a sample (ground projections, m and m/s)."""
 
-    A hand's push (the table's wrench on it (6,), world axes at its contact frame) moves
-    the ZMP toward the hand. Where that keeps it ``margin_m`` inside the support polygon,
-    the CoM stays where the plan puts it; otherwise the ZMP is held at that margin and the
-    CoM moves away from the hand by what it takes.
+    com: FloatArray  # (2,) m
+    com_velocity: FloatArray  # (2,) m/s
+    zmp: FloatArray  # (2,) m, the commanded motion's ZMP, hands free
+    pelvis_z: float  # m, the free base's height
+
+
+def references(
+    robot: NominalRobot, hands: dict[str, FloatArray], planned: Reference, polygon: Hull, margin_m: float
+) -> tuple[FloatArray, FloatArray]:
+    """The ZMP and CoM references (2,) each, m, while the hands push on the table.
+
+    The table pushes a pressing hand up (its wrench (6,) on the hand, world axes at its
+    contact frame): the floor carries that much less, and the ZMP moves away from the hand,
+    ``p = (W p_plan - F h) / (W - F)``. Where that keeps it ``margin_m`` inside the support
+    polygon, the CoM stays where the plan puts it; otherwise the ZMP is held at that margin
+    and the CoM moves toward the hand by what it takes.
+
+    Example:
+        >>> zmp, com = references(robot, {"left": wrench}, Reference(com, velocity, zmp, 1.0), hull, 0.01)
+
     """
     weight = robot.mass_kg * -GRAVITY[2]
     moment, load = np.zeros(2), 0.0
     for chain, wrench in hands.items():
-        down = max(float(wrench[2]), 0.0)  # the table pushes the hand up: the hand pushes the table down
-        moment += down * robot.pose(robot.contact_frames[chain])[:2, 3]
-        load += down
-    free = (weight * com_planned + moment) / (weight + load)  # the static ZMP if the CoM stays
+        up = max(float(wrench[2]), 0.0)  # the table's push on the hand
+        moment += up * robot.pose(robot.contact_frames[chain])[:2, 3]
+        load += up
+    floor = max(weight - load, 0.1 * weight)  # what the floor carries
+    free = (weight * planned.zmp - moment) / floor  # the ZMP if the CoM follows the plan
     zmp = clamp_into(polygon, free, margin_m)
-    return zmp, np.asarray((zmp * (weight + load) - moment) / weight)
+    return zmp, np.asarray(planned.com + (zmp - free) * floor / weight)
 
 
 @dataclass(frozen=True)
@@ -132,14 +175,14 @@ class Stabilizer:
 
     Example:
         >>> stabilizer = Stabilizer(scene, robot)
-        >>> twists = stabilizer.step(soles, hand_wrenches, (imu, planned), com_planned, dt_s=0.002)
+        >>> twists = stabilizer.step(soles, hand_wrenches, (imu, planned), reference, dt_s=0.002)
 
     """
 
     def __init__(self, scene: Scene, robot: NominalRobot, glued_feet: bool = False) -> None:
         self.robot = robot
         self.glued_feet = glued_feet  # welded soles: no admittance (their sensors read the welds)
-        self.margin_m = scene.margins.com_m  # the static ZMP is kept this far inside the polygon
+        self.margin_m = scene.margins.zmp_m  # the reference ZMP is kept this far inside the polygon
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
         self._com: FloatArray | None = None
@@ -147,6 +190,7 @@ class Stabilizer:
         self._steps = 0
         self._velocity = np.zeros(2)
         self.zmp_desired: FloatArray = np.zeros(2)
+        self.dcm_error: FloatArray = np.zeros(2)  # m, the DCM less its reference
 
     def _polygon(self) -> Hull:
         """The soles' support polygon where the robot believes they are (renewed every ``POLYGON_EVERY`` steps)."""
@@ -155,16 +199,16 @@ class Stabilizer:
             self._hull = Hull.of(points)
         return self._hull
 
-    def _desired_zmp(self, zmp: FloatArray, reference: FloatArray, dt_s: float) -> FloatArray:
-        """The ZMP (2,) that brings the DCM back to its reference (the static ZMP ``zmp`` at the CoM ``reference``)."""
+    def _desired_zmp(self, zmp: FloatArray, reference: FloatArray, velocity: FloatArray, dt_s: float) -> FloatArray:
+        """The ZMP (2,) that brings the DCM back to its reference (the ZMP ``zmp``, the CoM ``reference`` moving)."""
         com = self.robot.com()
         if self._com is not None:
             blend = dt_s / (VELOCITY_FILTER_S + dt_s)
             self._velocity += blend * ((com[:2] - self._com) / dt_s - self._velocity)
         self._com = com[:2].copy()
         omega = np.sqrt(-GRAVITY[2] / max(float(com[2]), 0.1))
-        dcm = com[:2] + self._velocity / omega
-        desired = zmp + (1.0 + K_DCM_PER_S / omega) * (dcm - reference)
+        self.dcm_error = com[:2] + self._velocity / omega - reference - velocity / omega
+        desired = zmp + (1.0 + K_DCM_PER_S / omega) * self.dcm_error
         return clamp_into(self._polygon(), desired, ZMP_MARGIN_M)
 
     def step(
@@ -172,8 +216,9 @@ class Stabilizer:
         soles: SoleReadings,
         hand_wrenches: dict[str, FloatArray],
         attitude: tuple[FloatArray, FloatArray],
-        com_planned: FloatArray,
+        planned: Reference,
         dt_s: float,
+        holding: bool = False,
     ) -> list[FloatArray]:
         """Each sole's twist (6,) relative to the base (world axes at the sole), the robot updated at its sensors.
 
@@ -181,28 +226,51 @@ class Stabilizer:
             soles: The soles' sensor readings.
             hand_wrenches: Chain -> the table's measured wrench on its hand (6,), world axes at its contact frame.
             attitude: The base's orientation (3, 3) as its IMU reads it, and as planned.
-            com_planned: (2,) the planned CoM's ground projection, m.
+            planned: The plan's CoM, CoM velocity and ZMP at this sample.
             dt_s: The control period.
+            holding: A hand holds a contact: the stabilizer rests while the robot is balanced.
 
         """
         robot = self.robot
         self._steps += 1
-        zmp, reference = references(robot, hand_wrenches, com_planned, self._polygon(), self.margin_m)
-        self.zmp_desired = self._desired_zmp(zmp, reference, dt_s)
-        if self.glued_feet:
-            return [np.zeros(6) for _ in robot.soles]
-        poses = robot.sole_poses
+        zmp, reference = references(robot, hand_wrenches, planned, self._polygon(), self.margin_m)
+        self.zmp_desired = self._desired_zmp(zmp, reference, planned.com_velocity, dt_s)
         total = robot.soles_total(soles.wrenches)
+        measured = np.array([-total[4], total[3]]) / max(float(total[2]), 1.0)  # the ZMP (2,), floor at z = 0
+        balanced = np.linalg.norm(self.dcm_error) < REST_DCM_M and self._polygon().margin(measured) > REST_MARGIN_M
+        if self.glued_feet or (holding and balanced):
+            return [np.zeros(6) for _ in robot.soles]
         desired = total.copy()
         desired[3:5] = [self.zmp_desired[1] * total[2], -self.zmp_desired[0] * total[2]]  # its ZMP there
-        level = np.zeros(3)
+        shift = np.zeros(3)  # the soles move back: the base moves on
+        shift[2] = K_HEIGHT_PER_S * float(
+            _beyond(np.array([robot.q[2] - planned.pelvis_z]), np.array([HEIGHT_BAND_M]))[0]
+        )
+        shift[:2] = -np.clip(
+            K_COM_PER_S * _beyond(reference - robot.com()[:2], np.full(2, COM_BAND_M)), -MAX_COM_SPEED, MAX_COM_SPEED
+        )
+        level = np.zeros(3)  # turning both soles by the base's tilt, relative to it, turns the base back
         tilt = _beyond(tilt_error(*attitude), np.full(2, ATTITUDE_BAND_RAD))
         level[:2] = np.clip(K_ATTITUDE_PER_S * tilt, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
-        twists = []
-        for pose, wrench, share in zip(poses, soles.wrenches, robot.sole_split(desired), strict=True):
-            excess = _beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
-            local = np.concatenate([K_FOOT_FORCE * excess[:3], K_FOOT_TORQUE * excess[3:]])
-            local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
-            # turning both soles by the base's tilt, relative to it, turns the base back
-            twists.append(np.concatenate([pose[:3, :3] @ local[:3], pose[:3, :3] @ local[3:] + level]))
-        return twists
+        shares = robot.sole_split(desired)
+        return [
+            _sole_twist(pose, wrench, share, shift, level, float(total[2]))
+            for pose, wrench, share in zip(robot.sole_poses, soles.wrenches, shares, strict=True)
+        ]
+
+
+def _sole_twist(
+    pose: FloatArray, wrench: FloatArray, share: FloatArray, shift: FloatArray, level: FloatArray, load: float
+) -> FloatArray:
+    """A sole's twist (6,) relative to the base: its admittance, the CoM's shift and height, the attitude's turn.
+
+    ``pose`` (4, 4) where the nominal model puts it; ``wrench`` and ``share`` (6,) in its frame;
+    ``load`` the soles' total vertical force, N.
+    """
+    excess = _beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
+    if wrench[2] < LIGHT_SHARE * load:
+        excess[3:] = 0.0
+    local = np.concatenate([K_FOOT_FORCE * excess[:3], K_FOOT_TORQUE * excess[3:]])
+    local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
+    rotation = pose[:3, :3]
+    return np.concatenate([rotation @ local[:3] + shift, rotation @ local[3:] + level])

@@ -58,7 +58,6 @@ from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import Scene, scene_for
 
 REST_S = 1.0  # at rest before the route starts and after it ends (as simulate --bag)
-CONTACT_FORCE_N = 30.0  # the normal force the force-controlled contacts hold
 
 
 @dataclass(frozen=True)
@@ -123,7 +122,6 @@ def _provenance(scene: Scene, route_path: str, options: PhysicsOptions) -> dict[
             "engine": f"mujoco {mujoco.__version__}",
             "timestep_s": TIMESTEP_S,
             "rest_s": REST_S,
-            "contact_force_n": CONTACT_FORCE_N,
             "sensors": asdict(SensorNoise()),
         },
     }
@@ -210,13 +208,13 @@ def _run(
     """Build the true robot, run the route, and the truth record (plane and floor as the robot stood)."""
     robot = draw_true_robot(scene, options.session, perturbation, options.seed)
     gains = joint_gains(scene)
-    tools = {c.name: wrist_tool(scene, c.gripper_frame) for c in scene.chains}
+    tools = {c.name: wrist_tool(scene, c.sensor_frame) for c in scene.chains}
     built = build(scene, robot.urdf, robot.table_top, gains, tools, robot.springs, options.glued_feet)
     period = stride * TIMESTEP_S
     plan = sample_plan(scene, route, period, REST_S)
     noise = SensorNoise(encoder_rad=float(np.deg2rad(options.noise_deg)))
     sensors = Sensors(built.layout, noise, options.seed)
-    run = Run(scene, built, gains, plan, contact_times(route), sensors, tools, CONTACT_FORCE_N, stride)
+    run = Run(scene, built, gains, plan, contact_times(route), sensors, tools, scene.route.contact_force_n, stride)
     result = run.run(progress)
     stood = as_stood(robot, result.soles_at_start) if result.soles_at_start else robot.x
     return result, truth_record(robot.model, stood, {})

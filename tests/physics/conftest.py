@@ -25,7 +25,7 @@ def gains(scene: Scene) -> Gains:
 
 @pytest.fixture(scope="session")
 def tools(scene: Scene) -> dict[str, Tool]:
-    return {c.name: wrist_tool(scene, c.gripper_frame) for c in scene.chains}
+    return {c.name: wrist_tool(scene, c.sensor_frame) for c in scene.chains}
 
 
 @pytest.fixture(scope="session")

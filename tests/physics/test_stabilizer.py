@@ -12,7 +12,7 @@ from posegen.physics.nominal import NominalRobot
 from posegen.physics.plan import Plan
 from posegen.physics.run import Run
 from posegen.physics.sensors import SensorNoise, Sensors
-from posegen.physics.stabilizer import Hull, clamp_into, references
+from posegen.physics.stabilizer import Hull, Reference, clamp_into, references
 from posegen.physics.tool import Tool
 from posegen.robot import Scene, convex_hull_clockwise, polygon_margin
 
@@ -33,6 +33,8 @@ def standing_plan(scene: Scene, seconds: float, period_s: float = 0.002) -> Plan
         np.repeat(scene.reference[None], count, axis=0),
         np.zeros((count, len(scene.joint_names))),
         np.repeat(com[None], count, axis=0),
+        np.zeros((count, 2)),
+        np.repeat(com[None], count, axis=0),  # at rest, the ZMP is under the CoM
         np.full(count, q[2]),
         np.repeat(pin.Quaternion(q[3:7]).toRotationMatrix()[None], count, axis=0),
         {c: np.repeat(h[None], count, axis=0) for c, h in hands.items()},
@@ -81,24 +83,13 @@ def test_a_push_moves_the_com_only_when_the_zmp_would_leave_the_margin(scene: Sc
         )
     )
     com = robot.com()[:2]
+    at_rest = Reference(com, np.zeros(2), com, 1.0)
     hand = robot.pose(robot.contact_frames["left"])[:2, 3]
     weight = robot.mass_kg * 9.81
-    zmp, reference = references(robot, {"left": np.array([0.0, 0.0, 30.0, 0, 0, 0])}, com, polygon, 0.02)
-    assert np.allclose(reference, com) and np.allclose(zmp, (weight * com + 30.0 * hand) / (weight + 30.0))
-    zmp, reference = references(robot, {"left": np.array([0.0, 0.0, 400.0, 0, 0, 0])}, com, polygon, 0.02)
+    zmp, reference = references(robot, {"left": np.array([0.0, 0.0, 30.0, 0, 0, 0])}, at_rest, polygon, 0.02)
+    assert np.allclose(reference, com) and np.allclose(zmp, (weight * com - 30.0 * hand) / (weight - 30.0))
+    assert (zmp - com) @ (hand - com) < 0  # the table lifts the hand: the floor's pressure moves away from it
+    zmp, reference = references(robot, {"left": np.array([0.0, 0.0, 300.0, 0, 0, 0])}, at_rest, polygon, 0.02)
     assert polygon.margin(zmp) == pytest.approx(0.02, abs=1e-3)
-    assert np.allclose((weight * reference + 400.0 * hand) / (weight + 400.0), zmp)  # the CoM moved back to hold it
-    assert (reference - com) @ (hand - com) < 0
-
-
-def test_the_soles_share_a_wrench_as_flat_feet(scene: Scene, tools: dict[str, Tool]) -> None:
-    robot = NominalRobot(scene, tools)
-    robot.update(scene.reference)
-    total = np.array([3.0, -2.0, 880.0, 880 * 0.03, 880 * 0.01, 1.5])  # ZMP (-0.01, 0.03)
-    shares = robot.sole_split(total)
-    assert np.allclose(robot.soles_total(tuple(shares)), total)
-    for wrench in shares:
-        assert wrench[2] > 0
-        cop = np.array([-wrench[4], wrench[3]]) / wrench[2]  # in the sole frame
-        (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
-        assert x0 < cop[0] < x1 and y0 < cop[1] < y1
+    assert np.allclose((weight * reference - 300.0 * hand) / (weight - 300.0), zmp)  # the CoM moved to hold it
+    assert (reference - com) @ (hand - com) > 0

@@ -63,9 +63,7 @@ def test_measure_reads_the_physics_bag_as_a_recording(physics_bag: Path, physics
         joint_topic="/joint_states",
         use_wrench=True,
     )
-    assert (
-        len(measured.windows) >= 1
-    )  # TODO(merge): 2, once measure removes the tools' weight (now: "force on both wrists")
+    assert len(measured.windows) == 2
 
 
 def test_the_same_seed_writes_the_same_bytes(physics_bag: Path, physics_route: Path, tmp_path: Path) -> None:
