@@ -58,6 +58,13 @@ SEARCH_TIMEOUT_S = 3.0  # the route waits at most this long for a contact before
 SETTLE_S = 0.25  # and this long after the force first reached its band (the arm settles)
 MAX_OFFSET_M = 0.05  # the search and the force control move the hand at most this far from the plan
 K_HOLD_PER_S = 5.0  # the hand's pose error to its target (the plan plus the admittance's offset) -> twist
+POSE_BAND = np.array([5e-4, 5e-4, 5e-4, 2e-3, 2e-3, 2e-3])  # m, rad: a smaller pose error is left as it is
+HOLD_EVERY = 5  # control periods between two computations of the hands' pose errors
+
+
+def _beyond(values: FloatArray, band: FloatArray) -> FloatArray:
+    """Each value less its band toward zero; zero within the band."""
+    return np.asarray(np.sign(values) * np.maximum(np.abs(values) - band, 0.0))
 
 
 class Phase(enum.Enum):
@@ -127,6 +134,8 @@ class HandControl:
         self.waited_s: dict[str, float] = {}  # contact label -> how long the route waited for it
         self.saturated: dict[str, bool] = {}  # chain -> an arm joint lags its command past its effort limit
         self._settled: dict[str, float] = {}  # contact label -> time since its force first reached its band
+        self._errors: dict[str, FloatArray] = {}  # chain -> its pose error beyond the band, renewed every HOLD_EVERY
+        self._steps = 0
 
     def _current(self, chain: str, t: float) -> ContactTimes | None:
         for contact in self.contacts[chain]:
@@ -195,7 +204,8 @@ class HandControl:
 
         Away from the table, the twist holds the hand at its target in the world (the planned
         pose moved by the admittance's offset), where the commanded angles put it on the base
-        the IMU tilts: the stabilizer's lean and the base's tilt do not carry it. While a hand
+        the IMU tilts: the stabilizer's lean and the base's tilt do not carry it (an error
+        within ``POSE_BAND`` is left; the error is renewed every ``HOLD_EVERY`` periods). While a hand
         is in contact (go-to-contact, hold, release) the table holds it and only its
         admittance moves it; the other hand stays still (a contact is measured with every
         joint still). (Closed on the commands,
@@ -212,8 +222,13 @@ class HandControl:
         """
         out = {}
         hold = not self.in_contact(t)  # in contact, every hand stays still
-        frames = [self.robot.contact_frames[chain] for chain in self.hands]
-        at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True)) if hold else {}
+        self._steps += 1
+        if hold and (self._steps % HOLD_EVERY == 0 or not self._errors):
+            frames = [self.robot.contact_frames[chain] for chain in self.hands]
+            at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True))
+            self._errors = {
+                c: _beyond(self._error(planned[c], h.offset, at[c]), POSE_BAND) for c, h in self.hands.items()
+            }
         for chain, hand in self.hands.items():
             contact = self._current(chain, t)
             compensated = wrists[chain] - self.robot.tool_wrench(chain)
@@ -228,7 +243,7 @@ class HandControl:
             rate = self._twist(chain, contact, t, wrench, hand)
             hand.offset += rate * dt_s
             hand.offset[:3] = np.clip(hand.offset[:3], -MAX_OFFSET_M, MAX_OFFSET_M)
-            out[chain] = rate + (K_HOLD_PER_S * self._error(planned[chain], hand.offset, at[chain]) if hold else 0.0)
+            out[chain] = rate + (K_HOLD_PER_S * self._errors[chain] if hold else 0.0)
         return out
 
     @staticmethod

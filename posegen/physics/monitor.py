@@ -15,8 +15,8 @@ import numpy as np
 
 from posegen.physics.builder import Layout
 from posegen.physics.geometry import ShapeRole
-from posegen.physics.nominal import cross
 from posegen.physics.sensors import sensor_wrench
+from posegen.physics.sole_split import cross
 from posegen.robot import FloatArray, convex_hull_clockwise, polygon_margin
 
 _CODES = {role: k for k, role in enumerate(ShapeRole)}

@@ -13,16 +13,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from posegen.physics.sole_split import split_wrench
+from posegen.physics.sole_split import cross, least_size_map, split_wrench
 from posegen.physics.tool import Tool
 from posegen.robot import FloatArray, Scene
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world
-
-
-def cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """The cross product of two 3-vectors (numpy's is slow on one pair)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+SPLIT_EVERY = 25  # updates between two computations of the least-size split's map (the soles barely move)
 
 
 class NominalRobot:
@@ -56,6 +52,8 @@ class NominalRobot:
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
         self._foot_centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # in a sole frame
         self._foot_half = np.array([(x1 - x0) / 2, (y1 - y0) / 2])
+        self._normal_map: FloatArray | None = None  # the least-size split's, renewed every SPLIT_EVERY updates
+        self._updates = 0
         self.q = scene.configuration(scene.reference)
 
     def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
@@ -84,6 +82,7 @@ class NominalRobot:
 
         """
         self.imu = imu
+        self._updates += 1
         self.q = self._configuration(joints, imu)
         pin.computeJointJacobians(self.model, self.data, self.q)
         pin.updateFramePlacements(self.model, self.data)
@@ -139,7 +138,9 @@ class NominalRobot:
 
     def sole_split(self, total: FloatArray) -> list[FloatArray]:
         """A world wrench (6,) at the world origin, shared by the soles: each (6,) LOCAL (see :func:`split_wrench`)."""
-        return split_wrench(total, self.sole_poses, self._foot_centre, self._foot_half)
+        if self._normal_map is None or self._updates % SPLIT_EVERY == 0:
+            self._normal_map = least_size_map(self.sole_poses)
+        return split_wrench(total, self.sole_poses, self._foot_centre, self._foot_half, self._normal_map)
 
     def soles_total(self, wrenches: tuple[FloatArray, ...]) -> FloatArray:
         """The soles' wrenches (6,) each, in their frames, as one world wrench (6,) at the world origin."""

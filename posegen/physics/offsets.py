@@ -8,7 +8,9 @@ hands' together by the upper body's joints (every chain's, less the legs': the t
 the arms; an arm alone, near the end of its reach, cannot move its hand along the table's
 normal), the torso's joints weighted ``SHARED_WEIGHT`` times an arm's (the arms move the
 hands; the torso, holding the whole upper body, often near its effort limit, helps only
-where they cannot). Locked joints never move.
+where they cannot). The planned angle plus the offset stays ``LIMIT_MARGIN_RAD`` inside
+each joint's limits; a joint held there weighs ``AT_LIMIT_WEIGHT`` times more in the next
+solves (the others take its share). Locked joints never move.
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ from posegen.physics.nominal import NominalRobot
 from posegen.robot import FloatArray, Scene
 
 DAMPING = 1e-4  # of the least-squares solves (m^2: a few centimetres of damping near singularities)
+LIMIT_MARGIN_RAD = 0.005  # the offset keeps the commanded angle this far inside the joint limits
+AT_LIMIT_WEIGHT = 400.0  # cost of moving a joint held at its limit, relative to a free one
 SHARED_WEIGHT = 100.0  # cost of a torso joint's motion relative to an arm joint's, in the hands' solve
 NULL_DECAY_S = 10.0  # an arm's offset that moves no task decays back to the plan (slowly: a hold stays still)
 
@@ -47,7 +51,7 @@ class JointOffsets:
 
     Example:
         >>> offsets = JointOffsets(scene, robot)
-        >>> dq = offsets.step(sole_twists, hand_twists, dt_s=0.002)
+        >>> dq = offsets.step(sole_twists, hand_twists, planned_angles, dt_s=0.002)
 
     """
 
@@ -61,6 +65,12 @@ class JointOffsets:
         self.shared = [j for j in self.upper if j not in own]  # the torso
         self._scale = np.ones(len(scene.joint_names))  # a joint's rate per unit of the solve's variable
         self._scale[self.shared] = 1.0 / np.sqrt(SHARED_WEIGHT)
+        middle = 0.5 * (scene.lower + scene.upper)
+        self._lower = np.minimum(scene.lower + LIMIT_MARGIN_RAD, middle)
+        self._upper = np.maximum(scene.upper - LIMIT_MARGIN_RAD, middle)
+        self._movable = np.zeros(len(scene.joint_names), dtype=bool)
+        self._movable[[j for leg in self.legs for j in leg] + self.upper] = True
+        self._at_limit = np.zeros(len(scene.joint_names), dtype=bool)
 
     def moving(self, chain: str) -> list[int]:
         """The joints that move a chain's hand: its arm's and the torso's."""
@@ -72,7 +82,7 @@ class JointOffsets:
         Damped least squares; a redundant chain's offset that moves no task decays toward zero
         (its self-motion would otherwise drift).
         """
-        scale = self._scale[joints]  # (n,) weighted least squares: the solve's variable is dq / scale
+        scale = np.where(self._at_limit[joints], 1.0 / np.sqrt(AT_LIMIT_WEIGHT), 1.0) * self._scale[joints]  # (n,)
         jacobian = np.vstack([self.robot.frame_jacobian(f)[:, 6 + np.asarray(joints)] for f in frames]) * scale
         rows = jacobian.shape[0]  # jacobian (6k, n)
         if jacobian.shape[1] < rows:
@@ -85,13 +95,19 @@ class JointOffsets:
         return np.asarray(scale * (jacobian.T @ np.linalg.solve(gram, twist + jacobian @ decaying) - decaying))
 
     def step(
-        self, soles: list[FloatArray], hands: dict[str, FloatArray], dt_s: float, decay: bool = True
+        self,
+        soles: list[FloatArray],
+        hands: dict[str, FloatArray],
+        planned: FloatArray,
+        dt_s: float,
+        decay: bool = True,
     ) -> FloatArray:
         """Advance the offset by one control period; the robot updated at the encoders' angles.
 
         Args:
             soles: Each sole's twist (6,) relative to the base, world axes at the sole (stance order).
             hands: Chain -> its hand's twist (6,) relative to the base, world axes at its contact frame.
+            planned: The planned angles (nj,) rad the offset adds to (the limits hold their sum).
             dt_s: Control period, s.
             decay: Let the arms' unused offsets decay (not while a hand is at the table: a
                 contact is measured with every joint still).
@@ -108,4 +124,7 @@ class JointOffsets:
         if np.any(twist) or (decay and np.any(self.dq[self.upper])):
             frames = [robot.contact_frames[chain] for chain in self.arms]
             self.dq[self.upper] += dt_s * self._solve(frames, self.upper, twist, decay)
+        limited = np.clip(planned + self.dq, self._lower, self._upper) - planned
+        self._at_limit = self._movable & (limited != self.dq)
+        self.dq = np.where(self._movable, limited, 0.0)
         return self.dq

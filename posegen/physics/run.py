@@ -118,7 +118,7 @@ class Run:
         imu = self.sensors.imu(data)
         self.robot.update(encoders, imu)
         planned = {chain: poses[index] for chain, poses in plan.hands.items()}
-        commanded = plan.positions[index] + self.offsets.dq
+        commanded = plan.positions[index] + self.offsets.dq  # within the joint limits
         lag = np.abs(commanded - encoders)
         for chain in self.offsets.arms:
             self.hands.saturated[chain] = bool(np.any(lag[self.offsets.moving(chain)] > LAGGING_RAD))
@@ -129,8 +129,10 @@ class Run:
         pushes = {c: np.array([0.0, 0.0, self.hands.planned_push(c, t_route), 0.0, 0.0, 0.0]) for c in wrists}
         holding = self.hands.holding(t_route)
         feet = self.stabilizer.step(soles, pushes, attitude, reference, self.period_s, holding)
-        offset = self.offsets.step(feet, hands, self.period_s, decay=not self.hands.in_contact(t_route))
-        target = np.clip(plan.positions[index] + offset, self.scene.lower, self.scene.upper)
+        offset = self.offsets.step(
+            feet, hands, plan.positions[index], self.period_s, not self.hands.in_contact(t_route)
+        )
+        target = plan.positions[index] + offset
         if sample % FEED_FORWARD_EVERY == 0:  # the posture's statics change slowly
             self._torque = self.robot.static_torques({})
         torque = self._torque

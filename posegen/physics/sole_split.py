@@ -24,6 +24,11 @@ COP_MARGIN_M = 0.01  # each sole's centre of pressure kept this far inside its r
 WEIGHT = np.array([1.0, 1.0, 1.0, MOMENT_ARM_M, MOMENT_ARM_M, MOMENT_ARM_M])  # the planner's least-size scaling
 
 
+def cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """The cross product of two 3-vectors (numpy's is slow on one pair)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def _action(pose: FloatArray) -> FloatArray:
     """(6, 6) a wrench in the frame ``pose`` (4, 4) -> the same wrench in the world, about the origin."""
     rotation, origin = pose[:3, :3], pose[:3, 3]
@@ -35,12 +40,22 @@ def _action(pose: FloatArray) -> FloatArray:
     return action
 
 
-def least_size_share(total: FloatArray, poses: list[FloatArray]) -> float:
-    """The second sole's share of the vertical load in the planner's least-size split of ``total`` (6,)."""
+def least_size_map(poses: list[FloatArray]) -> FloatArray:
+    """(2, 6) the soles' normal forces in the planner's least-size split, per unit of the total wrench.
+
+    The split solves ``A w = total`` at least scaled size (:mod:`posegen.robot.statics`);
+    its soles' normal forces are linear in the total. (The map depends on the soles'
+    poses alone: it can be kept while they barely move.)
+    """
     matrix = np.hstack([_action(pose) * WEIGHT[None, :] for pose in poses])  # (6, 12), acting on scaled wrenches
-    scaled = matrix.T @ np.linalg.solve(matrix @ matrix.T, total)
-    first, second = scaled[2], scaled[8]  # the soles' normal forces (the scaling leaves forces as they are)
-    return float(np.clip(second / (first + second), 0.0, 1.0)) if first + second > 1e-9 else 0.5
+    solution = matrix.T @ np.linalg.inv(matrix @ matrix.T)  # (12, 6)
+    return np.asarray(solution[[2, 8]])  # the normal forces (the scaling leaves forces as they are)
+
+
+def least_size_share(total: FloatArray, poses: list[FloatArray], normal_map: FloatArray | None = None) -> float:
+    """The second sole's share of the vertical load in the planner's least-size split of ``total`` (6,)."""
+    first, second = (least_size_map(poses) if normal_map is None else normal_map) @ total
+    return float(min(max(second / (first + second), 0.0), 1.0)) if first + second > 1e-9 else 0.5
 
 
 def _feasible(
@@ -62,7 +77,13 @@ def _feasible(
     return low, high
 
 
-def split_wrench(total: FloatArray, poses: list[FloatArray], centre: FloatArray, half: FloatArray) -> list[FloatArray]:
+def split_wrench(
+    total: FloatArray,
+    poses: list[FloatArray],
+    centre: FloatArray,
+    half: FloatArray,
+    normal_map: FloatArray | None = None,
+) -> list[FloatArray]:
     """A world wrench (6,) at the world origin shared by two flat soles: each (6,) in its frame (LOCAL).
 
     Args:
@@ -70,6 +91,7 @@ def split_wrench(total: FloatArray, poses: list[FloatArray], centre: FloatArray,
         poses: Each sole frame's world pose (4, 4).
         centre: (3,) the foot rectangle's centre in a sole frame.
         half: (2,) its half sizes, m.
+        normal_map: :func:`least_size_map` of the poses, if kept; None: computed.
 
     Example:
         >>> left, right = split_wrench(total, robot.sole_poses, np.zeros(3), np.array([0.1, 0.065]))
@@ -83,9 +105,9 @@ def split_wrench(total: FloatArray, poses: list[FloatArray], centre: FloatArray,
     span = centres[1][:2] - centres[0][:2]
     low, high = _feasible(zmp, centres, poses, half)
     if low <= high:
-        share = float(np.clip(least_size_share(total, poses), low, high))
+        share = min(max(least_size_share(total, poses, normal_map), low), high)
     else:  # the lever rule
-        share = float(np.clip((zmp - centres[0][:2]) @ span / (span @ span), 0.0, 1.0))
+        share = min(max(float((zmp - centres[0][:2]) @ span / (span @ span)), 0.0), 1.0)
     return _shared(total, share, centres, zmp - (centres[0][:2] + share * span), poses)
 
 
@@ -100,7 +122,7 @@ def _shared(
     out = []
     for part_share, point, pose in zip(shares, points, poses, strict=True):
         part = part_share * force
-        torque = np.cross(point - pose[:3, 3], part)
+        torque = cross(point - pose[:3, 3], part)
         torque[2] += part_share * yaw
         out.append(np.concatenate([pose[:3, :3].T @ part, pose[:3, :3].T @ torque]))
     return out
