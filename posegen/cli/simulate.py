@@ -11,6 +11,8 @@ import argparse
 from posegen.cli.options import JOINT_STATES_TOPIC, name, positive_size, seed, size
 from posegen.cli.progress import ProgressBar
 
+KINEMATIC_RATE_HZ = 500.0  # the default rate of a kinematic recording (simulate --bag)
+
 NAME = "simulate"
 HELP = "contacts of a perturbed robot at planned postures, or its recorded run of a route (--bag)"
 
@@ -48,7 +50,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
     bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR/truth.yaml")
     bag.add_argument(
-        "--rate", type=positive_size, default=500.0, help="joint state and wrench rate in Hz (default 500)"
+        "--rate",
+        type=positive_size,
+        default=None,
+        help="joint state and wrench rate in Hz (default 500; with --physics 250: its controllers run at this rate)",
     )
     bag.add_argument(
         "--joint-topic", default=JOINT_STATES_TOPIC, help=f"JointState topic (default {JOINT_STATES_TOPIC})"
@@ -79,9 +84,10 @@ def run(args: argparse.Namespace) -> int:
     if args.physics or args.glued_feet:
         return _physics(args)
     if args.bag:
-        recorded = simulate_route_bag(args.postures, args.bag, rate_hz=args.rate, joint_topic=args.joint_topic, **robot)
+        rate = args.rate or KINEMATIC_RATE_HZ
+        recorded = simulate_route_bag(args.postures, args.bag, rate_hz=rate, joint_topic=args.joint_topic, **robot)
         print(
-            f"simulate: {recorded.contacts} contacts, {recorded.duration_s:.1f} s recorded at {args.rate:g} Hz "
+            f"simulate: {recorded.contacts} contacts, {recorded.duration_s:.1f} s recorded at {rate:g} Hz "
             f"({recorded.samples} joint states) -> {recorded.bag}/ (true parameters: {recorded.truth})"
         )
         return 0
@@ -105,7 +111,7 @@ def _physics(args: argparse.Namespace) -> int:
         raise ArgumentError(
             "--contact-noise-mm/--contact-noise-deg are the kinematic simulation's: physics makes its own"
         )
-    from posegen.physics import PhysicsOptions, simulate_physics_bag
+    from posegen.physics import PHYSICS_RATE_HZ, PhysicsOptions, simulate_physics_bag
 
     options = PhysicsOptions(
         seed=args.seed,
@@ -113,7 +119,7 @@ def _physics(args: argparse.Namespace) -> int:
         error_deg=args.error_deg,
         noise_deg=args.noise_deg,
         session=args.session,
-        rate_hz=args.rate,
+        rate_hz=args.rate or PHYSICS_RATE_HZ,
         joint_topic=args.joint_topic,
         compliance_rad_per_knm=args.compliance,
         glued_feet=args.glued_feet,

@@ -22,11 +22,12 @@ from posegen.physics.physics_file import (
     read_physics,
     write_physics,
 )
-from posegen.physics.workflow import PhysicsBag, PhysicsOptions, simulate_physics_bag
+from posegen.physics.workflow import PHYSICS_RATE_HZ, PhysicsBag, PhysicsOptions, simulate_physics_bag
 
 __all__ = [
     "PHYSICS_FILE",
     "PHYSICS_FORMAT",
+    "PHYSICS_RATE_HZ",
     "PhysicsBag",
     "PhysicsOptions",
     "PhysicsReport",

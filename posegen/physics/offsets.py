@@ -24,7 +24,7 @@ from posegen.robot import FloatArray, Scene
 DAMPING = 1e-4  # of the least-squares solves (m^2: a few centimetres of damping near singularities)
 LIMIT_MARGIN_RAD = 0.005  # the offset keeps the commanded angle this far inside the joint limits
 AT_LIMIT_WEIGHT = 400.0  # cost of moving a joint held at its limit, relative to a free one
-SHARED_WEIGHT = 100.0  # cost of a torso joint's motion relative to an arm joint's, in the hands' solve
+SHARED_WEIGHT = 10.0  # cost of a torso joint's motion relative to an arm joint's, in the hands' solve
 NULL_DECAY_S = 10.0  # an arm's offset that moves no task decays back to the plan (slowly: a hold stays still)
 
 

@@ -6,7 +6,8 @@ the centre of mass, and each foot gives way to the wrench it carries beyond its 
 of that ZMP, so the ankles lean the body until the floor's wrench is the desired one.
 
 * **DCM feedback.** The CoM ``c`` and its velocity are estimated on the nominal model
-  from the encoders and the IMU (:class:`NominalRobot`); ``xi = c + c' / omega``,
+  from the encoders and the IMU (:class:`NominalRobot`), the model's CoM corrected by a
+  bias the soles' sensors measure (below); ``xi = c + c' / omega``,
   ``omega = sqrt(g / z_c)``. The desired ZMP is
   ``p_d = p_ref + (1 + K_DCM / omega) (xi - xi_ref)``, kept ``ZMP_MARGIN_M`` inside the
   support polygon, with ``xi_ref = c_ref + c_ref' / omega``. The references are the
@@ -22,6 +23,10 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
   contact is measured with its joints still): a sole
   on its edge turns flat, a leg the true kinematics makes long shortens, and together
   they lean the body to move the ZMP.
+* **CoM bias.** The nominal model misplaces a perturbed robot's CoM by centimetres. When
+  no hand pushes, the measured ZMP less the one the plan's motion gives at the model's CoM
+  is low-passed (``BIAS_S``) into the CoM's bias: on average over a few seconds the floor
+  carries the weight under the true CoM.
 * **CoM position.** The CoM the encoders and the IMU put on the nominal model is brought
   back to its reference by moving the base over the soles (both soles move alike,
   relative to the base, along the floor: ``K_COM``, beyond ``COM_BAND_M``): the joint
@@ -56,6 +61,7 @@ from posegen.robot import FloatArray, Scene, convex_hull_clockwise
 
 K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
 VELOCITY_FILTER_S = 0.02  # low-pass of the CoM velocity estimate
+BIAS_S = 2.0  # time constant of the CoM bias estimate, s
 ZMP_MARGIN_M = (
     0.004  # the desired ZMP is kept this far inside the support polygon (the feedback's authority at the edge)
 )
@@ -191,6 +197,7 @@ class Stabilizer:
         self._velocity = np.zeros(2)
         self.zmp_desired: FloatArray = np.zeros(2)
         self.dcm_error: FloatArray = np.zeros(2)  # m, the DCM less its reference
+        self.com_bias: FloatArray = np.zeros(2)  # m, the true CoM less the model's, as the soles measure it
 
     def _polygon(self) -> Hull:
         """The soles' support polygon where the robot believes they are (renewed every ``POLYGON_EVERY`` steps)."""
@@ -202,6 +209,7 @@ class Stabilizer:
     def _desired_zmp(self, zmp: FloatArray, reference: FloatArray, velocity: FloatArray, dt_s: float) -> FloatArray:
         """The ZMP (2,) that brings the DCM back to its reference (the ZMP ``zmp``, the CoM ``reference`` moving)."""
         com = self.robot.com()
+        com[:2] += self.com_bias
         if self._com is not None:
             blend = dt_s / (VELOCITY_FILTER_S + dt_s)
             self._velocity += blend * ((com[:2] - self._com) / dt_s - self._velocity)
@@ -237,6 +245,9 @@ class Stabilizer:
         self.zmp_desired = self._desired_zmp(zmp, reference, planned.com_velocity, dt_s)
         total = robot.soles_total(soles.wrenches)
         measured = np.array([-total[4], total[3]]) / max(float(total[2]), 1.0)  # the ZMP (2,), floor at z = 0
+        if not any(float(w[2]) > 0.0 for w in hand_wrenches.values()):
+            expected = robot.com()[:2] + self.com_bias + planned.zmp - planned.com  # the plan's motion at our CoM
+            self.com_bias += dt_s / BIAS_S * (measured - expected)
         balanced = np.linalg.norm(self.dcm_error) < REST_DCM_M and self._polygon().margin(measured) > REST_MARGIN_M
         if self.glued_feet or (holding and balanced):
             return [np.zeros(6) for _ in robot.soles]
@@ -247,7 +258,9 @@ class Stabilizer:
             _beyond(np.array([robot.q[2] - planned.pelvis_z]), np.array([HEIGHT_BAND_M]))[0]
         )
         shift[:2] = -np.clip(
-            K_COM_PER_S * _beyond(reference - robot.com()[:2], np.full(2, COM_BAND_M)), -MAX_COM_SPEED, MAX_COM_SPEED
+            K_COM_PER_S * _beyond(reference - robot.com()[:2] - self.com_bias, np.full(2, COM_BAND_M)),
+            -MAX_COM_SPEED,
+            MAX_COM_SPEED,
         )
         level = np.zeros(3)  # turning both soles by the base's tilt, relative to it, turns the base back
         tilt = _beyond(tilt_error(*attitude), np.full(2, ATTITUDE_BAND_RAD))

@@ -58,6 +58,9 @@ from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import Scene, scene_for
 
 REST_S = 1.0  # at rest before the route starts and after it ends (as simulate --bag)
+PHYSICS_RATE_HZ = (
+    250.0  # the default recording rate, at which the controllers run (whole-body controllers: 200-1000 Hz)
+)
 
 
 @dataclass(frozen=True)
@@ -81,7 +84,7 @@ class PhysicsOptions:
     error_deg: float = 0.5
     noise_deg: float = 0.005
     session: str = "sim"
-    rate_hz: float = 500.0
+    rate_hz: float = PHYSICS_RATE_HZ
     joint_topic: str = "/joint_states"
     compliance_rad_per_knm: float = 0.0
     glued_feet: bool = False
