@@ -10,6 +10,15 @@ Internal: scripts use the public API at ``posegen.`` (stable, documented with ex
 names here are its plumbing and may change between versions.
 """
 
+from posegen.robot.additions import (  # for the draft (robot init)
+    Box,
+    Capsule,
+    CollisionConfig,
+    DisabledPair,
+    FrameConfig,
+    Shape,
+    VisualHull,
+)
 from posegen.robot.balance import (
     Balance,
     FloorWrenches,
@@ -21,9 +30,13 @@ from posegen.robot.balance import (
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
-from posegen.robot.collision_geometry import robot_geometry
-from posegen.robot.collision_matrix import PairSurvey
+from posegen.robot.collision_geometry import (
+    add_self_pairs,  # for the draft (robot init)
+    robot_geometry,
+)
+from posegen.robot.collision_matrix import PairSurvey, survey_pairs, survey_scene_pairs  # for the draft (robot init)
 from posegen.robot.config import (
+    PACKAGE_URI,  # for the draft (robot init)
     Config,
     MarginConfig,
     RecordingConfig,
@@ -44,10 +57,19 @@ from posegen.robot.contact_kinds import (
     kind_named,
     registered_kinds,
 )
-from posegen.robot.coverage import GeometryCoverage, geometry_coverage
-from posegen.robot.description import RobotFiles, kinematic_urdf, with_declared_frames
-from posegen.robot.draft import Draft
-from posegen.robot.draft_text import survey_config_pairs, write_draft
+from posegen.robot.coverage import (
+    GeometryCoverage,
+    geometry_coverage,
+    has_extent,  # for the draft (robot init)
+)
+from posegen.robot.description import (  # for the draft (robot init)
+    RobotFiles,
+    kinematic_urdf,
+    package_uri,
+    resolve_path,
+    resolve_source,
+    with_declared_frames,
+)
 from posegen.robot.feasibility import (
     SOLE_ANGLE_TOL_RAD,
     SOLE_POSITION_TOL_M,
@@ -105,21 +127,26 @@ __all__ = [
     "EXAMPLES",
     "FLUSH",
     "MOMENT_ARM_M",
+    "PACKAGE_URI",
     "POINT",
     "SOLE_ANGLE_TOL_RAD",
     "SOLE_POSITION_TOL_M",
     "TABLE",
     "Assessment",
     "Balance",
+    "Box",
     "CalibrationConfig",
     "CandidateConfig",
+    "Capsule",
     "ChainConfig",
     "CollisionChecker",
+    "CollisionConfig",
     "Config",
     "ContactKind",
-    "Draft",
+    "DisabledPair",
     "FloatArray",
     "FloorWrenches",
+    "FrameConfig",
     "GeometryCoverage",
     "Indices",
     "Invariant",
@@ -137,14 +164,17 @@ __all__ = [
     "RouteConfig",
     "SamplingConfig",
     "Scene",
+    "Shape",
     "Spot",
     "StanceConfig",
     "StanceSpace",
     "Statics",
     "TableConfig",
     "Verification",
+    "VisualHull",
     "Worst",
     "WorstSoFar",
+    "add_self_pairs",
     "assess",
     "centres_of_pressure",
     "check_for_planning",
@@ -155,6 +185,7 @@ __all__ = [
     "flatten_on_floor",
     "geometry_coverage",
     "gravity_torques",
+    "has_extent",
     "holding_torques",
     "kind_named",
     "kinematic_urdf",
@@ -162,6 +193,7 @@ __all__ = [
     "load_config",
     "offset_derivatives",
     "offset_matrix",
+    "package_uri",
     "parse_candidate",
     "parse_config",
     "placement_derivatives",
@@ -169,6 +201,8 @@ __all__ = [
     "polygon_margin",
     "pressed_zmp_margin",
     "registered_kinds",
+    "resolve_path",
+    "resolve_source",
     "robot_geometry",
     "rpy_derivatives",
     "rpy_matrix",
@@ -176,7 +210,8 @@ __all__ = [
     "scene_for_postures",
     "stretch_for_margin",
     "summarize",
-    "survey_config_pairs",
+    "survey_pairs",
+    "survey_scene_pairs",
     "tilt_angles",
     "tilt_measurement",
     "tilt_measurement_jacobian",
@@ -184,7 +219,6 @@ __all__ = [
     "with_declared_frames",
     "worst_case",
     "worst_effort_ratio",
-    "write_draft",
     "yaw_rotation",
     "zmp_margins",
 ]

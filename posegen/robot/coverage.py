@@ -11,11 +11,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import coal
+import numpy as np
 import pinocchio as pin
 
 from posegen.robot.additions import VisualHull
 from posegen.robot.collision_geometry import robot_geometry
-from posegen.robot.draft_geometry import has_extent
 from posegen.robot.scene import Scene
 
 
@@ -73,3 +73,14 @@ def _first_body(model: pin.Model, frame: pin.Frame) -> bool:
         if other.parentJoint == frame.parentJoint and other.type == pin.FrameType.BODY:
             return bool(other.name == frame.name)
     return False
+
+
+MIN_SEGMENT_M = 0.01  # a link shorter than this and without mass needs no geometry
+
+
+def has_extent(model: pin.Model, joint: int) -> bool:
+    """Whether a joint's link reaches MIN_SEGMENT_M from its joint (a child joint, or its CoM, with mass)."""
+    children = [model.jointPlacements[c].translation for c in range(2, model.njoints) if model.parents[c] == joint]
+    far = [c for c in children if np.linalg.norm(c) >= MIN_SEGMENT_M]
+    inertia = model.inertias[joint]
+    return bool(far) or (inertia.mass > 0 and float(np.linalg.norm(inertia.lever)) >= MIN_SEGMENT_M)

@@ -4,16 +4,16 @@ Everything here is a heuristic a user then checks and edits; it reads structure,
 names, and records every guess with how to check it (:attr:`Draft.checks`):
 
 * up axis, forward, soles, footprint and the reference posture:
-  :mod:`posegen.robot.draft_stance` (no SRDF needed: a standing posture with the knees
-  bent is found when none gives one), in the steps of :mod:`posegen.robot.draft_body`;
+  :mod:`posegen.draft.stance` (no SRDF needed: a standing posture with the knees
+  bent is found when none gives one), in the steps of :mod:`posegen.draft.body`;
 * arms: the two longest chains of the upper body, up to where they branch into light
   parts only (fingers: under 1 % of the robot's mass), which are locked, like every joint
-  off the legs and arms (head, neck) (:mod:`posegen.robot.draft_body`). A gripper joint
+  off the legs and arms (head, neck) (:mod:`posegen.draft.body`). A gripper joint
   that ends a chain stays in it: lock it by hand;
-* contact: :func:`posegen.robot.draft_geometry.hand_contact` (a flat face pointing down,
+* contact: :func:`posegen.draft.geometry.hand_contact` (a flat face pointing down,
   else a point at the hand's tip);
 * collision geometry for the links that move without any, and capsules for links whose
-  collision geometry misses their centre of mass: :mod:`posegen.robot.draft_geometry`;
+  collision geometry misses their centre of mass: :mod:`posegen.draft.geometry`;
 * table: in front of the shoulders, its top about 0.7 arm lengths below them;
 * velocity limits the URDF lacks (0) or gives implausibly (> 20 rad/s);
 * collision pairs to disable: :mod:`posegen.robot.collision_matrix`.
@@ -27,12 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot.additions import CollisionConfig, FrameConfig, Shape
-from posegen.robot.collision_geometry import add_self_pairs, robot_geometry
-from posegen.robot.collision_matrix import PairSurvey, survey_pairs
-from posegen.robot.config import RobotSource
-from posegen.robot.draft_body import Body, study_body
-from posegen.robot.draft_geometry import (
+from posegen.draft.body import Body, study_body
+from posegen.draft.geometry import (
     Geometry,
     HandContact,
     below_floor,
@@ -43,11 +39,28 @@ from posegen.robot.draft_geometry import (
     skeleton,
     vertices,
 )
-from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, missing_efforts, velocity_placeholders
-from posegen.robot.draft_source import DraftSource, load_draft_source
-from posegen.robot.draft_stance import Sole, floor_height, foot_box
-from posegen.robot.draft_table import Table, arm_length, place_table
-from posegen.robot.geometry import FloatArray
+from posegen.draft.limits import (
+    IMPLAUSIBLE_SPEED_RAD_S,
+    JOINT_LIMIT_MARGIN_RAD,
+    PLACEHOLDER_SPEED_RAD_S,
+    limits,
+    missing_efforts,
+    velocity_placeholders,
+)
+from posegen.draft.source import DraftSource, load_draft_source
+from posegen.draft.stance import Sole, floor_height, foot_box
+from posegen.draft.table import Table, arm_length, place_table
+from posegen.robot import (
+    CollisionConfig,
+    FloatArray,
+    FrameConfig,
+    PairSurvey,
+    RobotSource,
+    Shape,
+    add_self_pairs,
+    robot_geometry,
+    survey_pairs,
+)
 
 COLLISION_MARGIN_M = 0.005
 REST_MARGIN_M = 0.01  # pairs this close at the reference touch at rest (meshes that nearly overlap there)
@@ -108,7 +121,7 @@ def draft_robot(
 ) -> Draft:
     """Study a humanoid (an example-robot-data name or a URDF file) and draft its config.
 
-    The steps: :func:`~posegen.robot.draft_body.study_body` (stance, legs, arms, locks),
+    The steps: :func:`~posegen.draft.body.study_body` (stance, legs, arms, locks),
     :func:`collision_additions`, :func:`find_hands`, velocity placeholders, :func:`table_for`
     and the collision pairs to disable (:func:`~posegen.robot.collision_matrix.survey_pairs`).
 
@@ -126,7 +139,11 @@ def draft_robot(
     chains, found = find_hands(model, data, geometry, body)
     speeds, urdf_speed = velocity_placeholders(model, body.kept)
     if speeds:
-        found += (f"{len(speeds)} joints have no plausible URDF velocity limit: placeholders of 1 rad/s",)
+        found += (
+            f"{len(speeds)} joints have no plausible URDF velocity limit (none, or above "
+            f"{IMPLAUSIBLE_SPEED_RAD_S:g} rad/s): placeholders of {PLACEHOLDER_SPEED_RAD_S:g} rad/s in "
+            "robot.velocity_limits_rad_s; put your robot's",
+        )
     no_effort = missing_efforts(model, body.kept, set(body.locked))
     if no_effort:
         found += (

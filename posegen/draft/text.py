@@ -9,16 +9,24 @@ from typing import Any
 
 import yaml
 
-from posegen.errors import ConfigError
+from posegen.draft.drafting import Draft, draft_robot
+from posegen.draft.mjcf_source import converted_urdf, mjcf_source, urdf_beside
+from posegen.errors import ConfigError, InfeasibleError
 from posegen.io import check_apart, claim_output, write_atomic
-from posegen.robot.additions import Box, Capsule, DisabledPair, VisualHull
-from posegen.robot.collision import CollisionChecker
-from posegen.robot.collision_matrix import PairSurvey, survey_scene_pairs
-from posegen.robot.config import load_config, parse_config
-from posegen.robot.draft import Draft, draft_robot
-from posegen.robot.draft_mjcf import converted_urdf, mjcf_source, urdf_beside
-from posegen.robot.scene import Scene
-from posegen.robot.validation import check_for_planning
+from posegen.model import pool_size
+from posegen.robot import (
+    Box,
+    Capsule,
+    CollisionChecker,
+    DisabledPair,
+    PairSurvey,
+    Scene,
+    VisualHull,
+    check_for_planning,
+    load_config,
+    parse_config,
+    survey_scene_pairs,
+)
 
 POINT_CONE_DEG = 60.0  # a drafted point contact: the hand may tilt this far from the table's normal
 
@@ -189,7 +197,7 @@ def write_draft(
     """Draft a config for a robot (example-robot-data name, URDF or MJCF file) and write it (atomically) to ``output``.
 
     An MJCF model is converted to a URDF written beside the draft (``<output stem>.urdf``,
-    :mod:`posegen.robot.draft_mjcf`), which the draft names and the stages read.
+    :mod:`posegen.draft.mjcf_source`), which the draft names and the stages read.
 
     The draft is re-read as a config before it is written; whether it already loads as a
     scene (names, balance, reach, collisions at the reference) is added to its notes.
@@ -218,11 +226,14 @@ def write_draft(
         try:
             scene = Scene(config)
             check_for_planning(scene, CollisionChecker(scene))
-            verdict = "the draft loads as a scene (names, soles, balance, reach, collisions at the reference checked)"
-        except ConfigError as exc:
-            verdict = f"the draft does not load yet: {exc}"
+            verdicts: tuple[str, ...] = (
+                pool_size(scene).describe(),
+                "the draft loads as a scene (names, soles, balance, reach, collisions at the reference checked)",
+            )  # the verdict last
+        except (ConfigError, InfeasibleError) as exc:
+            verdicts = (f"the draft does not load yet: {exc}",)
         write_atomic(output, text)
-    return dataclasses.replace(draft, notes=(*draft.notes, verdict))
+    return dataclasses.replace(draft, notes=(*draft.notes, *verdicts))
 
 
 def survey_config_pairs(config_path: str, samples: int = 400, seed: int = 0) -> tuple[PairSurvey, str]:

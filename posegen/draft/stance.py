@@ -24,10 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from posegen.draft.geometry import Geometry, carried, link_of_joint, round3
 from posegen.errors import ConfigError
-from posegen.robot.additions import Box, FrameConfig
-from posegen.robot.draft_geometry import Geometry, carried, link_of_joint, round3
-from posegen.robot.geometry import FloatArray
+from posegen.robot import Box, FloatArray, FrameConfig
 
 FLOOR_TOL_M = 0.02  # a branch whose lowest frame is this close to the lowest one reaches the floor
 SOLE_VERTEX_TOL_M = 0.005  # foot vertices this close to the lowest one make the footprint

@@ -4,16 +4,17 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from posegen.robot import Scene, load_config, write_draft
+from posegen.draft import write_draft
+from posegen.draft.body import study_body
+from posegen.draft.drafting import collision_additions, draft_robot, find_hands, table_for
+from posegen.draft.geometry import Geometry, vertices
+from posegen.draft.source import load_draft_source
+from posegen.draft.stance import floor_height
+from posegen.robot import Scene, load_config
 from posegen.robot.additions import Box, Capsule, CollisionConfig
 from posegen.robot.collision_geometry import robot_geometry
-from posegen.robot.draft import collision_additions, draft_robot, find_hands, table_for
-from posegen.robot.draft_body import study_body
-from posegen.robot.draft_geometry import Geometry, vertices
-from posegen.robot.draft_source import load_draft_source
-from posegen.robot.draft_stance import floor_height
 from tests.conftest import CONFIG, ROOT
-from tests.robot.humanoid_urdf import humanoid_urdf
+from tests.draft.humanoid_urdf import humanoid_urdf
 
 
 @pytest.fixture(scope="module")

@@ -13,11 +13,11 @@ import pytest
 import yaml
 
 from posegen.cli.main import main
+from posegen.draft.mjcf import convert_mjcf
 from posegen.io import load_pool
 from posegen.io.atomic import CRASH_AT, CRASH_LOG, leftover_temporaries
 from posegen.robot import Scene, load_config
-from posegen.robot.mjcf import convert_mjcf
-from tests.robot.humanoid_mjcf import humanoid_mjcf
+from tests.draft.humanoid_mjcf import humanoid_mjcf
 
 REPO = Path(__file__).resolve().parents[2]
 

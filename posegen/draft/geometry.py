@@ -17,8 +17,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot.additions import Capsule, FrameConfig, Shape, VisualHull
-from posegen.robot.geometry import FloatArray
+from posegen.robot import Capsule, FloatArray, FrameConfig, Shape, VisualHull
 
 FLAT_TOL_M = 0.002  # vertices this close to a face's plane lie on it
 FLAT_FILL = 0.5  # a face is flat when its touching vertices span this share of its box face in both directions
@@ -92,14 +91,6 @@ def _points(shape: object) -> FloatArray:
     half_length = float(getattr(shape, "halfLength", 0.0))
     ends = [np.array([0.0, 0.0, -half_length]), np.array([0.0, 0.0, half_length])]
     return np.array([end + radius * d for end in ends for d in np.vstack([np.eye(3), -np.eye(3)])])
-
-
-def has_extent(model: pin.Model, joint: int) -> bool:
-    """Whether a joint's link reaches MIN_SEGMENT_M from its joint (a child joint, or its CoM, with mass)."""
-    children = [model.jointPlacements[c].translation for c in range(2, model.njoints) if model.parents[c] == joint]
-    far = [c for c in children if np.linalg.norm(c) >= MIN_SEGMENT_M]
-    inertia = model.inertias[joint]
-    return bool(far) or (inertia.mass > 0 and float(np.linalg.norm(inertia.lever)) >= MIN_SEGMENT_M)
 
 
 def link_of_joint(model: pin.Model, joint: int) -> str:
