@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import re
 import subprocess
 import sys
 import tempfile
@@ -33,20 +34,21 @@ POSEGEN = [sys.executable, "-m", "posegen.cli"]
 
 @dataclass(frozen=True)
 class Case:
-    """A robot and its experiment: pool size and seed, selected postures."""
+    """A robot and its experiment: pool size and seed, selected postures, the contacts routed."""
 
     name: str
     config: str
     pool: int
     seed: int
-    k: int
+    k: int  # 0: the fewest select accepts
+    contacts: int  # the selection's first (by rank) routed; 0: all
 
 
 CASES = {
-    "talos": Case("talos", "configs/talos_table.yaml", 300, 5, 41),
-    "icub": Case("icub", "configs/icub_table.yaml", 200, 5, 10),
-    "jvrc": Case("jvrc", "configs/jvrc_table.yaml", 200, 5, 10),
-    "human": Case("human", "configs/human_table.yaml", 200, 5, 10),
+    "talos": Case("talos", "configs/talos_table.yaml", 300, 5, 41, 0),
+    "icub": Case("icub", "configs/icub_table.yaml", 200, 5, 0, 10),
+    "jvrc": Case("jvrc", "configs/jvrc_table.yaml", 200, 5, 0, 10),
+    "human": Case("human", "configs/human_table.yaml", 200, 5, 0, 10),
 }
 
 
@@ -68,31 +70,51 @@ def posegen(*args: str) -> tuple[float, subprocess.CompletedProcess[str]]:
     return time.perf_counter() - start, done
 
 
+def _run(case: Case, *argv: str) -> subprocess.CompletedProcess[str]:
+    _, done = posegen(*argv)
+    if done.returncode != 0:
+        raise SystemExit(f"{case.name}: posegen {argv[0]} failed: {done.stderr.strip()}")
+    return done
+
+
+def _select(case: Case, folder: Path) -> Path:
+    """The selection of K postures (or of the fewest the robot's model accepts)."""
+    selected = folder / "selected.yaml"
+    k = case.k
+    if not k:
+        _, done = posegen("select", str(folder / "pool.yaml"), "--k", "1", "-q", "-o", str(selected))
+        found = re.search(r"choose between (\d+)", done.stderr)
+        k = int(found.group(1)) if found else 1
+    _run(case, "select", str(folder / "pool.yaml"), "--k", str(k), "-q", "-o", str(selected))
+    return selected
+
+
+def _first(case: Case, folder: Path, selected: Path) -> Path:
+    """A pool file of the selection's first ``case.contacts`` postures by rank."""
+    import yaml
+
+    from posegen.io import load_pool, write_yaml
+
+    ranked = sorted(yaml.safe_load(selected.read_text())["postures"], key=lambda p: p["rank"])
+    ids = {p["pool_id"] for p in ranked[: case.contacts]}
+    data = load_pool(folder / "pool.yaml").to_dict()
+    data["postures"] = [p for p in data["postures"] if p["id"] in ids]
+    out = folder / "first.yaml"
+    write_yaml(out, data)
+    return out
+
+
 def plan(case: Case, folder: Path) -> Path:
     """Pool, selection and route of a case (made once per work folder)."""
     route = folder / "route.yaml"
     if route.is_file():
         return route
-    steps = [
-        [
-            "pool",
-            "--config",
-            case.config,
-            "--n",
-            str(case.pool),
-            "--seed",
-            str(case.seed),
-            "-q",
-            "-o",
-            str(folder / "pool.yaml"),
-        ],
-        ["select", str(folder / "pool.yaml"), "--k", str(case.k), "-q", "-o", str(folder / "selected.yaml")],
-        ["route", str(folder / "selected.yaml"), "-q", "-o", str(route)],
-    ]
-    for argv in steps:
-        _, done = posegen(*argv)
-        if done.returncode != 0:
-            raise SystemExit(f"{case.name}: posegen {argv[0]} failed: {done.stderr.strip()}")
+    pool = ["--config", case.config, "--n", str(case.pool), "--seed", str(case.seed), "-q"]
+    _run(case, "pool", *pool, "-o", str(folder / "pool.yaml"))
+    postures = _select(case, folder)
+    if case.contacts:
+        postures = _first(case, folder, postures)
+    _run(case, "route", str(postures), "-q", "-o", str(route))
     return route
 
 

@@ -124,7 +124,7 @@ class JointOffsets:
         if np.any(twist) or (decay and np.any(self.dq[self.upper])):
             frames = [robot.contact_frames[chain] for chain in self.arms]
             self.dq[self.upper] += dt_s * self._solve(frames, self.upper, twist, decay)
-        limited = np.clip(planned + self.dq, self._lower, self._upper) - planned
-        self._at_limit = self._movable & (limited != self.dq)
-        self.dq = np.where(self._movable, limited, 0.0)
+        commanded = planned + self.dq
+        self._at_limit = self._movable & ((commanded < self._lower) | (commanded > self._upper))
+        self.dq = np.where(self._movable, np.clip(commanded, self._lower, self._upper) - planned, 0.0)
         return self.dq
