@@ -104,12 +104,31 @@ def _first(case: Case, folder: Path, selected: Path) -> Path:
     return out
 
 
+def config(case: Case, folder: Path) -> str:
+    """The case's config; where a chain names no wrist force/torque topic, a copy naming ``/<chain>_wrist_ft``.
+
+    A recording (``simulate --bag``, ``--physics``) has one wrench topic per wrist; the iCub
+    and drafted configs name none (their robots' sensors are not known): the copy adds them.
+    """
+    import yaml
+
+    data = yaml.safe_load((ROOT / case.config).read_text())
+    missing = [name for name, chain in data["chains"].items() if not chain.get("wrench_topic")]
+    if not missing:
+        return case.config
+    for name in missing:
+        data["chains"][name]["wrench_topic"] = f"/{name}_wrist_ft"
+    out = folder / "config.yaml"
+    out.write_text(yaml.safe_dump(data, sort_keys=False))
+    return str(out)
+
+
 def plan(case: Case, folder: Path) -> Path:
     """Pool, selection and route of a case (made once per work folder)."""
     route = folder / "route.yaml"
     if route.is_file():
         return route
-    pool = ["--config", case.config, "--n", str(case.pool), "--seed", str(case.seed), "-q"]
+    pool = ["--config", config(case, folder), "--n", str(case.pool), "--seed", str(case.seed), "-q"]
     _run(case, "pool", *pool, "-o", str(folder / "pool.yaml"))
     postures = _select(case, folder)
     if case.contacts:
@@ -130,7 +149,7 @@ def rehearse(case: Case, route: Path, folder: Path, errors: list[str], glued: bo
         return f"| {case.name}{' (glued)' if glued else ''} | failed: {done.stderr.strip()} |" + " |" * 9
     s = read_physics(bag / "physics.yaml").summary
     _, measured = posegen(
-        "measure", str(bag), "--route", str(route), "--config", case.config, "-o", str(folder / "m.yaml")
+        "measure", str(bag), "--route", str(route), "--config", config(case, folder), "-o", str(folder / "m.yaml")
     )
     found = measured.stdout.split(":", 1)[1].split("contact")[0].strip() if measured.returncode == 0 else "0"
     state = "yes" if s.completed else f"fell at {s.fell_at_s:.1f} s"
@@ -149,6 +168,7 @@ def main() -> None:
     parser.add_argument("--error-deg", default=None, help="placement angle errors (default: simulate's)")
     parser.add_argument("--workdir", default=None, help="keep the pools, routes and bags here")
     args = parser.parse_args()
+    sys.path.insert(0, str(ROOT))  # the in-process reads use this checkout's posegen, as the runs (cwd ROOT) do
     errors = [
         *(["--error-mm", args.error_mm] if args.error_mm else []),
         *(["--error-deg", args.error_deg] if args.error_deg else []),
