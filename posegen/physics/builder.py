@@ -109,7 +109,7 @@ def _weighted_moving_links(root: ET.Element) -> None:
     (A link lighter than the speck is given the speck instead.)
 
     A description may split a ball joint into three hinges through massless links (the
-    drafted human); the joints' rotor inertia carries their dynamics.
+    example-robot-data body models); the joints' rotor inertia carries their dynamics.
     """
     moving = {
         str(child.get("link"))
