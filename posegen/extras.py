@@ -3,7 +3,8 @@
 ``pip install posegen`` plans, selects, routes and calibrates. The rest is optional:
 ``posegen[view]`` (the 3D viewer and the calibration report: viser, trimesh),
 ``posegen[dask]`` (work sent to a Dask cluster: distributed), ``posegen[ros]`` (rosbag2
-bags: rosbags), ``posegen[all]`` (all three). The code that needs one calls
+bags: rosbags), ``posegen[physics]`` (a route rehearsed in MuJoCo: mujoco),
+``posegen[all]`` (all four). The code that needs one calls
 :func:`require` first, so a missing package is one clear error naming what to install.
 """
 
@@ -21,12 +22,14 @@ class Extra(enum.Enum):
     VIEW = "view"
     DASK = "dask"
     ROS = "ros"
+    PHYSICS = "physics"
 
 
 PACKAGES: dict[Extra, tuple[str, ...]] = {  # the modules each extra installs (pyproject.toml)
     Extra.VIEW: ("viser", "trimesh"),
     Extra.DASK: ("dask", "distributed"),
     Extra.ROS: ("rosbags",),
+    Extra.PHYSICS: ("mujoco",),
 }
 
 

@@ -73,7 +73,7 @@ def _defaults(command: str) -> dict[str, object]:
     [
         ("generate_pool", "pool", {"n": "n", "seed": "seed"}),
         ("plan_route", "route", {"seed": "seed", "csv": "csv"}),
-        ("simulate_recording", "simulate", {"rate_hz": "rate", "session": "session", "joint_topic": "joint_topic"}),
+        ("simulate_recording", "simulate", {"session": "session", "joint_topic": "joint_topic"}),
         ("measure", "measure", {"joint_topic": "joint_topic", "session": "session"}),
         ("export_route", "export", {"topic": "topic", "segments_topic": "segments_topic"}),
     ],
@@ -83,6 +83,15 @@ def test_the_api_defaults_are_the_command_lines(function, command, pairs):
     defaults = _defaults(command)
     for api_name, flag in pairs.items():
         assert parameters[api_name].default == defaults[flag], (function, api_name)
+
+
+def test_the_recording_rate_is_the_command_line_s_kinematic_one():
+    """``simulate --rate`` defaults by mode (500 Hz recorded, 250 Hz with --physics); the API records kinematically."""
+    from posegen.cli.simulate import KINEMATIC_RATE_HZ
+
+    parameters = inspect.signature(posegen.api.simulate_recording).parameters
+    assert _defaults("simulate")["rate"] is None
+    assert parameters["rate_hz"].default == KINEMATIC_RATE_HZ
 
 
 def test_a_simulated_robot_has_the_command_lines_defaults():

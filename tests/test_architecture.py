@@ -8,7 +8,7 @@ Layers, bottom first (docs/architecture.md)::
     robot
     model
     draft | pool | select | route | calibrate   (stages: never each other; draft is stage 0, robot init)
-    session | view                         (chains the stages | reads every stage's artefacts)
+    session | view | physics               (chains the stages | reads every stage's artefacts | rehearses a route)
     cli
 
 A module may import its own package freely (its siblings by module path), and from
@@ -48,6 +48,7 @@ LAYERS = {
     "posegen.calibrate": 4,
     "posegen.session": 5,  # an experiment: chains the stages (beside view)
     "posegen.view": 5,  # reads every stage's artefacts
+    "posegen.physics": 5,  # a route rehearsed in MuJoCo: reads routes, draws the perturbed robot (calibrate)
     "posegen.api": 5.5,  # the public API: a function per command (re-exported lazily by the root package)
     "posegen.cli": 6,
 }
@@ -419,6 +420,7 @@ DICT_READERS = {
     "posegen.select.selection_file": "reader: the selection format (Selection)",
     "posegen.calibrate.offsets": "reader: offsets.yaml",
     "posegen.session.index": "reader: session.yaml (SessionIndex)",
+    "posegen.physics.physics_file": "reader: physics.yaml (PhysicsReport)",
     "posegen.parallel.cluster": "not an artefact: a worker plugin's pickled state (__setstate__)",
     "posegen.robot.scene": "Provenance: an artefact's provenance as a dict (scene_for, check_made_for)",
     "posegen.route.workflow": "Route and Selection: segments, entries and provenance as dicts",

@@ -43,15 +43,16 @@ def declared() -> list[Requirement]:
 
 
 def test_the_optional_parts_are_extras_and_all_holds_them():
-    """The core leaves the viewer, Dask and rosbags out; ``all`` is every optional part."""
+    """The core leaves the viewer, Dask, rosbags and MuJoCo out; ``all`` is every optional part."""
     core = {canonicalize_name(Requirement(r).name) for r in project()["dependencies"]}
     extras = project()["optional-dependencies"]
-    assert not core & {"viser", "trimesh", "distributed", "dask", "rosbags"}, core
+    assert not core & {"viser", "trimesh", "distributed", "dask", "rosbags", "mujoco"}, core
     assert {"viser", "trimesh"} <= {canonicalize_name(Requirement(r).name) for r in extras["view"]}
     assert {"distributed"} <= {canonicalize_name(Requirement(r).name) for r in extras["dask"]}
     assert {"rosbags"} <= {canonicalize_name(Requirement(r).name) for r in extras["ros"]}
+    assert {"mujoco"} <= {canonicalize_name(Requirement(r).name) for r in extras["physics"]}
     (everything,) = [Requirement(r) for r in extras["all"]]
-    assert everything.name == "posegen" and everything.extras == {"view", "dask", "ros"}
+    assert everything.name == "posegen" and everything.extras == {"view", "dask", "ros", "physics"}
 
 
 def closure() -> dict[str, str]:

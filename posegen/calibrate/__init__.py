@@ -11,7 +11,14 @@ Internal: scripts use the public API at ``posegen.`` (stable, documented with ex
 names here are its plumbing and may change between versions.
 """
 
-from posegen.calibrate.bag_workflow import Measured, SimulatedBag, measure_bag, simulate_route_bag
+from posegen.calibrate.bag_workflow import (
+    TRUTH_FILE,
+    Measured,
+    SimulatedBag,
+    measure_bag,
+    simulate_route_bag,
+    wrench_topics,
+)
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
 from posegen.calibrate.calibration_file import format_table, residual_stats, write_calibration
 from posegen.calibrate.compliance import Compliance, ComplianceGroup, compensate, read_compliance, uncompensate
@@ -37,7 +44,7 @@ from posegen.calibrate.record import (
 )
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
-from posegen.calibrate.simulation import Perturbation, simulate, true_parameters
+from posegen.calibrate.simulation import Perturbation, perturbed_robot, simulate, true_parameters
 from posegen.calibrate.summary import (
     CalibrationSummary,
     ChosenModel,
@@ -51,14 +58,17 @@ from posegen.calibrate.summary import (
     summary_from_dict,
     write_summary,
 )
-from posegen.calibrate.urdf_export import calibrated_config, calibrated_urdf, check_exportable
+from posegen.calibrate.urdf_export import calibrated_config, calibrated_robot, calibrated_urdf, check_exportable
 from posegen.calibrate.workflow import (
     Calibrated,
     Simulated,
     calibrate_files,
+    check_compliance,
+    perturbation_of,
     read_contacts,
     simulate_postures_file,
     truth_of,
+    truth_record,
 )
 
 __all__ = [
@@ -67,6 +77,7 @@ __all__ = [
     "COMPONENTS",
     "DISPLAY",
     "RULE",
+    "TRUTH_FILE",
     "Calibrated",
     "Calibration",
     "CalibrationRecord",
@@ -103,7 +114,9 @@ __all__ = [
     "calibrate",
     "calibrate_files",
     "calibrated_config",
+    "calibrated_robot",
     "calibrated_urdf",
+    "check_compliance",
     "check_exportable",
     "compensate",
     "contact_residuals",
@@ -116,6 +129,8 @@ __all__ = [
     "levenberg_marquardt",
     "load_line",
     "measure_bag",
+    "perturbation_of",
+    "perturbed_robot",
     "posterior_of",
     "read_calibration",
     "read_compliance",
@@ -132,7 +147,9 @@ __all__ = [
     "summary_from_dict",
     "true_parameters",
     "truth_of",
+    "truth_record",
     "uncompensate",
+    "wrench_topics",
     "write_calibration",
     "write_record",
     "write_summary",

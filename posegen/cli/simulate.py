@@ -1,10 +1,17 @@
-"""``posegen simulate``: contacts of a perturbed robot at planned postures, or a recorded session (``--bag``)."""
+"""``posegen simulate``: contacts of a perturbed robot at planned postures, or a recorded session (``--bag``).
+
+With ``--physics``, the session is rehearsed in MuJoCo: the perturbed robot stands free
+on the floor (``--glued-feet``: welded to it) and runs the route with its controllers.
+"""
 
 from __future__ import annotations
 
 import argparse
 
 from posegen.cli.options import JOINT_STATES_TOPIC, name, positive_size, seed, size
+from posegen.cli.progress import ProgressBar
+
+KINEMATIC_RATE_HZ = 500.0  # the default rate of a kinematic recording (simulate --bag)
 
 NAME = "simulate"
 HELP = "contacts of a perturbed robot at planned postures, or its recorded run of a route (--bag)"
@@ -43,11 +50,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
     bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR/truth.yaml")
     bag.add_argument(
-        "--rate", type=positive_size, default=500.0, help="joint state and wrench rate in Hz (default 500)"
+        "--rate",
+        type=positive_size,
+        default=None,
+        help="joint state and wrench rate in Hz (default 500; with --physics 250: its controllers run at this rate)",
     )
     bag.add_argument(
         "--joint-topic", default=JOINT_STATES_TOPIC, help=f"JointState topic (default {JOINT_STATES_TOPIC})"
     )
+    bag.add_argument(
+        "--physics",
+        action="store_true",
+        help="rehearse the route in MuJoCo: a free-standing robot with its controllers (needs posegen[physics])",
+    )
+    bag.add_argument("--glued-feet", action="store_true", help="with --physics: the soles welded to the floor")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,10 +81,13 @@ def run(args: argparse.Namespace) -> int:
         "contact_noise_mm": args.contact_noise_mm,
         "contact_noise_deg": args.contact_noise_deg,
     }
+    if args.physics or args.glued_feet:
+        return _physics(args)
     if args.bag:
-        recorded = simulate_route_bag(args.postures, args.bag, rate_hz=args.rate, joint_topic=args.joint_topic, **robot)
+        rate = args.rate or KINEMATIC_RATE_HZ
+        recorded = simulate_route_bag(args.postures, args.bag, rate_hz=rate, joint_topic=args.joint_topic, **robot)
         print(
-            f"simulate: {recorded.contacts} contacts, {recorded.duration_s:.1f} s recorded at {args.rate:g} Hz "
+            f"simulate: {recorded.contacts} contacts, {recorded.duration_s:.1f} s recorded at {rate:g} Hz "
             f"({recorded.samples} joint states) -> {recorded.bag}/ (true parameters: {recorded.truth})"
         )
         return 0
@@ -78,3 +97,46 @@ def run(args: argparse.Namespace) -> int:
         f"(true parameters: {simulated.truth})"
     )
     return 0
+
+
+def _physics(args: argparse.Namespace) -> int:
+    """``--physics``: rehearse the route in MuJoCo, write the bag, its truth and physics.yaml, and say how it went."""
+    from posegen.errors import ArgumentError
+
+    if not args.physics:
+        raise ArgumentError("--glued-feet is an option of --physics")
+    if not args.bag:
+        raise ArgumentError("--physics writes a recorded session: give --bag DIR")
+    if args.contact_noise_mm or args.contact_noise_deg:
+        raise ArgumentError(
+            "--contact-noise-mm/--contact-noise-deg are the kinematic simulation's: physics makes its own"
+        )
+    from posegen.physics import PHYSICS_RATE_HZ, PhysicsOptions, simulate_physics_bag
+
+    options = PhysicsOptions(
+        seed=args.seed,
+        error_mm=args.error_mm,
+        error_deg=args.error_deg,
+        noise_deg=args.noise_deg,
+        session=args.session,
+        rate_hz=args.rate or PHYSICS_RATE_HZ,
+        joint_topic=args.joint_topic,
+        compliance_rad_per_knm=args.compliance,
+        glued_feet=args.glued_feet,
+    )
+    with ProgressBar(args.quiet) as bar:
+        done = simulate_physics_bag(args.postures, args.bag, config_path=args.config, options=options, progress=bar)
+    s = done.report.summary
+    state = "completed" if s.completed else f"FELL at {s.fell_at_s:.2f} s"
+    low, high = s.hold_range_n
+    print(
+        f"simulate --physics: {state}, {s.duration_s:.1f} s of robot time in {done.wall_s:.1f} s -> {done.bag}/ "
+        f"({done.samples} joint states; {done.physics.name}, {done.truth.name})"
+    )
+    print(
+        f"  holds within [{low:g}, {high:g}] N: {s.holds_in_range} of {s.contacts}; "
+        f"ZMP margin >= {1e3 * s.zmp_margin_min_m:.1f} mm; "
+        f"sole slip <= {s.slip_max_mm:.2f} mm; pelvis within {1e3 * s.pelvis_deviation_max_m:.1f} mm of plan; "
+        f"torque <= {s.torque_ratio_max:.2f} x effort ({s.torque_joint}); unwanted contacts {s.unwanted_contacts}"
+    )
+    return 0 if s.completed else 1

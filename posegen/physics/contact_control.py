@@ -1,0 +1,296 @@
+"""The force-controlled go-to-contact, hold and release: an admittance at the hand.
+
+Each hand moves by a twist the stabilizer makes its joints give (:mod:`posegen.physics.stabilizer`),
+computed from its wrist sensor: the reading less the tool's weight (the nominal URDF's
+tool, turned with the wrist as the encoders say) and less a tare taken while the hand is
+free just before its approach (the sensor's offset, the tool's model error), moved to
+the contact frame's origin in world axes.
+
+A contact of the route runs, in route time:
+
+* **approach** (the route's): the hand gives way to any force above ``GUARD_FORCE_N``
+  (a table higher than planned is met, not pushed);
+* **go-to-contact and hold**: force control along the table normal to the target force
+  ``force_n``: ``dz/dt = K_FORCE (f - force_n)`` within ``MAX_SPEED_M_S`` once
+  touching (still within ``FORCE_BAND`` of the target: the contact is measured with the
+  joints still), ``SEARCH_SPEED_M_S`` down before (a table lower than planned is searched
+  for, below the route's overshoot); the route waits at the end of its go-to-contact
+  until ``SETTLE_S`` after the force first reached its band (``REACHED``;
+  ``SEARCH_TIMEOUT_S`` at most), so that the
+  hold lasts the planned time in contact; in contact the hand also turns to zero roll and pitch torque
+  about the contact frame's origin, so the fingertips settle flush and share the load;
+* an arm whose joint loop is at its effort limit (its tracking error past the loop's
+  saturation) neither presses further nor turns: the admittance does not wind up;
+* **release**: the target force falls to zero over ``UNLOAD_S`` as the route's release
+  starts, then the hand's offset fades back to the plan over the rest of the release.
+
+A free hand outside these phases stays where the plan puts it (zero twist) unless a force
+above ``GUARD_FORCE_N`` pushes it.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.io import Route, SegmentType
+from posegen.physics.nominal import NominalRobot
+from posegen.robot import FloatArray
+
+K_FORCE = 3e-3  # m/s per N of normal force error
+FORCE_BAND = 0.1  # within this fraction of the target force, the hand stays where it is
+HOLD_BAND = 0.3  # and during the hold (only a force far from the target moves it: the contact is measured still)
+K_TORQUE = 0.01  # rad/s per N m of roll or pitch torque about the contact origin
+TORQUE_BAND_NM = 0.5  # roll and pitch torques below this leave the hand's tilt as it is
+MAX_TILT_RAD = 0.05  # the hand turns at most this far from the plan
+SEARCH_SPEED_M_S = 0.02
+MAX_SPEED_M_S = 0.02
+MAX_TURN_RAD_S = 0.2
+GUARD_FORCE_N = 10.0
+TOUCH_FORCE_N = 3.0  # in contact: above this normal force
+UNLOAD_S = 0.1
+TARE_S = 0.1
+REACHED = 0.9  # a hold starts once the normal force is this fraction of the target (in the force band)
+SEARCH_TIMEOUT_S = 4.0  # the route waits at most this long for a contact before its hold
+SETTLE_S = 0.25  # and this long after the force first reached its band (the arm settles)
+MAX_OFFSET_M = 0.05  # the search and the force control move the hand at most this far from the plan
+K_HOLD_PER_S = 5.0  # the hand's pose error to its target (the plan plus the admittance's offset) -> twist
+POSE_BAND = np.array([5e-4, 5e-4, 5e-4, 2e-3, 2e-3, 2e-3])  # m, rad: a smaller pose error is left as it is
+HOLD_EVERY = 5  # control periods between two computations of the hands' pose errors
+
+
+def _beyond(values: FloatArray, band: FloatArray) -> FloatArray:
+    """Each value less its band toward zero; zero within the band."""
+    return np.asarray(np.sign(values) * np.maximum(np.abs(values) - band, 0.0))
+
+
+class Phase(enum.Enum):
+    """What a hand's controller is doing."""
+
+    FREE = "free"
+    APPROACH = "approach"
+    PRESS = "press"  # go-to-contact and hold: force control
+    RELEASE = "release"
+
+
+@dataclass(frozen=True)
+class ContactTimes:
+    """When the route makes one contact (route time, s)."""
+
+    chain: str
+    label: str  # "posture 3 (pool 17)"
+    approach_s: float
+    press_s: float  # go-to-contact starts
+    hold_s: float
+    lift_s: float  # release starts
+    free_s: float  # release ends
+
+
+def contact_times(route: Route) -> tuple[ContactTimes, ...]:
+    """The route's contacts (approach, go-to-contact, hold and release each), in time order."""
+    steps: dict[int | None, dict[SegmentType, tuple[float, float, str, int | None]]] = {}
+    for s in route.segments:
+        if s.type != SegmentType.FREE and s.chain is not None:
+            steps.setdefault(s.posture, {})[s.type] = (s.start_s, s.end_s, s.chain, s.pool_id)
+    out = []
+    kinds = (SegmentType.APPROACH, SegmentType.GO_TO_CONTACT, SegmentType.HOLD, SegmentType.RELEASE)
+    for posture, found in steps.items():
+        if any(k not in found for k in kinds):
+            continue  # a route always has the four; a hand-edited one may not
+        approach, press, hold, release = (found[k] for k in kinds)
+        label = f"posture {posture}" + ("" if hold[3] is None else f" (pool {hold[3]})")
+        out.append(ContactTimes(hold[2], label, approach[0], press[0], hold[0], release[0], release[1]))
+    return tuple(sorted(out, key=lambda c: c.hold_s))
+
+
+@dataclass
+class _Hand:
+    """One hand's controller state."""
+
+    tare: FloatArray  # (6,) sensor frame
+    tare_sum: FloatArray
+    tare_count: int
+    offset: FloatArray  # (6,) the twist integrated so far (world axes; angles small)
+
+
+class HandControl:
+    """Both hands' admittance, from their wrist sensors and the route's contact times.
+
+    Example:
+        >>> hands = HandControl(robot, contact_times(route), force_n=30.0)
+        >>> twists = hands.step(route_time_s, wrists, planned_hands, commanded, dt_s=0.002)
+
+    """
+
+    def __init__(self, robot: NominalRobot, contacts: tuple[ContactTimes, ...], force_n: float) -> None:
+        self.robot = robot
+        self.force_n = force_n
+        self.contacts = {c: [k for k in contacts if k.chain == c] for c in robot.tools}
+        self.hands = {c: _Hand(np.zeros(6), np.zeros(6), 0, np.zeros(6)) for c in robot.tools}
+        self.wrenches: dict[str, FloatArray] = {c: np.zeros(6) for c in robot.tools}  # the last, at the contact
+        self.waited_s: dict[str, float] = {}  # contact label -> how long the route waited for it
+        self.saturated: dict[str, bool] = {}  # chain -> an arm joint lags its command past its effort limit
+        self._settled: dict[str, float] = {}  # contact label -> time since its force first reached its band
+        self._errors: dict[str, FloatArray] = {}  # chain -> its pose error beyond the band, renewed every HOLD_EVERY
+        self._steps = 0
+
+    def _current(self, chain: str, t: float) -> ContactTimes | None:
+        for contact in self.contacts[chain]:
+            if contact.approach_s - TARE_S <= t < contact.free_s:
+                return contact
+        return None
+
+    def phase(self, chain: str, t: float) -> Phase:
+        """A hand's phase at route time ``t``."""
+        contact = self._current(chain, t)
+        if contact is None or t < contact.approach_s:
+            return Phase.FREE
+        if t < contact.press_s:
+            return Phase.APPROACH
+        return Phase.PRESS if t < contact.lift_s else Phase.RELEASE
+
+    def holds_back(self, t: float, t_next: float, dt_s: float) -> bool:
+        """Whether the route's clock waits at ``t`` rather than go on to ``t_next``.
+
+        A hold starts when its force is reached, as a robot's contact controller starts it:
+        the route waits, at the end of its go-to-contact, while the hand searches for the
+        table, for at most ``SEARCH_TIMEOUT_S``.
+        """
+        for chain in self.hands:
+            contact = self._current(chain, t)
+            if contact is None or not t < contact.hold_s <= t_next:
+                continue
+            waited = self.waited_s.get(contact.label, 0.0)
+            settled = self._settled.get(contact.label)  # since the force first reached its band
+            force = self.wrenches[chain][2]
+            at_limit = self.saturated.get(chain, False) and force > GUARD_FORCE_N  # pressing as hard as it can
+            if settled is not None or force >= REACHED * self.force_n or at_limit:
+                settled = (settled or 0.0) + dt_s
+                self._settled[contact.label] = settled
+            if (settled is None or settled < SETTLE_S) and waited < SEARCH_TIMEOUT_S:
+                self.waited_s[contact.label] = waited + dt_s
+                return True
+        return False
+
+    def in_contact(self, t: float) -> bool:
+        """Whether a hand is at the table at route time ``t`` (go-to-contact, hold or release)."""
+        return any(self.phase(chain, t) in (Phase.PRESS, Phase.RELEASE) for chain in self.hands)
+
+    def holding(self, t: float) -> bool:
+        """Whether a hand holds a contact at route time ``t`` (its hold, as the route's clock has it)."""
+        return any(c.hold_s <= t < c.lift_s for contacts in self.contacts.values() for c in contacts)
+
+    def planned_push(self, chain: str, t: float) -> float:
+        """The force (N) the plan has a hand push on the table at route time ``t``: the target, ramped in and out."""
+        contact = self._current(chain, t)
+        if contact is None or t < contact.press_s:
+            return 0.0
+        if t < contact.lift_s:
+            return self.force_n * min((t - contact.press_s) / max(contact.hold_s - contact.press_s, 1e-3), 1.0)
+        return self.force_n * max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)
+
+    def step(
+        self,
+        t: float,
+        wrists: dict[str, FloatArray],
+        planned: dict[str, FloatArray],
+        commanded: FloatArray,
+        dt_s: float,
+    ) -> dict[str, FloatArray]:
+        """Each hand's twist (6,) relative to the base (world axes at its contact frame) at route time ``t``.
+
+        Away from the table, the twist holds the hand at its target in the world (the planned
+        pose moved by the admittance's offset), where the commanded angles put it on the base
+        the IMU tilts: the stabilizer's lean and the base's tilt do not carry it (an error
+        within ``POSE_BAND`` is left; the error is renewed every ``HOLD_EVERY`` periods). While a hand
+        is in contact (go-to-contact, hold, release) the table holds it and only its
+        admittance moves it; the other hand stays still (a contact is measured with every
+        joint still). (Closed on the commands,
+        not on the encoders: a joint that its effort limit or the table holds back does
+        not wind the loop up.)
+
+        Args:
+            t: Route time, s.
+            wrists: Chain -> its wrist sensor's reading (6,).
+            planned: Chain -> its contact frame's planned world pose (4, 4).
+            commanded: The joint angles (nj,) rad last commanded.
+            dt_s: Control period, s.
+
+        """
+        out = {}
+        hold = not self.in_contact(t)  # in contact, every hand stays still
+        self._steps += 1
+        if hold and (self._steps % HOLD_EVERY == 0 or not self._errors):
+            frames = [self.robot.contact_frames[chain] for chain in self.hands]
+            at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True))
+            self._errors = {
+                c: _beyond(self._error(planned[c], h.offset, at[c]), POSE_BAND) for c, h in self.hands.items()
+            }
+        for chain, hand in self.hands.items():
+            contact = self._current(chain, t)
+            compensated = wrists[chain] - self.robot.tool_wrench(chain)
+            if contact is not None and t < contact.approach_s:  # free, before the approach: tare
+                hand.tare_sum += compensated
+                hand.tare_count += 1
+                hand.tare = hand.tare_sum / hand.tare_count
+            else:
+                hand.tare_sum, hand.tare_count = np.zeros(6), 0
+            wrench = self.robot.at_contact(chain, compensated - hand.tare)
+            self.wrenches[chain] = wrench
+            rate = self._twist(chain, contact, t, wrench, hand)
+            hand.offset += rate * dt_s
+            hand.offset[:3] = np.clip(hand.offset[:3], -MAX_OFFSET_M, MAX_OFFSET_M)
+            out[chain] = rate + (K_HOLD_PER_S * self._errors[chain] if hold else 0.0)
+        return out
+
+    @staticmethod
+    def _error(planned: FloatArray, offset: FloatArray, estimated: FloatArray) -> FloatArray:
+        """(6,) the hand's target pose less its commanded one (4, 4): translation, rotation vector (world axes)."""
+        target_rotation = pin.exp3(offset[3:]) @ planned[:3, :3]
+        return np.concatenate(
+            [planned[:3, 3] + offset[:3] - estimated[:3, 3], pin.log3(target_rotation @ estimated[:3, :3].T)]
+        )
+
+    def _twist(self, chain: str, contact: ContactTimes | None, t: float, wrench: FloatArray, hand: _Hand) -> FloatArray:
+        phase = self.phase(chain, t)
+        if phase == Phase.RELEASE and contact is not None and t >= contact.lift_s + UNLOAD_S:
+            remaining = max(contact.free_s - t, 0.05)
+            return -hand.offset / remaining  # back to the plan by the release's end
+        if phase in (Phase.FREE, Phase.APPROACH):
+            size = float(np.linalg.norm(wrench[:3]))
+            if size <= GUARD_FORCE_N:
+                return np.zeros(6) if phase == Phase.APPROACH else -hand.offset / 0.5
+            return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset, 0.0)
+        target = self.force_n
+        if phase == Phase.RELEASE and contact is not None:
+            target *= max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)
+        band = HOLD_BAND if contact is not None and contact.hold_s <= t < contact.lift_s else FORCE_BAND
+        twist = self._give_way(wrench, target, hand.offset, band)
+        if self.saturated.get(chain, False):  # anti-windup: an arm at its effort limit pushes no further
+            twist[2] = max(twist[2], 0.0)
+            twist[3:] = 0.0
+        return twist
+
+    @staticmethod
+    def _give_way(wrench: FloatArray, target_n: float, offset: FloatArray, band: float = FORCE_BAND) -> FloatArray:
+        """The admittance twist (6,): along the normal to the target force, roll and pitch to zero torque.
+
+        The tangent and the yaw are held (the fingertips' friction holds them; the
+        measurement needs neither); the hand turns at most ``MAX_TILT_RAD`` from the plan.
+        """
+        twist = np.zeros(6)
+        if wrench[2] <= TOUCH_FORCE_N:  # not touching: search down (or stay, when unloaded)
+            twist[2] = -SEARCH_SPEED_M_S if target_n > TOUCH_FORCE_N else 0.0
+            return twist
+        error = wrench[2] - target_n
+        if abs(error) <= band * target_n:  # close enough: the hand stays still (a contact is measured still)
+            return twist
+        twist[2] = np.clip(K_FORCE * error, -MAX_SPEED_M_S, MAX_SPEED_M_S)
+        torque = np.where(np.abs(wrench[3:5]) > TORQUE_BAND_NM, wrench[3:5], 0.0)
+        turn = np.clip(K_TORQUE * torque, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD
+        twist[3:5] = np.where(blocked & (np.sign(turn) == np.sign(offset[3:5])), 0.0, turn)
+        return twist

@@ -1,0 +1,168 @@
+"""What the robot's controllers know: the nominal model, its anchor sole flat on the floor.
+
+The controllers never see the true robot. They read the encoders and the force/torque
+sensors and compute, on the nominal URDF (pinocchio) with the anchor sole at its
+reference place (``Scene.configuration``), the frames and their Jacobians, the centre of mass,
+and the static torques of the posture: gravity held by both soles and, in contact, the
+hand's target force (the soles' share split by least size, as
+:mod:`posegen.robot.statics` splits it). Wrenches are (force, torque) in N and N m.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from posegen.physics.sole_split import cross, least_size_map, split_wrench
+from posegen.physics.tool import Tool
+from posegen.robot import FloatArray, Scene
+
+GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world
+SPLIT_EVERY = 25  # updates between two computations of the least-size split's map (the soles barely move)
+
+
+class NominalRobot:
+    """The nominal model at the encoders' angles; call :meth:`update` first.
+
+    Frames are read in the world the robot believes in (its anchor sole at its place);
+    Jacobians have the base's six columns, then one per actuated joint (scene order).
+
+    Example:
+        >>> robot = NominalRobot(scene, {"left": wrist_tool(scene, "wrist_left_ft_link")})
+        >>> robot.update(scene.reference)
+        >>> robot.com()[:2]  # the centre of mass over the floor, m
+
+    """
+
+    def __init__(self, scene: Scene, tools: dict[str, Tool]) -> None:
+        self.scene = scene
+        self.model = scene.model
+        self.data = self.model.createData()
+        self._scratch = self.model.createData()  # kinematics that must not disturb ``data``
+        self.imu: FloatArray | None = None
+        self.sole_poses: list[FloatArray] = []  # (4, 4) each, stance order: set by update()
+        self.sole_centres: list[FloatArray] = []  # (3,) each, the foot rectangles' centres
+        self.tools = tools
+        self._velocity = scene.velocity_indices()
+        self.soles = [scene.frame_id(s) for s in scene.stance.sole_frames]
+        self._anchor = self.soles[0]
+        self.contact_frames = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.chains}
+        self.wrench_frames = {c: scene.frame_id(t.frame) for c, t in tools.items()}
+        self.mass_kg = float(pin.computeTotalMass(self.model))
+        (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
+        self._foot_centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # in a sole frame
+        self._foot_half = np.array([(x1 - x0) / 2, (y1 - y0) / 2])
+        self._normal_map: FloatArray | None = None  # the least-size split's, renewed every SPLIT_EVERY updates
+        self._updates = 0
+        self.q = scene.configuration(scene.reference)
+
+    def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
+        """The configuration (nq,) the robot believes in: its anchor sole's origin at its place, as the IMU tilts it."""
+        q = self.scene.configuration(joints)
+        if imu is None:
+            return q
+        kinematic = pin.Quaternion(q[3:7]).toRotationMatrix()
+        yaw = np.arctan2(kinematic[1, 0], kinematic[0, 0]) - np.arctan2(imu[1, 0], imu[0, 0])
+        rotation = pin.rpy.rpyToMatrix(0.0, 0.0, yaw) @ imu
+        pin.forwardKinematics(self.model, self._scratch, q)
+        anchor_flat = pin.updateFramePlacement(self.model, self._scratch, self._anchor)
+        local = pin.XYZQUATToSE3(q[:7]).actInv(anchor_flat.translation)  # the anchor origin in the base frame
+        q[:3] = self.scene.sole_poses[self.scene.anchor_sole][:3, 3] - rotation @ local
+        q[3:7] = pin.Quaternion(rotation).coeffs()
+        return q
+
+    def update(self, joints: FloatArray, imu: FloatArray | None = None) -> None:
+        """Kinematics and Jacobians at these joint angles (nj,) rad, the base tilted as the IMU reads it.
+
+        Args:
+            joints: The encoders' angles (nj,) rad.
+            imu: The base's world orientation (3, 3) the IMU reads: its roll and pitch replace
+                the ones the flat anchor sole gives (the yaw stays the kinematics'), the anchor
+                sole's origin kept at its place. None: the anchor sole flat.
+
+        """
+        self.imu = imu
+        self._updates += 1
+        self.q = self._configuration(joints, imu)
+        pin.computeJointJacobians(self.model, self.data, self.q)
+        pin.updateFramePlacements(self.model, self.data)
+        self.sole_poses = [self.pose(sole) for sole in self.soles]
+        self.sole_centres = [pose[:3, :3] @ self._foot_centre + pose[:3, 3] for pose in self.sole_poses]
+
+    def commanded_poses(self, joints: FloatArray, frames: list[int]) -> list[FloatArray]:
+        """Frames' world poses (4, 4) at commanded angles (nj,), the base as :meth:`update` last estimated it."""
+        q = self._configuration(joints, self.imu)
+        pin.forwardKinematics(self.model, self._scratch, q)
+        return [np.asarray(pin.updateFramePlacement(self.model, self._scratch, f).homogeneous) for f in frames]
+
+    def pose(self, frame: int) -> FloatArray:
+        """World pose of a frame (4, 4)."""
+        return np.asarray(self.data.oMf[frame].homogeneous)
+
+    def _columns(self, full: FloatArray) -> FloatArray:
+        return np.hstack([full[:, :6], full[:, 6:][:, self._velocity - 6]])
+
+    def frame_jacobian(self, frame: int) -> FloatArray:
+        """(6, 6 + nj) a frame's twist (linear, angular; world axes at its origin) per base twist and joint rate.
+
+        The base's six columns are its local twist; the others one per actuated joint (scene order).
+        """
+        return self._columns(pin.getFrameJacobian(self.model, self.data, frame, pin.LOCAL_WORLD_ALIGNED))
+
+    def base_jacobian(self) -> FloatArray:
+        """(6, 6 + nj) the free base's twist (world axes at its origin), as :meth:`frame_jacobian`."""
+        return self._columns(pin.getJointJacobian(self.model, self.data, 1, pin.LOCAL_WORLD_ALIGNED))
+
+    def com(self) -> FloatArray:
+        """World centre of mass (3,), m."""
+        return np.asarray(pin.centerOfMass(self.model, self.data, self.q, False))
+
+    def com_jacobian(self) -> FloatArray:
+        """(3, 6 + nj) CoM velocity per base twist and joint rate, as :meth:`frame_jacobian`."""
+        return self._columns(pin.jacobianCenterOfMass(self.model, self.data, self.q, False))
+
+    def tool_wrench(self, chain: str) -> FloatArray:
+        """The wrench (6,) the tool's weight puts on its wrist sensor, in the sensor's frame."""
+        tool = self.tools[chain]
+        rotation = self.data.oMf[self.wrench_frames[chain]].rotation
+        force = rotation.T @ (tool.mass_kg * GRAVITY)
+        return np.concatenate([force, cross(tool.com_m, force)])
+
+    def at_contact(self, chain: str, wrench: FloatArray) -> FloatArray:
+        """A wrench (6,) read in a chain's wrench frame, as world axes at its contact frame's origin."""
+        sensor = self.data.oMf[self.wrench_frames[chain]]
+        force = sensor.rotation @ wrench[:3]
+        torque = sensor.rotation @ wrench[3:]
+        lever = self.data.oMf[self.contact_frames[chain]].translation - sensor.translation
+        return np.concatenate([force, torque - cross(lever, force)])
+
+    def sole_split(self, total: FloatArray) -> list[FloatArray]:
+        """A world wrench (6,) at the world origin, shared by the soles: each (6,) LOCAL (see :func:`split_wrench`)."""
+        if self._normal_map is None or self._updates % SPLIT_EVERY == 0:
+            self._normal_map = least_size_map(self.sole_poses)
+        return split_wrench(total, self.sole_poses, self._foot_centre, self._foot_half, self._normal_map)
+
+    def soles_total(self, wrenches: tuple[FloatArray, ...]) -> FloatArray:
+        """The soles' wrenches (6,) each, in their frames, as one world wrench (6,) at the world origin."""
+        total = np.zeros(6)
+        for pose, wrench in zip(self.sole_poses, wrenches, strict=True):
+            force = pose[:3, :3] @ wrench[:3]
+            total[:3] += force
+            total[3:] += pose[:3, :3] @ wrench[3:] + cross(pose[:3, 3], force)
+        return total
+
+    def static_torques(self, hand: dict[str, FloatArray]) -> FloatArray:
+        """Joint torques (nj,) N m that hold the posture: gravity, the hands' wrenches, the soles' shares.
+
+        Args:
+            hand: Chain -> the table's wrench on its hand (6,), world axes at its contact frame.
+
+        """
+        gravity = np.array(pin.computeGeneralizedGravity(self.model, self.data, self.q))  # (nv,)
+        for chain, wrench in hand.items():
+            jacobian = pin.getFrameJacobian(self.model, self.data, self.contact_frames[chain], pin.LOCAL_WORLD_ALIGNED)
+            gravity -= jacobian.T @ wrench
+        base = self.data.oMi[1].toDualActionMatrix() @ gravity[:6]  # base wrench -> world origin
+        for sole, wrench in zip(self.soles, self.sole_split(base), strict=True):
+            gravity -= pin.getFrameJacobian(self.model, self.data, sole, pin.LOCAL).T @ wrench
+        return gravity[self._velocity]

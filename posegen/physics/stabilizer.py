@@ -1,0 +1,289 @@
+"""The balance stabilizer: DCM feedback realised by foot admittance (the ankle strategy).
+
+Position-controlled humanoids balance by regulating the ZMP with their feet (Kajita et
+al., 2010): a desired ZMP is computed from the divergent component of motion (DCM) of
+the centre of mass, and each foot gives way to the wrench it carries beyond its share
+of that ZMP, so the ankles lean the body until the floor's wrench is the desired one.
+
+* **DCM feedback.** The CoM ``c`` and its velocity are estimated on the nominal model
+  from the encoders and the IMU (:class:`NominalRobot`), the model's CoM corrected by a
+  bias the soles' sensors measure (below); ``xi = c + c' / omega``,
+  ``omega = sqrt(g / z_c)``. The desired ZMP is
+  ``p_d = p_ref + (1 + K_DCM / omega) (xi - xi_ref)``, kept ``ZMP_MARGIN_M`` inside the
+  support polygon, with ``xi_ref = c_ref + c_ref' / omega``. The references are the
+  plan's: its CoM and CoM velocity, and its ZMP (the commanded motion's, from the whole
+  robot's inverse dynamics); with the hands pushing on the table (as planned), the ZMP
+  they move away from the hands, held the config's ZMP margin inside the polygon by moving
+  the CoM toward them (:func:`references`).
+* **Foot admittance** (foot damping control). The desired ZMP's wrench is shared by the
+  soles as flat feet share it (:meth:`NominalRobot.sole_split`); each sole moves, relative
+  to the base, at ``v = K (w - w_share)`` in its frame, along its normal and about its
+  horizontal axes (a sole never slides nor turns on the floor; the friction holds it), an
+  excess within ``BAND`` leaving it still (the robot rests near equilibrium, so that a
+  contact is measured with its joints still): a sole
+  on its edge turns flat, a leg the true kinematics makes long shortens, and together
+  they lean the body to move the ZMP.
+* **CoM bias.** The nominal model misplaces a perturbed robot's CoM by centimetres. When
+  no hand pushes, the measured ZMP less the one the plan's motion gives at the model's CoM
+  is low-passed (``BIAS_S``) into the CoM's bias: on average over a few seconds the floor
+  carries the weight under the true CoM.
+* **CoM position.** The CoM the encoders and the IMU put on the nominal model is brought
+  back to its reference by moving the base over the soles (both soles move alike,
+  relative to the base, along the floor: ``K_COM``, beyond ``COM_BAND_M``): the joint
+  loops' give under load (a leg carrying the whole robot) would otherwise leave the CoM
+  off its plan, and near the polygon's edge, where the plan may put the ZMP within a
+  centimetre, the feet's admittance alone is too slow to bring it back. Likewise the
+  base's height (the soles' admittance along their normals drifts it) is brought back to
+  the plan's (``K_HEIGHT``, beyond ``HEIGHT_BAND_M``).
+* **Light soles.** A sole carrying less than ``LIGHT_SHARE`` of the load does not turn: it
+  cannot make the torque its share asks for (its centre of pressure would leave the
+  rectangle), and its admittance would turn it on its edge.
+* **Holds.** While a hand holds a contact, the stabilizer rests (zero twists) as long as
+  the DCM is within ``REST_DCM_M`` of its reference and the measured ZMP
+  ``REST_MARGIN_M`` inside the polygon: the robot stands balanced in a static posture, and a
+  contact is measured with every joint still. Past either bound it acts as ever.
+* **Body attitude.** The base's roll and pitch, as the IMU reads them, are slowly
+  levelled to the plan's by turning both soles alike relative to the base
+  (``K_ATTITUDE``): the true legs tilt the body where the nominal ones would not.
+
+The output is each sole's twist relative to the base; :mod:`posegen.physics.offsets`
+turns it into leg joint offsets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from posegen.physics.nominal import GRAVITY, NominalRobot
+from posegen.robot import FloatArray, Scene, convex_hull_clockwise
+
+K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
+VELOCITY_FILTER_S = 0.02  # low-pass of the CoM velocity estimate
+BIAS_S = 2.0  # time constant of the CoM bias estimate, s
+ZMP_MARGIN_M = (
+    0.004  # the desired ZMP is kept this far inside the support polygon (the feedback's authority at the edge)
+)
+K_FOOT_FORCE = 1e-4  # m/s per N of excess force on a sole
+K_FOOT_TORQUE = 1e-3  # rad/s per N m of excess torque
+MAX_FOOT_SPEED = 0.02  # m/s and rad/s
+ADMITTED = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 0.0])  # a sole gives way along its normal and tilts, never slides
+BAND = np.array([20.0, 20.0, 20.0, 3.0, 3.0, 3.0])  # N, N m: a sole's excess below this leaves it where it is
+K_COM_PER_S = 3.0  # CoM position error -> the base's motion over the soles
+COM_BAND_M = 0.003  # a CoM error below this is left as it is (the robot rests still)
+MAX_COM_SPEED = 0.05  # m/s
+K_HEIGHT_PER_S = 1.0  # the base's height error -> both soles' motion along the vertical
+HEIGHT_BAND_M = 0.002
+LIGHT_SHARE = 0.1  # of the vertical load: a sole carrying less does not turn
+K_ATTITUDE_PER_S = 0.5  # base tilt error -> both soles' turn relative to the base
+MAX_TURN_RAD_S = 0.05
+ATTITUDE_BAND_RAD = 0.003  # a tilt error below this is left as it is (the robot rests still)
+REST_DCM_M = 0.01  # during a hold the stabilizer rests while the DCM is this close to its reference
+REST_MARGIN_M = 0.01  # and the measured ZMP this far inside the support polygon
+POLYGON_EVERY = 25  # control steps between two computations of the support polygon (the soles barely move)
+
+
+@dataclass(frozen=True)
+class SoleReadings:
+    """The floor's wrench on each sole, as its sensor reads it: (6,) (force N, torque N m), sole frame."""
+
+    wrenches: tuple[FloatArray, ...]  # in the stance's sole order
+
+
+@dataclass(frozen=True)
+class Reference:
+    """What the plan says of the robot's balance at a sample (ground projections, m and m/s)."""
+
+    com: FloatArray  # (2,) m
+    com_velocity: FloatArray  # (2,) m/s
+    zmp: FloatArray  # (2,) m, the commanded motion's ZMP, hands free
+    pelvis_z: float  # m, the free base's height
+
+
+def references(
+    robot: NominalRobot, hands: dict[str, FloatArray], planned: Reference, polygon: Hull, margin_m: float
+) -> tuple[FloatArray, FloatArray]:
+    """The ZMP and CoM references (2,) each, m, while the hands push on the table.
+
+    The table pushes a pressing hand up (its wrench (6,) on the hand, world axes at its
+    contact frame): the floor carries that much less, and the ZMP moves away from the hand,
+    ``p = (W p_plan - F h) / (W - F)``. Where that keeps it ``margin_m`` inside the support
+    polygon, the CoM stays where the plan puts it; otherwise the ZMP is held at that margin
+    and the CoM moves toward the hand by what it takes.
+
+    Example:
+        >>> zmp, com = references(robot, {"left": wrench}, Reference(com, velocity, zmp, 1.0), hull, 0.01)
+
+    """
+    weight = robot.mass_kg * -GRAVITY[2]
+    moment, load = np.zeros(2), 0.0
+    for chain, wrench in hands.items():
+        up = max(float(wrench[2]), 0.0)  # the table's push on the hand
+        moment += up * robot.pose(robot.contact_frames[chain])[:2, 3]
+        load += up
+    floor = max(weight - load, 0.1 * weight)  # what the floor carries
+    free = (weight * planned.zmp - moment) / floor  # the ZMP if the CoM follows the plan
+    zmp = clamp_into(polygon, free, margin_m)
+    return zmp, np.asarray(planned.com + (zmp - free) * floor / weight)
+
+
+@dataclass(frozen=True)
+class Hull:
+    """A convex polygon as its edges' inward normals and offsets: ``margin(p) = min(normals @ p - offsets)``."""
+
+    vertices: FloatArray  # (h, 2) clockwise
+    normals: FloatArray  # (h, 2) unit, inward
+    offsets: FloatArray  # (h,)
+
+    @classmethod
+    def of(cls, points: FloatArray) -> Hull:
+        """The convex hull of points (m, 2)."""
+        vertices = convex_hull_clockwise(points)
+        edges = np.roll(vertices, -1, axis=0) - vertices
+        normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # clockwise: the interior is on the right
+        normals /= np.linalg.norm(normals, axis=1)[:, None]
+        return cls(vertices, normals, np.einsum("ij,ij->i", normals, vertices))
+
+    def margin(self, point: FloatArray) -> float:
+        """Signed distance (m) of a point inside the polygon (negative outside)."""
+        return float(np.min(self.normals @ point - self.offsets))
+
+
+def clamp_into(hull: Hull, point: FloatArray, margin_m: float) -> FloatArray:
+    """The point (2,) pulled toward the polygon's centroid until it is ``margin_m`` inside."""
+    if hull.margin(point) >= margin_m:
+        return point
+    centre = hull.vertices.mean(axis=0)
+    low, high = 0.0, 1.0
+    for _ in range(12):
+        middle = 0.5 * (low + high)
+        if hull.margin(centre + middle * (point - centre)) >= margin_m:
+            low = middle
+        else:
+            high = middle
+    return np.asarray(centre + low * (point - centre))
+
+
+def _beyond(values: FloatArray, band: FloatArray) -> FloatArray:
+    """Each value less its band toward zero; zero within the band (a deadband: the soles rest near equilibrium)."""
+    return np.asarray(np.sign(values) * np.maximum(np.abs(values) - band, 0.0))
+
+
+def tilt_error(measured: FloatArray, planned: FloatArray) -> FloatArray:
+    """(2,) rad: the roll and pitch (world x, y) that turn the planned orientation (3, 3) into the measured one."""
+    error = measured @ planned.T
+    return 0.5 * np.array([error[2, 1] - error[1, 2], error[0, 2] - error[2, 0]])
+
+
+class Stabilizer:
+    """Each sole's twist relative to the base that keeps the robot balanced with both soles flat.
+
+    Example:
+        >>> stabilizer = Stabilizer(scene, robot)
+        >>> twists = stabilizer.step(soles, hand_wrenches, (imu, planned), reference, dt_s=0.002)
+
+    """
+
+    def __init__(self, scene: Scene, robot: NominalRobot, glued_feet: bool = False) -> None:
+        self.robot = robot
+        self.glued_feet = glued_feet  # welded soles: no admittance (their sensors read the welds)
+        self.margin_m = scene.margins.zmp_m  # the reference ZMP is kept this far inside the polygon
+        (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
+        self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
+        self._com: FloatArray | None = None
+        self._hull: Hull | None = None
+        self._steps = 0
+        self._velocity = np.zeros(2)
+        self.zmp_desired: FloatArray = np.zeros(2)
+        self.dcm_error: FloatArray = np.zeros(2)  # m, the DCM less its reference
+        self.com_bias: FloatArray = np.zeros(2)  # m, the true CoM less the model's, as the soles measure it
+
+    def _polygon(self) -> Hull:
+        """The soles' support polygon where the robot believes they are (renewed every ``POLYGON_EVERY`` steps)."""
+        if self._hull is None or self._steps % POLYGON_EVERY == 0:
+            points = np.hstack([(pose @ self._corners)[:2] for pose in self.robot.sole_poses]).T
+            self._hull = Hull.of(points)
+        return self._hull
+
+    def _desired_zmp(self, zmp: FloatArray, reference: FloatArray, velocity: FloatArray, dt_s: float) -> FloatArray:
+        """The ZMP (2,) that brings the DCM back to its reference (the ZMP ``zmp``, the CoM ``reference`` moving)."""
+        com = self.robot.com()
+        com[:2] += self.com_bias
+        if self._com is not None:
+            blend = dt_s / (VELOCITY_FILTER_S + dt_s)
+            self._velocity += blend * ((com[:2] - self._com) / dt_s - self._velocity)
+        self._com = com[:2].copy()
+        omega = np.sqrt(-GRAVITY[2] / max(float(com[2]), 0.1))
+        self.dcm_error = com[:2] + self._velocity / omega - reference - velocity / omega
+        desired = zmp + (1.0 + K_DCM_PER_S / omega) * self.dcm_error
+        return clamp_into(self._polygon(), desired, ZMP_MARGIN_M)
+
+    def step(
+        self,
+        soles: SoleReadings,
+        hand_wrenches: dict[str, FloatArray],
+        attitude: tuple[FloatArray, FloatArray],
+        planned: Reference,
+        dt_s: float,
+        holding: bool = False,
+    ) -> list[FloatArray]:
+        """Each sole's twist (6,) relative to the base (world axes at the sole), the robot updated at its sensors.
+
+        Args:
+            soles: The soles' sensor readings.
+            hand_wrenches: Chain -> the table's measured wrench on its hand (6,), world axes at its contact frame.
+            attitude: The base's orientation (3, 3) as its IMU reads it, and as planned.
+            planned: The plan's CoM, CoM velocity and ZMP at this sample.
+            dt_s: The control period.
+            holding: A hand holds a contact: the stabilizer rests while the robot is balanced.
+
+        """
+        robot = self.robot
+        self._steps += 1
+        zmp, reference = references(robot, hand_wrenches, planned, self._polygon(), self.margin_m)
+        self.zmp_desired = self._desired_zmp(zmp, reference, planned.com_velocity, dt_s)
+        total = robot.soles_total(soles.wrenches)
+        measured = np.array([-total[4], total[3]]) / max(float(total[2]), 1.0)  # the ZMP (2,), floor at z = 0
+        if not any(float(w[2]) > 0.0 for w in hand_wrenches.values()):
+            expected = robot.com()[:2] + self.com_bias + planned.zmp - planned.com  # the plan's motion at our CoM
+            self.com_bias += dt_s / BIAS_S * (measured - expected)
+        balanced = np.linalg.norm(self.dcm_error) < REST_DCM_M and self._polygon().margin(measured) > REST_MARGIN_M
+        if self.glued_feet or (holding and balanced):
+            return [np.zeros(6) for _ in robot.soles]
+        desired = total.copy()
+        desired[3:5] = [self.zmp_desired[1] * total[2], -self.zmp_desired[0] * total[2]]  # its ZMP there
+        shift = np.zeros(3)  # the soles move back: the base moves on
+        shift[2] = K_HEIGHT_PER_S * float(
+            _beyond(np.array([robot.q[2] - planned.pelvis_z]), np.array([HEIGHT_BAND_M]))[0]
+        )
+        shift[:2] = -np.clip(
+            K_COM_PER_S * _beyond(reference - robot.com()[:2] - self.com_bias, np.full(2, COM_BAND_M)),
+            -MAX_COM_SPEED,
+            MAX_COM_SPEED,
+        )
+        level = np.zeros(3)  # turning both soles by the base's tilt, relative to it, turns the base back
+        tilt = _beyond(tilt_error(*attitude), np.full(2, ATTITUDE_BAND_RAD))
+        level[:2] = np.clip(K_ATTITUDE_PER_S * tilt, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        shares = robot.sole_split(desired)
+        return [
+            _sole_twist(pose, wrench, share, shift, level, float(total[2]))
+            for pose, wrench, share in zip(robot.sole_poses, soles.wrenches, shares, strict=True)
+        ]
+
+
+def _sole_twist(
+    pose: FloatArray, wrench: FloatArray, share: FloatArray, shift: FloatArray, level: FloatArray, load: float
+) -> FloatArray:
+    """A sole's twist (6,) relative to the base: its admittance, the CoM's shift and height, the attitude's turn.
+
+    ``pose`` (4, 4) where the nominal model puts it; ``wrench`` and ``share`` (6,) in its frame;
+    ``load`` the soles' total vertical force, N.
+    """
+    excess = _beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
+    if wrench[2] < LIGHT_SHARE * load:
+        excess[3:] = 0.0
+    local = np.concatenate([K_FOOT_FORCE * excess[:3], K_FOOT_TORQUE * excess[3:]])
+    local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
+    rotation = pose[:3, :3]
+    return np.concatenate([rotation @ local[:3] + shift, rotation @ local[3:] + level])
