@@ -76,8 +76,12 @@ def _sha256(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def wrench_topics(scene: Scene) -> dict[str, str]:
+def wrench_topics(scene: Scene, measuring: bool = False) -> dict[str, str]:
     """Each chain's wrist force/torque topic, from the config.
+
+    Args:
+        scene: Scene.
+        measuring: The caller measures a recording (joint speed alone is then an option, said in the error).
 
     Raises:
         InputError: A chain names no ``wrench_topic``.
@@ -85,9 +89,15 @@ def wrench_topics(scene: Scene) -> dict[str, str]:
     """
     missing = [c.name for c in scene.config.chains if not c.wrench_topic]
     if missing:
+        where = ", ".join(f"chains.{name}.wrench_topic" for name in missing)
+        if measuring:
+            raise InputError(
+                f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with use_wrench=False)",
+                parameter="use_wrench=False",
+            )
         raise InputError(
-            f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with use_wrench=False)",
-            parameter="use_wrench=False",
+            f"no wrist force/torque topic in the config for chain(s) {', '.join(missing)}: "
+            f"name it in {where} (e.g. /{missing[0]}_wrist_ft)"
         )
     return {c.name: c.wrench_topic for c in scene.config.chains}
 
@@ -277,7 +287,7 @@ def measure_bag(
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
     scene = Scene(load_config(config_path))
     planned_motion = None if route_path is None else _route(route_path, scene)[0]
-    topics = wrench_topics(scene) if use_wrench else {}
+    topics = wrench_topics(scene, measuring=True) if use_wrench else {}
     with claim_output(output):
         joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
         columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
