@@ -109,7 +109,7 @@ def robust_residuals(
         weighted = per_posture * np.sqrt(weights)[:, None, None]
         flat = weighted.reshape(-1, weighted.shape[2])
         information = flat.T @ flat + prior_rows.T @ prior_rows
-        leverage = np.einsum("ij,jk,ik->i", flat, np.linalg.pinv(information), flat).reshape(n, comps)
+        leverage = np.sum((flat @ np.linalg.pinv(information)) * flat, axis=1).reshape(n, comps)
         scaled = (raw / sigma) ** 2 / np.clip(1.0 - leverage, 0.05, 1.0)  # (n, comps)
         studentised = np.sqrt(scaled.sum(axis=1))
         # noise of the well-fitting rows: weighted, leverage-corrected mean square over the measured rows
