@@ -245,7 +245,7 @@ def bench_calibration(workdir: Path) -> None:
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
     data = real_data()
     bench_real(scene, data, machine(), workdir / "calibration")
-    bench_corrupted_rows(scene, data)
+    bench_corrupted_rows(scene, data, workdir / "calibration")
     bench_recovery(scene, load_pool(ROOT / "plans" / "talos" / "pool.yaml"))
 
 

@@ -28,11 +28,12 @@ import numpy as np
 from posegen.arguments import check_count, check_seed, check_size
 from posegen.calibrate.deliverables import Deliverables, choose_deliverables
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec
+from posegen.calibrate.file_judge import with_training_planes
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, ScaleSearch, select_model
 from posegen.calibrate.screening import Flag, Screening, feet_off_the_floor, feet_offsets
 from posegen.calibrate.urdf_export import check_exportable
-from posegen.errors import InfeasibleError, InputError
+from posegen.errors import InputError
 from posegen.model import (
     DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
@@ -317,23 +318,10 @@ def held_out_x(calibration: Calibration, x: FloatArray, contacts: Contacts) -> F
 
     A session also present in training keeps its own plane. Another session takes the
     plane of the training session with the most kept rows of the held-out chain: the
-    plane's height is only known relative to the chain it was fitted with.
+    plane's height is only known relative to the chain it was fitted with
+    (:func:`posegen.calibrate.file_judge.with_training_planes`).
     """
-    plane = calibration.model.contact.plane_columns
-    out = x.copy()
-    train = calibration.train.subset(list(calibration.kept))
-    for session in sorted(set(contacts.sessions) - set(train.sessions)):
-        chains = [c for c, s in zip(contacts.chains, contacts.sessions, strict=True) if s == session]
-        chain = max(sorted(set(chains)), key=chains.count)
-        counts = {
-            s: sum(1 for c, t in zip(train.chains, train.sessions, strict=True) if c == chain and t == s)
-            for s in set(train.sessions)
-        }
-        source = max(sorted(counts), key=lambda s: counts[s])
-        if counts[source] == 0:
-            raise InfeasibleError(f"chain '{chain}' of held-out session '{session}' has no training contact")
-        out[plane(session)] = x[plane(source)]
-    return out
+    return with_training_planes(calibration.model, x, calibration.train.subset(list(calibration.kept)), contacts)
 
 
 def held_out_residuals(calibration: Calibration, contacts: Contacts) -> dict[str, dict[str, FloatArray]]:
