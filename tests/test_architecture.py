@@ -348,8 +348,6 @@ LONG_FUNCTIONS = {  # module:qualified name -> why it is still one piece (the li
     "target, greedy choice): its steps share a dozen arrays; not split yet",
     "posegen.select.workflow:follow_up_pool_file": "the follow-up command, files to files (read the calibration and "
     "the given contacts, design, write): not split yet",
-    "posegen.calibrate.simulation:settle_true": "the settle step's Gauss-Newton loop with its stance and contact "
-    "closures inline: not split yet",
 }
 
 

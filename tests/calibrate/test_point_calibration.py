@@ -60,7 +60,7 @@ def point_truth(point_scene, example_pool):
             delta[i] = 1.5e-3 * rng.normal()
     rigid = Perturbation(length_m=0.0, angle_rad=0.0)
     x = true_parameters(model, rigid, seed=8) + model.basis @ delta
-    recorded, converged = settle_true(model, x, contacts)
+    recorded, converged, _ = settle_true(model, x, contacts)
     recorded = recorded.subset(np.flatnonzero(converged))
     assert len(recorded) >= 100
     return model, x, recorded.subset(range(80)), recorded.subset(range(80, len(recorded)))
