@@ -11,7 +11,8 @@ Internal: scripts use the public API at ``posegen.`` (stable, documented with ex
 names here are its plumbing and may change between versions.
 """
 
-from posegen.calibrate.bag_workflow import Measured, SimulatedBag, measure_bag, simulate_route_bag
+from typing import TYPE_CHECKING, Any
+
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
 from posegen.calibrate.calibration_file import write_calibration
 from posegen.calibrate.compliance import Compliance, ComplianceGroup, compensate, read_compliance, uncompensate
@@ -62,6 +63,20 @@ from posegen.calibrate.workflow import (
     simulate_postures_file,
     truth_of,
 )
+
+if TYPE_CHECKING:
+    from posegen.calibrate.bag_workflow import Measured, SimulatedBag, measure_bag, simulate_route_bag
+
+_BAG_NAMES = ("Measured", "SimulatedBag", "measure_bag", "simulate_route_bag")
+
+
+def __getattr__(name: str) -> Any:
+    """The rosbag workflow's names, imported when first used (``calibrate`` needs none of its readers)."""
+    if name in _BAG_NAMES:
+        from posegen.calibrate import bag_workflow
+
+        return getattr(bag_workflow, name)
+    raise AttributeError(f"module 'posegen.calibrate' has no attribute {name!r}")
 
 __all__ = [
     "CALIBRATION_FILE",
