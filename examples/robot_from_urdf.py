@@ -15,8 +15,9 @@ import argparse
 import time
 from pathlib import Path
 
+from posegen.draft import write_draft
 from posegen.resources import DEFAULT_CONFIG, shipped_path
-from posegen.robot import Scene, load_config, write_draft
+from posegen.robot import Scene, load_config
 
 
 def main(output: Path, robot: str) -> None:

@@ -282,29 +282,13 @@ def measure_bag(
         joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))
         columns, absent = _columns(scene, joints, f"{bag}: topic '{joint_topic}'")
         base = np.where(scene.locked, scene.locked_values, scene.reference)
-        settings = scene.config.recording
-        forces: dict[str, FloatArray] | None = None
-        tools: tuple[ToolGravity, ...] = ()
-        if use_wrench:
-            angles = np.repeat(base[None, :], len(joints.times_s), axis=0)  # (n, nj) in the robot order
-            angles[:, columns] = joints.positions
-            by_chain = dict(zip(topics, wrenches, strict=True))
-            forces, tools = wrist_forces(scene, joints.times_s, angles, by_chain, settings.force_threshold_n)
-        windows, rejected = find_windows(joints.times_s, joints.positions, forces, settings)
-        duration = float(joints.times_s[-1] - joints.times_s[0])
-        if planned_motion is not None:
-            planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
-            heights = None if use_wrench else _heights(scene, windows, planned_motion, columns, base)
-            windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights)
-        accepted, full = _within_limits(scene, windows, columns, base, rejected)
-        rejected.sort(key=lambda r: r.start_s)
-        if not accepted:
+        found = _contact_windows(scene, joints, columns, base, dict(zip(topics, wrenches, strict=True)), planned_motion)
+        if not found.accepted:
+            rejected = found.rejected
             first = f"; first rejected: {rejected[0].start_s:.2f} s, {rejected[0].reason}" if rejected else ""
             raise InputError(f"{bag}: no contact window found ({len(rejected)} rejected{first})")
         name = session or Path(bag).resolve().name
-        labels = tuple(f"{Path(bag).name}:{w.label or 'contact'}@{w.start_s:.2f}s" for w in accepted)
-        made = tuple(w.chain for w in accepted)
-        contacts = Contacts(np.array(full), made, (name,) * len(accepted), labels, planned_kinds(scene, made))
+        duration = float(joints.times_s[-1] - joints.times_s[0])
         prov = scene.provenance(None)
         prov["recording"] = {
             "bag": str(bag),
@@ -312,19 +296,64 @@ def measure_bag(
             "storage": recorded.storage,
             "session": name,
             "topics": {"joint_states": joint_topic, "wrenches": topics},
-            "thresholds": dataclasses.asdict(settings),
+            "thresholds": dataclasses.asdict(scene.config.recording),
             "route": route_path,
             "route_sha256": _sha256(route_path) if route_path else None,
             "joint_states": {"samples": len(joints.times_s), "duration_s": duration},
             "joints_not_recorded": absent,
-            "tool_gravity": {tool.chain: _tool_fields(tool) for tool in tools},
+            "tool_gravity": {tool.chain: _tool_fields(tool) for tool in found.tools},
         }
-        data = measurements_to_dict(scene, contacts, prov)
-        for entry, window in zip(data["contacts"], accepted, strict=True):
-            entry.update(_window_fields(window))
-        data["rejected"] = [{"start_s": r.start_s, "end_s": r.end_s, "reason": r.reason} for r in rejected]
-        write_yaml(output, data)
-        return Measured(Path(output), tuple(accepted), tuple(rejected), topics, duration, tools)
+        write_yaml(output, _measurements(scene, found, bag, name, prov))
+        return Measured(Path(output), found.accepted, found.rejected, topics, duration, found.tools)
+
+
+@dataclass(frozen=True)
+class _Found:
+    """The contact windows of a recording."""
+
+    accepted: tuple[Window, ...]
+    joints: FloatArray  # (n, nj) rad: each accepted window's angles in the robot's order
+    rejected: tuple[Rejection, ...]  # by time
+    tools: tuple[ToolGravity, ...]  # each wrist's tool model (none without wrench topics)
+
+
+def _contact_windows(
+    scene: Scene,
+    joints: JointStates,
+    columns: list[int],
+    base: FloatArray,
+    wrenches: dict[str, Wrenches],
+    planned_motion: Motion | None,
+) -> _Found:
+    """A recording's windows: on the wrists' compensated force (or the joints alone), matched to the route."""
+    settings = scene.config.recording
+    forces: dict[str, FloatArray] | None = None
+    tools: tuple[ToolGravity, ...] = ()
+    if wrenches:
+        angles = np.repeat(base[None, :], len(joints.times_s), axis=0)  # (n, nj) in the robot order
+        angles[:, columns] = joints.positions
+        forces, tools = wrist_forces(scene, joints.times_s, angles, wrenches, settings.force_threshold_n)
+    windows, rejected = find_windows(joints.times_s, joints.positions, forces, settings)
+    if planned_motion is not None:
+        planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
+        heights = None if wrenches else _heights(scene, windows, planned_motion, columns, base)
+        windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights)
+    accepted, full = _within_limits(scene, windows, columns, base, rejected)
+    rejected.sort(key=lambda r: r.start_s)
+    return _Found(tuple(accepted), np.array(full), tuple(rejected), tools)
+
+
+def _measurements(scene: Scene, found: _Found, bag: str, session: str, provenance: dict[str, Any]) -> dict[str, Any]:
+    """The measurement file's data: one contact per accepted window, with its times, and the windows left out."""
+    labels = tuple(f"{Path(bag).name}:{w.label or 'contact'}@{w.start_s:.2f}s" for w in found.accepted)
+    made = tuple(w.chain for w in found.accepted)
+    sessions = (session,) * len(made)
+    contacts = Contacts(found.joints, made, sessions, labels, planned_kinds(scene, made))
+    data = measurements_to_dict(scene, contacts, provenance)
+    for entry, window in zip(data["contacts"], found.accepted, strict=True):
+        entry.update(_window_fields(window))
+    data["rejected"] = [{"start_s": r.start_s, "end_s": r.end_s, "reason": r.reason} for r in found.rejected]
+    return data
 
 
 def _tool_fields(tool: ToolGravity) -> dict[str, Any]:

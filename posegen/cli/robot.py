@@ -53,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Draft a config, or survey a config's collision pairs, and say what was found."""
     if args.action == "init":
-        from posegen.robot import write_draft
+        from posegen.draft import write_draft
 
         command = " ".join(
             ["posegen robot init", args.name, *(f"--srdf {args.srdf}" for _ in [0] if args.srdf)]
@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         for check in draft.checks:
             print(f"  - {check}")
         return 0
-    from posegen.robot import survey_config_pairs
+    from posegen.draft import survey_config_pairs
 
     survey, block = survey_config_pairs(args.config, args.samples, args.seed)
     found = f"{len(survey.disabled)} of {survey.pairs_surveyed} link pairs, {survey.samples} postures"

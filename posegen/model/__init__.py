@@ -33,6 +33,7 @@ from posegen.model.measurements import (
 )
 from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, POINT_FIELDS, Group, Parameter, Unit
 from posegen.model.planes import initial_planes, level_planes
+from posegen.model.pool_size import POOL_FACTOR, PoolSize, minimum_postures, pool_size
 from posegen.model.prior import (
     ROBOT_KINDS,
     Spec,
@@ -66,6 +67,7 @@ __all__ = [
     "OFFSET_FIELDS",
     "PLACEMENT_FIELDS",
     "POINT_FIELDS",
+    "POOL_FACTOR",
     "RANK_TOLERANCE",
     "RIDGE",
     "ROBOT_KINDS",
@@ -89,6 +91,7 @@ __all__ = [
     "Observations",
     "Parameter",
     "Part",
+    "PoolSize",
     "Spec",
     "Unit",
     "Weights",
@@ -107,11 +110,13 @@ __all__ = [
     "measurement_item",
     "measurement_provenance",
     "measurements_to_dict",
+    "minimum_postures",
     "observability_o1",
     "offset_matrix",
     "placement_derivatives",
     "placement_matrix",
     "planned_kinds",
+    "pool_size",
     "prior_scale",
     "prior_sigmas",
     "read_csv",

@@ -25,6 +25,7 @@ from posegen.model.contact_model import ContactModel, Contacts, planned_kinds
 from posegen.model.contact_rows import row_counts
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters
 from posegen.model.planes import initial_planes
+from posegen.model.pool_size import POOL_FACTOR, minimum_postures
 from posegen.model.structural import structural_base
 from posegen.model.weights import DEFAULT_NOISE, NOISE_FLOOR
 from posegen.robot import ContactKind, FloatArray, Scene
@@ -198,9 +199,12 @@ def build_design(
     measured = row_counts(contacts.kinds)
     if measured.sum() < nb or np.any(diag <= RANK_TOLERANCE * diag.max()):
         rank = int(np.sum(diag > RANK_TOLERANCE * diag.max()))
+        per_contact = int(measured.max())
+        least = minimum_postures(nb, per_contact)
         raise InfeasibleError(
             f"the pool is rank deficient: its {n} postures identify {rank} of the {nb} base parameters; "
-            "sample a larger or more diverse pool"
+            f"a contact measures {per_contact} number{'s' if per_contact > 1 else ''}: no fewer than {least} "
+            f"postures can, and a pool needs more: sample {POOL_FACTOR * least} or more"
         )
     for rows in _chunks(3 * n, DESIGN_CHUNK):
         flat[rows] = np.linalg.solve(r.T, flat[rows].T).T  # A_i R^-1

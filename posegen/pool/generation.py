@@ -14,6 +14,7 @@ from __future__ import annotations
 import functools
 import itertools
 import logging
+from collections.abc import Iterator
 from pathlib import Path
 
 from posegen.arguments import check_seed
@@ -53,6 +54,53 @@ def sampling_job(config: Config, seed: int, model_sha256: str) -> Job[PostureSam
         setup=functools.partial(_sampler, config, seed, model_sha256),
         run=_evaluate,
     )
+
+
+def _sample_until(
+    n: int,
+    outcomes: list[Outcome],
+    chunks: Iterator[list[Outcome]],
+    checkpoint: Checkpoint | None,
+    progress: ProgressCallback,
+) -> None:
+    """Take chunks of outcomes (appended to ``outcomes``) until ``n`` postures are accepted.
+
+    Raises:
+        InfeasibleError: No feasible posture in the first samples, or acceptance too low.
+
+    """
+    accepted = sum(isinstance(o, Posture) for o in outcomes)
+    max_samples = max(PROBE_SAMPLES, MAX_SAMPLES_PER_POSTURE * n)
+    while accepted < n:
+        if accepted == 0 and len(outcomes) >= PROBE_SAMPLES:
+            raise InfeasibleError(
+                f"no feasible posture in the first {len(outcomes)} samples "
+                f"(rejections: {rejection_counts(outcomes)}); is the table (table.top_center_m) within the "
+                "arms' reach, and can a hand press route.contact_force_n within margins.effort_ratio of the "
+                "effort limits?"
+            )
+        if len(outcomes) >= max_samples:
+            raise InfeasibleError(
+                f"only {accepted} feasible postures in {len(outcomes)} samples; loosen the margins or move the table"
+            )
+        chunk = next(chunks)
+        if checkpoint:
+            checkpoint.append(chunk)
+        outcomes.extend(chunk)
+        accepted += sum(isinstance(o, Posture) for o in chunk)
+        progress(Progress(min(accepted, n), n, "posture", attempts=len(outcomes)))
+
+
+def _first_accepted(outcomes: list[Outcome], n: int) -> list[Outcome]:
+    """The outcomes up to the ``n``-th accepted posture (the rejections before it kept)."""
+    kept: list[Outcome] = []
+    count = 0
+    for outcome in outcomes:
+        kept.append(outcome)
+        count += isinstance(outcome, Posture)
+        if count == n:
+            break
+    return kept
 
 
 def generate_pool(
@@ -97,39 +145,15 @@ def generate_pool(
     if done:
         LOG.info("resuming: %d samples already done, %d postures accepted", len(outcomes), accepted)
     progress(Progress(min(accepted, n), n, "posture", attempts=len(outcomes)))
-    max_samples = max(PROBE_SAMPLES, MAX_SAMPLES_PER_POSTURE * n)
     backend = as_backend(workers)
     size = config.sampling.chunk_size
     ranges = (range(c * size, (c + 1) * size) for c in itertools.count(len(done)))
     chunks = backend.map(sampling_job(config, seed, model_sha), ranges)
     try:
-        while accepted < n:
-            if accepted == 0 and len(outcomes) >= PROBE_SAMPLES:
-                raise InfeasibleError(
-                    f"no feasible posture in the first {len(outcomes)} samples "
-                    f"(rejections: {rejection_counts(outcomes)}); "
-                    "is the table (table.top_center_m) within the arms' reach?"
-                )
-            if len(outcomes) >= max_samples:
-                raise InfeasibleError(
-                    f"only {accepted} feasible postures in {len(outcomes)} samples; "
-                    "loosen the margins or move the table"
-                )
-            chunk = next(chunks)
-            if checkpoint:
-                checkpoint.append(chunk)
-            outcomes.extend(chunk)
-            accepted += sum(isinstance(o, Posture) for o in chunk)
-            progress(Progress(min(accepted, n), n, "posture", attempts=len(outcomes)))
+        _sample_until(n, outcomes, chunks, checkpoint, progress)
     finally:
         chunks.close()
-    kept: list[Outcome] = []
-    count = 0
-    for outcome in outcomes:  # the first n accepted samples, and the rejections before the last
-        kept.append(outcome)
-        count += isinstance(outcome, Posture)
-        if count == n:
-            break
+    kept = _first_accepted(outcomes, n)
     postures = tuple(o for o in kept if isinstance(o, Posture))
     return Pool(
         joint_names=scene.joint_names,

@@ -10,6 +10,15 @@ Internal: scripts use the public API at ``posegen.`` (stable, documented with ex
 names here are its plumbing and may change between versions.
 """
 
+from posegen.robot.additions import (  # for the draft (robot init)
+    Box,
+    Capsule,
+    CollisionConfig,
+    DisabledPair,
+    FrameConfig,
+    Shape,
+    VisualHull,
+)
 from posegen.robot.balance import (
     Balance,
     FloorWrenches,
@@ -21,9 +30,13 @@ from posegen.robot.balance import (
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
-from posegen.robot.collision_geometry import robot_geometry
-from posegen.robot.collision_matrix import PairSurvey
+from posegen.robot.collision_geometry import (
+    add_self_pairs,  # for the draft (robot init)
+    robot_geometry,
+)
+from posegen.robot.collision_matrix import PairSurvey, survey_pairs, survey_scene_pairs  # for the draft (robot init)
 from posegen.robot.config import (
+    PACKAGE_URI,  # for the draft (robot init)
     Config,
     MarginConfig,
     RecordingConfig,
@@ -44,10 +57,24 @@ from posegen.robot.contact_kinds import (
     kind_named,
     registered_kinds,
 )
-from posegen.robot.coverage import GeometryCoverage, geometry_coverage
-from posegen.robot.description import RobotFiles, kinematic_urdf, with_declared_frames
-from posegen.robot.draft import Draft
-from posegen.robot.draft_text import survey_config_pairs, write_draft
+from posegen.robot.coverage import (
+    COVER_TOL_M,
+    BareLink,  # for the draft (robot init)
+    GeometryCoverage,
+    bare_links,  # for the draft
+    geometry_coverage,
+    has_extent,  # for the draft
+    left_out_m,  # for the draft
+    link_masses,  # for the draft
+)
+from posegen.robot.description import (  # for the draft (robot init)
+    RobotFiles,
+    kinematic_urdf,
+    package_uri,
+    resolve_path,
+    resolve_source,
+    with_declared_frames,
+)
 from posegen.robot.feasibility import (
     SOLE_ANGLE_TOL_RAD,
     SOLE_POSITION_TOL_M,
@@ -101,25 +128,32 @@ from posegen.robot.verification import (
 )
 
 __all__ = [
+    "COVER_TOL_M",
     "DEFAULT_KIND",
     "EXAMPLES",
     "FLUSH",
     "MOMENT_ARM_M",
+    "PACKAGE_URI",
     "POINT",
     "SOLE_ANGLE_TOL_RAD",
     "SOLE_POSITION_TOL_M",
     "TABLE",
     "Assessment",
     "Balance",
+    "BareLink",
+    "Box",
     "CalibrationConfig",
     "CandidateConfig",
+    "Capsule",
     "ChainConfig",
     "CollisionChecker",
+    "CollisionConfig",
     "Config",
     "ContactKind",
-    "Draft",
+    "DisabledPair",
     "FloatArray",
     "FloorWrenches",
+    "FrameConfig",
     "GeometryCoverage",
     "Indices",
     "Invariant",
@@ -137,15 +171,19 @@ __all__ = [
     "RouteConfig",
     "SamplingConfig",
     "Scene",
+    "Shape",
     "Spot",
     "StanceConfig",
     "StanceSpace",
     "Statics",
     "TableConfig",
     "Verification",
+    "VisualHull",
     "Worst",
     "WorstSoFar",
+    "add_self_pairs",
     "assess",
+    "bare_links",
     "centres_of_pressure",
     "check_for_planning",
     "contact_in_table",
@@ -155,13 +193,17 @@ __all__ = [
     "flatten_on_floor",
     "geometry_coverage",
     "gravity_torques",
+    "has_extent",
     "holding_torques",
     "kind_named",
     "kinematic_urdf",
+    "left_out_m",
     "linear_torques",
+    "link_masses",
     "load_config",
     "offset_derivatives",
     "offset_matrix",
+    "package_uri",
     "parse_candidate",
     "parse_config",
     "placement_derivatives",
@@ -169,6 +211,8 @@ __all__ = [
     "polygon_margin",
     "pressed_zmp_margin",
     "registered_kinds",
+    "resolve_path",
+    "resolve_source",
     "robot_geometry",
     "rpy_derivatives",
     "rpy_matrix",
@@ -176,7 +220,8 @@ __all__ = [
     "scene_for_postures",
     "stretch_for_margin",
     "summarize",
-    "survey_config_pairs",
+    "survey_pairs",
+    "survey_scene_pairs",
     "tilt_angles",
     "tilt_measurement",
     "tilt_measurement_jacobian",
@@ -184,7 +229,6 @@ __all__ = [
     "with_declared_frames",
     "worst_case",
     "worst_effort_ratio",
-    "write_draft",
     "yaw_rotation",
     "zmp_margins",
 ]

@@ -40,7 +40,8 @@ CONVERGED_RAD = 2e-5
 COM_BUFFER_M = 1e-3  # solved inside the configured margin, so the re-check has slack
 LIMIT_BUFFER_RAD = 1e-4
 PRESSED_BUFFER_M = 1e-3  # the pressed centre of pressure solved this much inside its margin
-TORQUE_ACTIVE = 0.7  # a joint's torque above this fraction of its allowed torque is constrained
+TORQUE_ACTIVE = 0.85  # a torque above this fraction of its allowed value is constrained (0.7: slower, same postures)
+TORQUE_REFRESH = 4  # the torques' derivative is recomputed after this many uses
 TORQUE_BUFFER = 0.005  # solved this fraction of the effort limit inside the allowed ratio
 TORQUE_WEIGHT = 1.0  # the torque rows in the soft phase (N m)
 CYCLE_TOLERANCE = 1e-2  # relative: errors repeating this closely with period 1 or 2 never converge
@@ -121,6 +122,7 @@ class Projector:
         allowed = (scene.margins.effort_ratio - TORQUE_BUFFER) * scene.effort_limit  # (nj,) N m, nan: no limit
         self._allowed = np.where(scene.locked, np.nan, allowed)  # a locked joint does not move here
         self._nq = scene.model.nq
+        self._derivative: tuple[FloatArray, int] | None = None  # (d torque / d joints, times used)
         self._joint_q = scene.velocity_indices() + 1  # (nj,) 1-dof joints: q index = v index + 1 (free flyer 7 vs 6)
 
     def _set_joints(self, joints: FloatArray) -> None:
@@ -212,32 +214,45 @@ class Projector:
         problem.pressed.margin = (1.0 - share) * (self.scene.margins.zmp_m + PRESSED_BUFFER_M)
 
     def _limit_torques(self, problem: _ChainProblem, chain: str, hard: bool) -> None:
-        """Linearise the holding torques near their limits (unloaded and pressing) as rows of ``A q <= b``."""
+        """Linearise the holding torques near their limits (unloaded and pressing) as rows of ``A q <= b``.
+
+        The torques are exact at every iteration; their derivative (that of the unloaded
+        robot: 30 N on the hand changes it little) is computed when a joint first comes
+        near its limit and refreshed every ``TORQUE_REFRESH`` iterations. The rows hold
+        ``torque(q) + D (q' - q) <= allowed``: whatever ``D``, a fixed point keeps the limit.
+        """
         if not hard:
+            self._derivative = None
             problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
             return
         joints = self._joints()
-        force = self.scene.route.contact_force_n
+        allowed = self._allowed
         rows: list[FloatArray] = []
         bounds: list[float] = []
-        allowed = self._allowed
-        for load in (None, chain):
-            torques = self._statics.torques(joints, load, force)
+        for torques in self._statics.torque_pair(joints, chain, self.scene.route.contact_force_n):
             with np.errstate(invalid="ignore"):
                 active = np.flatnonzero(np.abs(torques) > TORQUE_ACTIVE * allowed)  # nan: never
             if not len(active):
                 continue
-            linear = self._statics.linear(joints, load, force)
+            derivative = self._torque_derivative(joints)
             for j in active:
                 sign = float(np.sign(torques[j]))
                 row = np.zeros(self._nq)
-                row[self._joint_q] = sign * linear.jacobian[j]
+                row[self._joint_q] = sign * derivative[j]
                 rows.append(row)
-                bounds.append(float(allowed[j] - sign * torques[j] + sign * linear.jacobian[j] @ joints))
+                bounds.append(float(allowed[j] - sign * torques[j] + sign * derivative[j] @ joints))
         if rows:
             problem.torque.A, problem.torque.b = np.array(rows), np.array(bounds)
         else:
             problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
+
+    def _torque_derivative(self, joints: FloatArray) -> FloatArray:
+        """(nj, nj) the unloaded holding torques' derivative, refreshed every ``TORQUE_REFRESH`` calls."""
+        if self._derivative is None or self._derivative[1] >= TORQUE_REFRESH:
+            self._derivative = (self._statics.linear(joints, None, 0.0).jacobian, 0)
+        jacobian, uses = self._derivative
+        self._derivative = (jacobian, uses + 1)
+        return jacobian
 
     def _joints(self) -> FloatArray:
         return np.array([self.robot.get_joint(n) for n in self.scene.joint_names])

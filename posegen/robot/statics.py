@@ -63,14 +63,31 @@ class Statics:
         q = self.scene.configuration(joints)
         return self._wrenches(q, chain, force_n)[0][self.velocity]
 
-    def _wrenches(
-        self, q: FloatArray, chain: str | None, force_n: float
-    ) -> tuple[FloatArray, list[tuple[int, pin.Force]]]:
-        """Generalized torques (nv,) and the wrenches on the robot, (frame, wrench in its frame), hand first."""
+    def torque_pair(self, joints: FloatArray, chain: str, force_n: float) -> tuple[FloatArray, FloatArray]:
+        """Holding torques (nj,) N m of one posture, the hand unloaded and pressing (one kinematics pass)."""
+        q = self.scene.configuration(joints)
+        gravity = self._kinematics(q)
+        unloaded = self._wrenches(q, None, 0.0, gravity)[0][self.velocity]
+        return unloaded, self._wrenches(q, chain, force_n, gravity)[0][self.velocity]
+
+    def _kinematics(self, q: FloatArray) -> FloatArray:
+        """Placements and Jacobians of ``q`` in the workspace; the generalized gravity (nv,)."""
         model, data = self.model, self.data
-        load = pin.computeGeneralizedGravity(model, data, q)  # (nv,) generalized forces the torques balance
+        gravity = pin.computeGeneralizedGravity(model, data, q).copy()
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
+        return np.asarray(gravity)
+
+    def _wrenches(
+        self, q: FloatArray, chain: str | None, force_n: float, gravity: FloatArray | None = None
+    ) -> tuple[FloatArray, list[tuple[int, pin.Force]]]:
+        """Generalized torques (nv,) and the wrenches on the robot, (frame, wrench in its frame), hand first.
+
+        ``gravity``: the generalized gravity of ``q`` with its kinematics already in the
+        workspace (:meth:`_kinematics`); None: computed here.
+        """
+        model, data = self.model, self.data
+        load = self._kinematics(q) if gravity is None else gravity  # (nv,) generalized forces the torques balance
         wrenches: list[tuple[int, pin.Force]] = []
         if chain is not None and force_n != 0.0:
             hand = self.hands[chain]
@@ -115,31 +132,43 @@ class Statics:
         model, data = self.model, self.data
         jacobians = [pin.getFrameJacobian(model, data, f, pin.LOCAL) for f, _ in soles]  # (6, nv) each
         split = np.hstack([jac[:, :6].T for jac in jacobians]) * self.weight[None, :]  # (6, 6 k)
-        wrench = np.concatenate([w.vector for _, w in soles])  # (6 k,) the split now
-        scaled = wrench / self.weight
-        pseudo = split.T @ np.linalg.inv(split @ split.T)  # (6 k, 6) B^+
-        n = base_rows.shape[1]
-        d_split = np.zeros((n, 6, 6 * len(soles)))  # d B / d joint k
+        scaled = np.concatenate([w.vector for _, w in soles]) / self.weight  # (6 k,) the split now
+        gram = split @ split.T
+        pseudo = split.T @ np.linalg.inv(gram)  # (6 k, 6) B^+
+        moved, blocks = [], []  # the joints that move a sole, and d B / d joint (6, 6 k) for each
         for s, jac in enumerate(jacobians):
-            adjoint = jac[:, :6]
-            for k in np.flatnonzero(np.abs(jac[:, 6:]).max(axis=0) > 0):
-                d_split[k, :, 6 * s : 6 * s + 6] = (-_ad(jac[:, 6 + k]) @ adjoint).T
-        d_split *= self.weight[None, None, :]
-        d_load = base_rows + np.einsum("kij,j->ik", d_split, scaled)  # (6, n): the base load's change
+            columns = np.flatnonzero(np.abs(jac[:, 6:]).max(axis=0) > 0)
+            block = np.zeros((len(columns), 6, split.shape[1]))
+            block[:, :, 6 * s : 6 * s + 6] = -np.transpose(_ads(jac[:, 6 + columns].T) @ jac[:, :6], (0, 2, 1))
+            moved.append(columns)
+            blocks.append(block)
+        joints, d_split = np.concatenate(moved), np.concatenate(blocks) * self.weight[None, None, :]  # (K, 6, 6 k)
+        change = np.einsum("kij,j->ik", d_split, scaled)  # (6, K): d B s per moving joint
+        d_load = np.array(base_rows)  # (6, n): the base load's change, d r = d(B s) at fixed s
+        d_load[:, joints] += change
+        d_scaled = pseudo @ d_load  # (6 k, n): B^+ d r ...
         projector = np.eye(len(scaled)) - pseudo @ split
-        load = split @ scaled
-        d_scaled = np.einsum("ij,kjl,l->ik", -pseudo, d_split, scaled) + pseudo @ d_load  # -B^+ dB s + B^+ dr
-        d_scaled += projector @ np.einsum("kji,j->ik", d_split, np.linalg.solve(split @ split.T, load))
+        lagrange = np.linalg.solve(gram, split @ scaled)
+        d_scaled[:, joints] += -pseudo @ change + projector @ np.einsum("kji,j->ik", d_split, lagrange)
         d_wrench = d_scaled * self.weight[:, None]  # (6 k, n)
         contact = np.vstack(jacobians)  # (6 k, nv)
         return np.asarray(contact.T @ d_wrench)
 
 
-def _ad(motion: FloatArray) -> FloatArray:
-    """The 6x6 matrix of the spatial cross product ``motion x`` (linear first)."""
-    out = np.zeros((6, 6))
-    out[:3, :3] = out[3:, 3:] = pin.skew(motion[3:])
-    out[:3, 3:] = pin.skew(motion[:3])
+def _ads(motions: FloatArray) -> FloatArray:
+    """(K, 6, 6) the matrices of the spatial cross products ``motion x`` of (K, 6) motions (linear first)."""
+    out = np.zeros((len(motions), 6, 6))
+    angular, linear = _skews(motions[:, 3:]), _skews(motions[:, :3])
+    out[:, :3, :3] = out[:, 3:, 3:] = angular
+    out[:, :3, 3:] = linear
+    return out
+
+
+def _skews(vectors: FloatArray) -> FloatArray:
+    """(K, 3, 3) the cross-product matrices of (K, 3) vectors."""
+    out = np.zeros((len(vectors), 3, 3))
+    out[:, 0, 1], out[:, 0, 2], out[:, 1, 2] = -vectors[:, 2], vectors[:, 1], -vectors[:, 0]
+    out[:, 1, 0], out[:, 2, 0], out[:, 2, 1] = vectors[:, 2], -vectors[:, 1], vectors[:, 0]
     return out
 
 
@@ -224,7 +253,7 @@ def effort_ratios(scene: Scene, torques: FloatArray) -> FloatArray:
         torques: (..., nj) N m.
 
     Returns:
-        (..., nj) |torque| / effort limit.
+        (..., nj) abs(torque) / effort limit.
 
     Example:
         >>> ratio = effort_ratios(scene, holding_torques(scene, joints, chains, 30.0))

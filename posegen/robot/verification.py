@@ -41,7 +41,7 @@ class JointEffort:
     """The worst holding torque of one joint over the checked postures or points."""
 
     joint: str
-    ratio: float  # |torque| / URDF effort limit
+    ratio: float  # abs(torque) / URDF effort limit
     torque_nm: float
     limit_nm: float
     point: int  # where (posture or route point index)

@@ -25,6 +25,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from posegen.errors import InputError, reason
 from posegen.io import read_yaml
@@ -89,6 +90,50 @@ def follow_up(
             postures left than k.
 
     """
+    posterior = _posterior(scene, joints, chains, given, candidate, prior_scale, noise)
+    before = posterior.height_std_mm(posterior.covariance)
+    chain = weakest or max(before, key=lambda c: before[c])
+    excluded = _checked_choice(posterior, chain, k, exclude)
+    heights = posterior.targets[posterior.chain_rows[chain], 0] * 1e3  # (m, f) the chain's height rows, mm
+    target = heights.T @ heights / len(heights)  # (f, f) mean over the chain's postures
+    chosen, gains, covariance = _greedy(posterior.candidates, posterior.covariance, target, k, excluded)
+    after = posterior.height_std_mm(covariance)
+    return FollowUp(
+        rows=tuple(chosen),
+        chain=chain,
+        height_std_mm={c: (before[c], after[c]) for c in before},
+        gains=tuple(gains),
+    )
+
+
+@dataclass(frozen=True)
+class _Posterior:
+    """The calibration's posterior and the pool's rows in its free parameters."""
+
+    candidates: FloatArray  # (n, m, f) whitened rows of each pool posture (contact, and floor if modelled)
+    targets: FloatArray  # (n, 3, f) unwhitened contact rows of each pool posture
+    covariance: FloatArray  # (f, f) posterior covariance after the given contacts
+    chain_rows: dict[str, NDArray[np.int_]]  # pool rows of each chain
+
+    def height_std_mm(self, covariance: FloatArray) -> dict[str, float]:
+        """Each chain's predicted height sigma (mm, rms over its pool postures) under ``covariance``."""
+        out = {}
+        for chain, rows in self.chain_rows.items():
+            heights = self.targets[rows, 0]  # (m, f)
+            out[chain] = float(np.sqrt(np.mean(np.einsum("nf,fg,ng->n", heights, covariance, heights))) * 1e3)
+        return out
+
+
+def _posterior(
+    scene: Scene,
+    joints: FloatArray,
+    chains: Sequence[str],
+    given: Contacts,
+    candidate: CandidateConfig,
+    prior_scale: float,
+    noise: Sequence[float],
+) -> _Posterior:
+    """The model's posterior after ``given``, and the rows of every pool posture."""
     all_chains = sorted(set(chains) | set(given.chains))
     pool = Contacts(
         np.asarray(joints, dtype=float),
@@ -124,30 +169,34 @@ def follow_up(
     precision = np.where(np.isfinite(sd), 1.0 / np.where(np.isfinite(sd), sd, 1.0) ** 2, 0.0)
     flat = measured.reshape(-1, len(free))
     information = flat.T @ flat + np.diag(precision) + 1e-12 * np.eye(len(free))
-    covariance = np.linalg.inv(information)
     chain_rows = {c: np.flatnonzero(np.array(chains) == c) for c in sorted(set(chains))}
+    return _Posterior(candidates, targets, np.linalg.inv(information), chain_rows)
 
-    def height_std_mm(cov: FloatArray) -> dict[str, float]:
-        return {
-            c: float(np.sqrt(np.mean(np.einsum("nf,fg,ng->n", targets[r, 0], cov, targets[r, 0]))) * 1e3)
-            for c, r in chain_rows.items()
-        }
 
-    before = height_std_mm(covariance)
-    chain = weakest or max(before, key=lambda c: before[c])
-    if chain not in chain_rows:
-        raise InputError(f"the pool has no posture of chain '{chain}'; its chains: {', '.join(chain_rows)}")
-    if not 1 <= k <= len(pool):
-        raise InputError(f"k={k}: choose between 1 and {len(pool)} postures", parameter="k")
+def _checked_choice(posterior: _Posterior, chain: str, k: int, exclude: Sequence[int]) -> list[int]:
+    """The excluded rows, sorted, once the chain, ``k`` and the exclusions are checked against the pool.
+
+    Raises:
+        InputError: No pool posture of the chain, k out of range, or fewer postures left than k.
+
+    """
+    count = len(posterior.candidates)
+    if chain not in posterior.chain_rows:
+        raise InputError(f"the pool has no posture of chain '{chain}'; its chains: {', '.join(posterior.chain_rows)}")
+    if not 1 <= k <= count:
+        raise InputError(f"k={k}: choose between 1 and {count} postures", parameter="k")
     excluded = sorted({int(r) for r in exclude})
-    if excluded and not 0 <= excluded[0] <= excluded[-1] < len(pool):
-        raise InputError(f"excluded pool rows must lie in 0..{len(pool) - 1}")
-    if k > len(pool) - len(excluded):
-        raise InputError(
-            f"k={k}: only {len(pool) - len(excluded)} pool postures are left to choose from", parameter="k"
-        )
-    heights = targets[chain_rows[chain], 0] * 1e3  # (m, f) the chain's height rows, mm
-    target = heights.T @ heights / len(heights)  # (f, f) mean over the chain's postures
+    if excluded and not 0 <= excluded[0] <= excluded[-1] < count:
+        raise InputError(f"excluded pool rows must lie in 0..{count - 1}")
+    if k > count - len(excluded):
+        raise InputError(f"k={k}: only {count - len(excluded)} pool postures are left to choose from", parameter="k")
+    return excluded
+
+
+def _greedy(
+    candidates: FloatArray, covariance: FloatArray, target: FloatArray, k: int, excluded: list[int]
+) -> tuple[list[int], list[float], FloatArray]:
+    """``k`` rows chosen one at a time, each lowering ``trace(target S)`` the most; their gains; the final S."""
     chosen: list[int] = []
     gains: list[float] = []
     for _ in range(k):
@@ -162,13 +211,7 @@ def follow_up(
         chosen.append(best)
         gains.append(float(gain[best]))
         covariance = covariance - spread[best].T @ damping[best] @ spread[best]
-    after = height_std_mm(covariance)
-    return FollowUp(
-        rows=tuple(chosen),
-        chain=chain,
-        height_std_mm={c: (before[c], after[c]) for c in before},
-        gains=tuple(gains),
-    )
+    return chosen, gains, covariance
 
 
 CALIBRATION_VERSION = 3  # of the calibration.yaml read here (posegen.calibrate writes it)

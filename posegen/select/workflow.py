@@ -11,10 +11,10 @@ from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import check_apart, check_writable, claim_output, load_pool
+from posegen.io import Pool, check_apart, check_writable, claim_output, load_pool
 from posegen.model import DEFAULT_NOISE, Contacts, build_design, measurement_item, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
-from posegen.robot import scene_for_postures
+from posegen.robot import CandidateConfig, Scene, scene_for_postures
 from posegen.select.figures import design_selection, plot_detmax, plot_o1
 from posegen.select.followup import follow_up, read_calibration_model
 from posegen.select.selection import detmax_runs, iroc, select_k
@@ -127,6 +127,44 @@ def select_pool_file(
     return selection
 
 
+def _given_contacts(given: Sequence[str], scene: Scene) -> Contacts:
+    """The contacts of every measurement file given (``FILE[@SESSION]``), concatenated."""
+    contacts: Contacts | None = None
+    for item in given:
+        measured, session = measurement_item(item)
+        part = read_measurements(measured, scene, session or None).contacts
+        contacts = part if contacts is None else contacts.concat(part)
+    assert contacts is not None  # given is not empty
+    return contacts
+
+
+def _follow_up_model(
+    scene: Scene, pool: Pool, pool_path: str, calibration_path: str | None, weakest: str | None
+) -> tuple[CandidateConfig, float, tuple[float, ...], str | None, str]:
+    """The model a follow-up plans for: candidate, prior scale, noise, weakest chain and where it came from.
+
+    Raises:
+        InfeasibleError: The pool has no posture of the calibration's weakest chain.
+
+    """
+    scales = scene.calibration.prior_scales
+    candidate, scale = scene.calibration.candidates[0], scales[len(scales) // 2]
+    noise: tuple[float, ...] = DEFAULT_NOISE
+    chosen = weakest
+    source = "posterior variance of the config's first candidate" if weakest is None else "given"
+    if calibration_path is not None:
+        candidate, scale, noise, weakest = read_calibration_model(calibration_path, scene)
+        source = f"cross-validation of {calibration_path}" if chosen is None else "given"
+        weakest = chosen or weakest
+        chains = {p.chain for p in pool.postures}
+        if weakest not in chains:
+            raise InfeasibleError(
+                f"{pool_path}: no posture of chain '{weakest}', the weakest of {calibration_path}; "
+                f"the pool's chains: {', '.join(sorted(chains))}"
+            )
+    return candidate, scale, noise, weakest, source
+
+
 def follow_up_pool_file(
     pool_path: str,
     output: str,
@@ -167,27 +205,8 @@ def follow_up_pool_file(
     scene = scene_for_postures(pool, pool_path, config_path)
     if k > len(pool.postures):
         raise InfeasibleError(f"k={k}: the pool has only {len(pool.postures)} postures", parameter="k")
-    contacts: Contacts | None = None
-    for item in given:
-        measured, session = measurement_item(item)
-        part = read_measurements(measured, scene, session or None).contacts
-        contacts = part if contacts is None else contacts.concat(part)
-    assert contacts is not None  # given is not empty
-    scales = scene.calibration.prior_scales
-    candidate, scale = scene.calibration.candidates[0], scales[len(scales) // 2]
-    noise: tuple[float, ...] = DEFAULT_NOISE
-    chosen = weakest
-    source = "posterior variance of the config's first candidate" if weakest is None else "given"
-    if calibration_path is not None:
-        candidate, scale, noise, weakest = read_calibration_model(calibration_path, scene)
-        source = f"cross-validation of {calibration_path}" if chosen is None else "given"
-        weakest = chosen or weakest
-        chains = {p.chain for p in pool.postures}
-        if weakest not in chains:
-            raise InfeasibleError(
-                f"{pool_path}: no posture of chain '{weakest}', the weakest of {calibration_path}; "
-                f"the pool's chains: {', '.join(sorted(chains))}"
-            )
+    contacts = _given_contacts(given, scene)
+    candidate, scale, noise, weakest, source = _follow_up_model(scene, pool, pool_path, calibration_path, weakest)
     with claim_output(path):
         result = follow_up(
             scene,

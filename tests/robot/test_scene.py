@@ -60,8 +60,9 @@ def test_support_polygon_contains_both_feet(scene):
 @pytest.fixture(scope="module")
 def waist_scene(tmp_path_factory):
     """The draft of the synthetic humanoid rooted at its torso, two waist joints down to the pelvis, as a scene."""
-    from posegen.robot import Scene, load_config, write_draft
-    from tests.robot.humanoid_urdf import humanoid_urdf
+    from posegen.draft import write_draft
+    from posegen.robot import Scene, load_config
+    from tests.draft.humanoid_urdf import humanoid_urdf
 
     folder = tmp_path_factory.mktemp("waist")
     config = folder / "config.yaml"

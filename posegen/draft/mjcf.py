@@ -35,8 +35,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from posegen.draft.mjcf_text import flattened_mjcf
 from posegen.errors import ConfigError
-from posegen.robot.mjcf_text import flattened_mjcf
 
 MJCF_ROOT = "mujoco"
 _IDENTITY_TOL = 1e-12

@@ -9,16 +9,24 @@ from typing import Any
 
 import yaml
 
-from posegen.errors import ConfigError
+from posegen.draft.drafting import Draft, draft_robot
+from posegen.draft.mjcf_source import converted_urdf, mjcf_source, urdf_beside
+from posegen.errors import ConfigError, InfeasibleError
 from posegen.io import check_apart, claim_output, write_atomic
-from posegen.robot.additions import Box, Capsule, DisabledPair, VisualHull
-from posegen.robot.collision import CollisionChecker
-from posegen.robot.collision_matrix import PairSurvey, survey_scene_pairs
-from posegen.robot.config import load_config, parse_config
-from posegen.robot.draft import Draft, draft_robot
-from posegen.robot.draft_mjcf import converted_urdf, mjcf_source, urdf_beside
-from posegen.robot.scene import Scene
-from posegen.robot.validation import check_for_planning
+from posegen.model import pool_size
+from posegen.robot import (
+    Box,
+    Capsule,
+    CollisionChecker,
+    DisabledPair,
+    PairSurvey,
+    Scene,
+    VisualHull,
+    check_for_planning,
+    load_config,
+    parse_config,
+    survey_scene_pairs,
+)
 
 POINT_CONE_DEG = 60.0  # a drafted point contact: the hand may tilt this far from the table's normal
 
@@ -99,11 +107,12 @@ def render_draft(draft: Draft, seed: int, command: str = "") -> str:
 def _shapes_text(draft: Draft) -> list[str]:
     lines = ["    shapes:                          # CHECK: links without collision geometry, or with wrong geometry"]
     for link in dict.fromkeys(shape.link for shape in draft.shapes):
-        why = (
-            f"its collision geometry: {draft.misplaced[link]}"
-            if link in draft.misplaced
-            else f"no collision geometry: {draft.covered.get(link, '')}"
-        )
+        if link in draft.misplaced:
+            why = f"its collision geometry: {draft.misplaced[link]}"
+        elif link in draft.left_out:
+            why = f"its collision shapes: {draft.left_out[link]}"
+        else:
+            why = f"no collision geometry: {draft.covered.get(link, '')}"
         lines.append(f"      {link}:                    # {why}")
         for shape in draft.shapes:
             if shape.link != link:
@@ -160,6 +169,11 @@ def _chains_text(draft: Draft) -> list[str]:
                 f"    fingertip_frames: {_flow([f.name for f in contact.frames])}   # CHECK: {contact.how}",
                 "    fingertip_length_m: 0.0",
             ]
+            if contact.touching:
+                lines.append(
+                    f"    touching_links: {_flow(list(contact.touching))}   # the links fixed to the hand whose "
+                    "geometry makes the face"
+                )
         else:
             lines += [
                 "    fingertip_frames: []",
@@ -189,7 +203,7 @@ def write_draft(
     """Draft a config for a robot (example-robot-data name, URDF or MJCF file) and write it (atomically) to ``output``.
 
     An MJCF model is converted to a URDF written beside the draft (``<output stem>.urdf``,
-    :mod:`posegen.robot.draft_mjcf`), which the draft names and the stages read.
+    :mod:`posegen.draft.mjcf_source`), which the draft names and the stages read.
 
     The draft is re-read as a config before it is written; whether it already loads as a
     scene (names, balance, reach, collisions at the reference) is added to its notes.
@@ -218,11 +232,14 @@ def write_draft(
         try:
             scene = Scene(config)
             check_for_planning(scene, CollisionChecker(scene))
-            verdict = "the draft loads as a scene (names, soles, balance, reach, collisions at the reference checked)"
-        except ConfigError as exc:
-            verdict = f"the draft does not load yet: {exc}"
+            verdicts: tuple[str, ...] = (
+                pool_size(scene).describe(),
+                "the draft loads as a scene (names, soles, balance, reach, collisions at the reference checked)",
+            )  # the verdict last
+        except (ConfigError, InfeasibleError) as exc:
+            verdicts = (f"the draft does not load yet: {exc}",)
         write_atomic(output, text)
-    return dataclasses.replace(draft, notes=(*draft.notes, verdict))
+    return dataclasses.replace(draft, notes=(*draft.notes, *verdicts))
 
 
 def survey_config_pairs(config_path: str, samples: int = 400, seed: int = 0) -> tuple[PairSurvey, str]:

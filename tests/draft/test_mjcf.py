@@ -10,9 +10,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from posegen.draft.mjcf import convert_mjcf, is_mjcf
 from posegen.errors import ConfigError
-from posegen.robot.mjcf import convert_mjcf, is_mjcf
-from tests.robot.humanoid_mjcf import MULTI_JOINT_BODIES, humanoid_mjcf
+from tests.draft.humanoid_mjcf import MULTI_JOINT_BODIES, humanoid_mjcf
 
 RNG_SEED = 7
 

@@ -1,6 +1,6 @@
 """The robot ``posegen robot init`` studies: an example-robot-data name or a URDF file.
 
-(An MJCF model is converted to a URDF first, by :mod:`posegen.robot.draft_mjcf`.)
+(An MJCF model is converted to a URDF first, by :mod:`posegen.draft.mjcf_source`.)
 
 Whatever is wrong with it is said in one line naming the file and the element: a file
 that is missing or not XML, a URDF pinocchio cannot load, a mesh that cannot be found
@@ -17,10 +17,9 @@ from pathlib import Path
 
 import pinocchio as pin
 
+from posegen.draft.mjcf import MJCF_ROOT
 from posegen.errors import ConfigError
-from posegen.robot.config import PACKAGE_URI, RobotSource
-from posegen.robot.description import RobotFiles, package_uri, resolve_path, resolve_source
-from posegen.robot.mjcf import MJCF_ROOT
+from posegen.robot import PACKAGE_URI, RobotFiles, RobotSource, package_uri, resolve_path, resolve_source
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The URDF ``posegen robot init`` writes beside a draft made from an MJCF model.
 
-The stages read a URDF, so an MJCF model is converted (:func:`posegen.robot.mjcf.convert_mjcf`)
+The stages read a URDF, so an MJCF model is converted (:func:`posegen.draft.mjcf.convert_mjcf`)
 and written next to the draft config, as ``<config stem>.urdf``; the draft names it in
 ``robot.source.urdf`` with a ``# CHECK:`` line giving the MJCF it came from (path,
 SHA-256) and what the URDF does not carry. An existing file there is never
@@ -16,9 +16,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from posegen.draft.mjcf import convert_mjcf, is_mjcf
 from posegen.errors import ConfigError, OutputError
 from posegen.io import write_atomic
-from posegen.robot.mjcf import convert_mjcf, is_mjcf
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,7 @@ def converted_urdf(mjcf: Path, output: str | Path) -> Iterator[ConvertedSource]:
         The URDF's path, with the draft's ``# CHECK:`` line and a note about it.
 
     Raises:
-        ConfigError: The MJCF cannot be converted (see :func:`~posegen.robot.mjcf.convert_mjcf`).
+        ConfigError: The MJCF cannot be converted (see :func:`~posegen.draft.mjcf.convert_mjcf`).
         OutputError: The URDF's place is ``output`` itself, or holds another file.
 
     Example:

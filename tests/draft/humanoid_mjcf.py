@@ -1,6 +1,6 @@
 """A small synthetic MJCF humanoid (z up, free root) for the MJCF conversion and ``robot init`` tests.
 
-The same robot as :mod:`tests.robot.humanoid_urdf`, written the MuJoCo way: the hip's
+The same robot as :mod:`tests.draft.humanoid_urdf`, written the MuJoCo way: the hip's
 three hinges in one body (the thigh), the ankle's two in one body (the foot), the
 shoulder's three in one (the upper arm); capsule limbs, box feet, palms and trunk; a
 free joint at the root; a neck hinge placed off its body's origin (``pos``), a camera

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot.draft_stance import Subtree, foot_joint, joint_axis, joint_path, knee_of
-from posegen.robot.geometry import FloatArray, yaw_rotation
+from posegen.draft.stance import Subtree, foot_joint, joint_axis, joint_path, knee_of
+from posegen.robot import FloatArray, yaw_rotation
 
 ONE_SIDED = 2.0  # a knee's range is one-sided when one side is at least this many times the other
 CLEAR = 0.5  # a vote counts when the foot's flexion motion is this aligned with forward (cosine)

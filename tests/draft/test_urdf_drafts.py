@@ -11,14 +11,15 @@ import pinocchio as pin
 import pytest
 
 from posegen.cli.main import main
+from posegen.draft import write_draft
+from posegen.draft.drafting import draft_robot
 from posegen.errors import ConfigError
 from posegen.io import load_pool, write_pool
-from posegen.robot import Scene, load_config, write_draft
+from posegen.robot import Scene, load_config
 from posegen.robot.additions import Capsule, CollisionConfig, VisualHull
 from posegen.robot.coverage import geometry_coverage
-from posegen.robot.draft import draft_robot
 from posegen.robot.validation import check_for_planning
-from tests.robot.humanoid_urdf import FOOT, humanoid_urdf
+from tests.draft.humanoid_urdf import FOOT, humanoid_urdf
 
 
 @pytest.fixture(scope="module")

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
+from posegen.draft.mjcf import convert_mjcf
+from posegen.draft.mjcf_text import flattened_mjcf
 from posegen.errors import ConfigError
-from posegen.robot.mjcf import convert_mjcf
-from posegen.robot.mjcf_text import flattened_mjcf
-from tests.robot.humanoid_mjcf import humanoid_mjcf
+from tests.draft.humanoid_mjcf import humanoid_mjcf
 
 SKYBOX = '<mujoco><asset><texture name="sky" type="skybox" builtin="gradient" width="8" height="8"/></asset></mujoco>'
 MATERIALS = '<mujoco><asset><material name="self" rgba=".7 .5 .3 1"/></asset><include file="common/more.xml"/></mujoco>'

@@ -4,15 +4,20 @@ from __future__ import annotations
 
 import pinocchio as pin
 
-from posegen.robot.geometry import FloatArray
+from posegen.robot import FloatArray
 
-IMPLAUSIBLE_SPEED_RAD_S = 20.0
-PLACEHOLDER_SPEED_RAD_S = 1.0
+IMPLAUSIBLE_SPEED_RAD_S = 50.0  # humanoid joints turn at up to ~40 rad/s (small wrist motors); above, a stand-in
+PLACEHOLDER_SPEED_RAD_S = 3.0  # a humanoid joint's usual speed limit (TALOS: 2.7-6.3 rad/s), where the URDF has none
 JOINT_LIMIT_MARGIN_RAD = 0.02  # the drafted margins.joint_limit_rad
 
 
 def velocity_placeholders(model: pin.Model, kept: set[int]) -> tuple[dict[str, float], dict[str, float]]:
-    """Placeholder speeds (rad/s) for the kept joints whose URDF speed is 0 or implausible, and the URDF's."""
+    """Placeholder speeds (rad/s) for the kept joints whose URDF speed is 0 or implausible, and the URDF's.
+
+    A URDF's speed up to ``IMPLAUSIBLE_SPEED_RAD_S`` is kept; none (0, an MJCF without
+    limits) or a larger one (a description's stand-in, as iCub's 100 rad/s on every joint)
+    gets ``PLACEHOLDER_SPEED_RAD_S``, which the draft says in a ``# CHECK:`` line.
+    """
     speeds: dict[str, float] = {}
     urdf_speed: dict[str, float] = {}
     for j in sorted(kept - {1}):

@@ -13,11 +13,11 @@ import pytest
 import yaml
 
 from posegen.cli.main import main
+from posegen.draft.mjcf import convert_mjcf
 from posegen.io import load_pool
 from posegen.io.atomic import CRASH_AT, CRASH_LOG, leftover_temporaries
 from posegen.robot import Scene, load_config
-from posegen.robot.mjcf import convert_mjcf
-from tests.robot.humanoid_mjcf import humanoid_mjcf
+from tests.draft.humanoid_mjcf import humanoid_mjcf
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -46,6 +46,9 @@ def test_robot_init_writes_a_draft_and_its_urdf_and_the_draft_runs(tmp_path, cap
     argv = ["pool", "--n", "3", "--seed", "1", "--workers", "1", "--config", str(output), "-q", "-o", str(pool)]
     assert main(argv) == 0
     assert len(load_pool(pool).postures) == 3
+    capsys.readouterr()
+    assert main(["check", str(pool), "-q"]) == 0
+    assert re.search(r"\(\d+ primitives; pinocchio", capsys.readouterr().out)  # no mesh: no "meshes" said
     assert _init(mjcf, output) == 0  # a re-run: the same URDF is there already, kept
 
 

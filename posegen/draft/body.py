@@ -3,11 +3,11 @@
 :func:`study_body` runs them in order:
 
 1. :func:`srdf_state`: the SRDF's first state, unless it breaks the URDF's limits;
-2. :func:`orient`: the up axis, forward and left (:mod:`posegen.robot.draft_stance`);
+2. :func:`orient`: the up axis, forward and left (:mod:`posegen.draft.stance`);
 3. :func:`find_legs` then :func:`find_soles`: the two branches reaching the floor, their
    feet and soles; the legs branch from the root, else from a joint below it (a torso-rooted
    model: the joints from the root down to that branching joint are the waist, free joints of
-   the upper body, in neither the legs nor the arms: :func:`~posegen.robot.draft_stance.waist_joints`);
+   the upper body, in neither the legs nor the arms: :func:`~posegen.draft.stance.waist_joints`);
 4. :func:`bend_reference`: without an SRDF state, a standing posture with the knees bent;
 5. :func:`find_arms`: the two longest chains of the upper body, up to where they branch
    into light parts only (fingers: under 1 % of the robot's mass);
@@ -25,26 +25,22 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from posegen.errors import ConfigError
-from posegen.robot.description import RobotFiles
-from posegen.robot.draft_geometry import Geometry, load_geometry
-from posegen.robot.draft_heading import TURNED, Bearing, forward_of, knees_face_back
-from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limit, outside_limits
-from posegen.robot.draft_source import DraftSource
-from posegen.robot.draft_stance import (
-    ANKLE_HEIGHT,
-    Sole,
+from posegen.draft.geometry import Geometry, load_geometry
+from posegen.draft.heading import TURNED, Bearing, forward_of, knees_face_back
+from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limit, outside_limits
+from posegen.draft.soles import ANKLE_HEIGHT, Sole, find_sole, sole_pose
+from posegen.draft.source import DraftSource
+from posegen.draft.stance import (
     bend_legs,
-    find_sole,
     find_up,
     foot_joint,
     joint_path,
     reaching_branches,
-    sole_pose,
     upper_branches,
     waist_joints,
 )
-from posegen.robot.geometry import FloatArray, yaw_rotation
+from posegen.errors import ConfigError
+from posegen.robot import FloatArray, RobotFiles, yaw_rotation
 
 LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
 LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
@@ -220,7 +216,7 @@ def find_legs(model: pin.Model, data: pin.Data, tree: Tree, left: FloatArray, la
     """The first joints of the two legs, left then right, at the posture of ``data``.
 
     The legs are the two branches reaching the floor of the root, else of the joint below it
-    where they branch (:func:`~posegen.robot.draft_stance.reaching_branches`).
+    where they branch (:func:`~posegen.draft.stance.reaching_branches`).
 
     Raises:
         ConfigError: Not exactly two such branches.

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot.additions import FrameConfig
-from posegen.robot.geometry import FloatArray
+from posegen.robot import FloatArray, FrameConfig
 
 TABLE_DEPTH = 0.7  # table top this many arm lengths below the shoulders, its centre as far in front
 TABLE_CLEARANCE_M = 0.03  # the drafted table's near edge from the robot at the reference

@@ -6,10 +6,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from posegen.robot import Scene, load_config, write_draft
-from posegen.robot.draft_geometry import skeleton
-from posegen.robot.draft_heading import TURNED
-from tests.robot.humanoid_urdf import humanoid_urdf
+from posegen.draft import write_draft
+from posegen.draft.covering import skeleton
+from posegen.draft.heading import TURNED
+from posegen.robot import Scene, load_config
+from tests.draft.humanoid_urdf import humanoid_urdf
 from tests.test_artefact_bytes import ICUB  # the reduced iCub of example-robot-data: its root's x axis points back
 
 

@@ -7,8 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from posegen.errors import ConfigError
-from posegen.robot.draft_body import (
+from posegen.draft.body import (
     LIMIT_CLEARANCE_RAD,
     Tree,
     bend_reference,
@@ -23,11 +22,13 @@ from posegen.robot.draft_body import (
     study_body,
     with_joints,
 )
-from posegen.robot.draft_geometry import load_geometry
-from posegen.robot.draft_limits import JOINT_LIMIT_MARGIN_RAD
-from posegen.robot.draft_source import load_draft_source
-from posegen.robot.draft_stance import reaching_branches, sole_pose, upper_branches
-from tests.robot.humanoid_urdf import humanoid_urdf
+from posegen.draft.geometry import load_geometry
+from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD
+from posegen.draft.soles import sole_pose
+from posegen.draft.source import load_draft_source
+from posegen.draft.stance import reaching_branches, upper_branches
+from posegen.errors import ConfigError
+from tests.draft.humanoid_urdf import humanoid_urdf
 
 
 @pytest.fixture(scope="module")
