@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -21,30 +22,23 @@ from posegen.calibrate import (
     ScaleSearch,
     Settings,
     calibrate,
-    compensate,
     estimate,
-    read_compliance,
     simulate,
     write_calibration,
 )
-from posegen.calibrate.deliverable_files import held_out_errors
 from posegen.calibrate.estimation import Noise, held_at_urdf
-from posegen.calibrate.estimation import fit as fit_parameters
 from posegen.io import Pool
 from posegen.model import (
     DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
-    CalibrationModel,
     Contacts,
     Kind,
-    Spec,
     candidate_spec,
     read_measurements,
-    spec_for_rows,
     start_point,
 )
 from posegen.parallel import ProcessBackend
-from posegen.robot import CandidateConfig, Scene, load_config
+from posegen.robot import CandidateConfig, Scene
 
 ROOT = Path(__file__).resolve().parents[1]
 POSEGEN = str(Path(sys.executable).with_name("posegen"))
@@ -72,31 +66,6 @@ def _real(scene: Scene, data: Path) -> tuple[Contacts, Contacts]:
         read_measurements(data / "right_train.csv", scene).contacts
     )
     return train, read_measurements(data / "left_validation.csv", scene).contacts
-
-
-def judge_file(config: Path, compliance: Path | None, train: Contacts, held_out: Contacts) -> np.ndarray:
-    """A deliverable alone, as any stack sees it: its kinematics frozen, only the table plane (height, roll,
-    pitch) and the contact tilt fitted on the training rows (joints compensated first when it ships a
-    compliance), held-out rows judged with the plane of their chain's training session. Mean abs (3,) mm, deg."""
-    scene = Scene(load_config(config))
-    sessions = sorted(set(train.sessions) | set(held_out.sessions))
-    if compliance is not None:
-        law = read_compliance(compliance)
-        train = train.at(compensate(scene, train.joints, law))
-        held_out = held_out.at(compensate(scene, held_out.joints, law))
-    model = CalibrationModel(scene, sorted(set(train.chains)), sessions, {}, train.kinds_by_chain())
-    free = tuple(model.columns([Kind.PLANE, Kind.CONTACT_TILT]))
-    spec = spec_for_rows(model, Spec(free, np.full(model.size, np.inf), floor=False), set(train.sessions))
-    observations = model.observations(train)
-    noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
-    delta, _ = fit_parameters(model, observations, spec, noise, start_point(model, observations))
-    x = model.x_of(delta)
-    for session in set(held_out.sessions) - set(train.sessions):  # the plane of the chain's training session
-        chain = held_out.chains[held_out.sessions.index(session)]
-        source = train.sessions[train.chains.index(chain)]
-        x[model.contact.plane_columns(session)] = x[model.contact.plane_columns(source)]
-    residuals = model.evaluate(x, model.observations(held_out), floor=False).contact
-    return np.mean(np.abs(residuals), axis=0) * SHOW
 
 
 def _cli_seconds(data: Path, out: Path, runs: int = 3) -> list[float]:
@@ -157,37 +126,22 @@ def bench_real(scene: Scene, data: Path, machine: str, workdir: Path) -> None:
         f"{', '.join(f.label.rsplit(':', 1)[0] for f in cal.flags) or 'none'}\n"
     )
     out = workdir / "real"
-    write_calibration(cal, held_out, out, 0)
+    files = write_calibration(cal, held_out, out, 0).document["deliverables"]  # each file judged as a stack sees it
     print(
-        "| deliverable alone (left_validation, plane from training) | model | CV-predicted left | CV-predicted right"
-        " | left_validation z mm / roll / pitch deg |"
+        "| file (left_validation, plane from training, as a stack loading it sees it) | model | CV-predicted left |"
+        " CV-predicted right | left_validation z mm / roll / pitch deg |"
     )
     print("|---|---|---|---|---|")
-    nominal = judge_file(ROOT / "configs" / "talos_table.yaml", None, train.subset(list(cal.kept)), held_out)
-    rows = [("nominal URDF", cal.selection.nominal, nominal)]
+    rows = [("nominal URDF", cal.selection.nominal, files["nominal_urdf"])]
     for d in cal.deliverables.all():
-        folder = out if d.kind == DeliverableKind.URDF else out / "with_compliance"
-        config = out / "calibrated.yaml"
-        if d.kind == DeliverableKind.COMPENSATED:
-            config = workdir / "compensated.yaml"
-            text = (
-                (out / "calibrated.yaml")
-                .read_text()
-                .replace(str((out / "calibrated.urdf").resolve()), str((folder / "calibrated.urdf").resolve()))
-            )
-            config.write_text(text)
-        compliance = folder / "compliance.yaml" if d.kind == DeliverableKind.COMPENSATED else None
-        rows.append(
-            (
-                f"`{folder.name}/calibrated.urdf`" + (" + compliance.yaml" if compliance else ""),
-                d.result,
-                judge_file(config, compliance, train.subset(list(cal.kept)), held_out),
-            )
-        )
-    for name, result, judged in rows:
+        name = "`calibrated.urdf`" if d.kind == DeliverableKind.URDF else "`with_compliance/` (+ compliance.yaml)"
+        rows.append((name, d.result, files[d.kind.value]))
+    for name, result, entry in rows:
         left, right = (np.array(result.chains[c].mean_abs) * SHOW for c in ("left", "right"))
+        judged = entry["held_out"]["all"]["mean_abs"]
         label = f"{result.candidate} x{result.prior_scale:g}"
-        print(f"| {name} | {label} | {_fmt(left)} | {_fmt(right)} | {_fmt(judged)} |")
+        shown = f"{judged['z_mm']:.2f} / {judged['roll_deg']:.2f} / {judged['pitch_deg']:.2f}"
+        print(f"| {name} | {label} | {_fmt(left)} | {_fmt(right)} | {shown} |")
 
 
 def pick_of(cal: Calibration) -> dict[str, list[object]]:
@@ -207,8 +161,12 @@ def record_pick(cal: Calibration, path: Path) -> None:
     )
 
 
-def bench_corrupted_rows(scene: Scene, data: Path) -> None:
-    """One to three corrupted rows (every default candidate): never an error, every one flagged, held-out kept."""
+def bench_corrupted_rows(scene: Scene, data: Path, workdir: Path) -> None:
+    """One to three corrupted rows (every default candidate): never an error, every one flagged, held-out kept.
+
+    Held-out errors as ``calibrate`` reports them: each file (and the interpretable model) as a stack loading it
+    sees it.
+    """
     train, held_out = _real(scene, data)
     print("\n### corrupted rows (real data, every candidate)\n")
     print(
@@ -223,9 +181,10 @@ def bench_corrupted_rows(scene: Scene, data: Path) -> None:
                 row = next(i for i, label in enumerate(train.labels) if label.startswith(f"{file}:{line}:"))
                 joints[row, scene.joint_index(joint)] += error
             cal = calibrate(scene, train.at(joints), SESSIONS, Settings(), backend=backend)
-            figures = [
-                held_out_errors(cal, x, held_out)["all"]["mean_abs"]
-                for x in (cal.after.x, *(d.estimate.x for d in cal.deliverables.all()))
+            out = Path(tempfile.mkdtemp(dir=workdir))
+            report = write_calibration(cal, held_out, out, 0).document
+            figures = [report["model"]["held_out"]["all"]["mean_abs"]] + [
+                report["deliverables"][d.kind.value]["held_out"]["all"]["mean_abs"] for d in cal.deliverables.all()
             ]
             shown = "; ".join(f"{f['z_mm']:.2f} / {f['roll_deg']:.2f} / {f['pitch_deg']:.2f}" for f in figures)
             flags = ", ".join(f.label.rsplit(":", 1)[0] for f in cal.flags)

@@ -99,9 +99,10 @@ def bench_robot(config: str, workdir: Path, n: int, routed: int) -> dict[str, st
 
 
 def _held_out(report: dict) -> str:
-    """Held-out mean absolute errors, URDF -> calibrated, the plane from training."""
-    held = report["residuals"]["held_out_training_plane"]
-    before, after = held["before"]["mean_abs"], held["after"]["mean_abs"]
+    """Held-out mean absolute errors, nominal URDF -> calibrated.urdf, each as a stack loading it sees it."""
+    files = report["deliverables"]
+    held = files["nominal_urdf"]["held_out"]["all"]
+    before, after = held["mean_abs"], files["urdf"]["held_out"]["all"]["mean_abs"]
     shown = [f"z {before['z_mm']:.2f} -> {after['z_mm']:.3f} mm"]
     for component in ("roll", "pitch"):  # not measured by point contacts (None)
         if before[f"{component}_deg"] is not None:

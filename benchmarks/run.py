@@ -245,7 +245,7 @@ def bench_calibration(workdir: Path) -> None:
     scene = Scene(load_config(ROOT / "configs" / "talos_table.yaml"))
     data = real_data()
     bench_real(scene, data, machine(), workdir / "calibration")
-    bench_corrupted_rows(scene, data)
+    bench_corrupted_rows(scene, data, workdir / "calibration")
     bench_recovery(scene, load_pool(ROOT / "plans" / "talos" / "pool.yaml"))
 
 
@@ -320,7 +320,19 @@ def main() -> None:
     parser.add_argument(
         "--only",
         nargs="*",
-        default=["pool", "dask", "select", "route", "bag", "calibration", "session", "view", "scale", "robots"],
+        default=[
+            "pool",
+            "dask",
+            "select",
+            "route",
+            "bag",
+            "calibration",
+            "simulation",
+            "session",
+            "view",
+            "scale",
+            "robots",
+        ],
         help="stages to run",
     )
     parser.add_argument("--n", type=int, default=1500, help="pool size")
@@ -353,6 +365,10 @@ def main() -> None:
         bench_bag(pool_path, workdir)
     if "calibration" in args.only:
         bench_calibration(workdir)
+    if "simulation" in args.only:
+        from simulation_bench import bench_kept  # benchmarks/simulation_bench.py, beside this script
+
+        bench_kept(workdir / "simulation", machine())
     if "session" in args.only:
         from session_bench import bench_session  # benchmarks/session_bench.py, beside this script
 

@@ -66,7 +66,7 @@ def robot_contacts(
     kinds = {c: (scene.chain(c).contact_kind,) for c in every}
     model, x = perturbed_robot(scene, every, [TABLE], perturbation, robot.seed, kinds)
     planned = Contacts(joints, tuple(chains), (TABLE,) * len(chains), tuple(spots), planned_kinds(scene, chains))
-    settled, converged = settle_true(model, x, planned, offsets=contact_offsets(planned, perturbation, robot.seed))
+    settled, converged, _ = settle_true(model, x, planned, offsets=contact_offsets(planned, perturbation, robot.seed))
     settled = settled.subset(np.flatnonzero(converged))
     rng = np.random.default_rng([robot.seed, 1])
     return settled.at(settled.joints + rng.normal(0.0, perturbation.encoder_noise_rad, settled.joints.shape))

@@ -26,7 +26,15 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from posegen.calibrate import Settings, calibrate_files, compensate, format_table, load_line, read_compliance
+from posegen.calibrate import (
+    Settings,
+    calibrate_files,
+    compensate,
+    file_lines,
+    format_table,
+    load_line,
+    read_compliance,
+)
 from posegen.resources import DEFAULT_CONFIG, shipped_path
 from posegen.robot import Scene, load_config
 
@@ -60,6 +68,7 @@ def main(data: Path, output: Path, candidates: tuple[str, ...]) -> None:
     settings = Settings(candidates=candidates, fold_seeds=1)
     train = [str(data / "left_train.csv"), str(data / "right_train.csv")]
     calibrated = calibrate_files(train, [str(data / "left_validation.csv")], str(output), settings, config)
+    print("\n".join(file_lines(calibrated.summary)))  # each file written: predicted and held-out error
     print(format_table(calibrated.summary))
     print(load_line(calibrated.summary))
     print(f"calibrate: {time.perf_counter() - start:.0f} s -> {output}/")

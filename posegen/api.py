@@ -29,6 +29,7 @@ from posegen.calibrate import (
     Simulated,
     SimulatedBag,
     calibrate_files,
+    file_lines,
     format_table,
     load_line,
     measure_bag,
@@ -344,7 +345,7 @@ def calibrate_robot(
 
     Example:
         >>> summary = posegen.calibrate_robot(["plans/measured.yaml"], "plans/calibration")
-        >>> summary.predicted_error  # per chain: the held-out error cross-validation predicts
+        >>> summary.deliverables  # each file written: its predicted error, and its error as a stack loading it sees it
 
     """
     calibrated: Calibrated = calibrate_files(
@@ -358,13 +359,13 @@ def calibrate_robot(
 
 
 def describe_calibration(summary: CalibrationSummary) -> str:
-    """What ``posegen calibrate`` prints: the error table before and after, then the one line saying what to load.
+    """What ``posegen calibrate`` prints of its files: each one's errors as a stack sees them, then what to load.
 
     Example:
         >>> print(posegen.describe_calibration(posegen.load("plans/calibration")))
 
     """
-    return f"{format_table(summary)}\n{load_line(summary)}"
+    return "\n".join([*file_lines(summary), format_table(summary), load_line(summary)])
 
 
 def write_view(artefact: str | Path, html: str | Path, *, config: str | Path | None = None) -> Path:

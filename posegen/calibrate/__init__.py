@@ -11,20 +11,14 @@ Internal: scripts use the public API at ``posegen.`` (stable, documented with ex
 names here are its plumbing and may change between versions.
 """
 
-from posegen.calibrate.bag_workflow import (
-    TRUTH_FILE,
-    Measured,
-    SimulatedBag,
-    measure_bag,
-    simulate_route_bag,
-    wrench_topics,
-)
+from typing import TYPE_CHECKING, Any
+
 from posegen.calibrate.calibration import Calibration, Settings, calibrate, held_out_residuals, held_out_x
-from posegen.calibrate.calibration_file import format_table, residual_stats, write_calibration
+from posegen.calibrate.calibration_file import write_calibration
 from posegen.calibrate.compliance import Compliance, ComplianceGroup, compensate, read_compliance, uncompensate
-from posegen.calibrate.deliverable_files import load_line
 from posegen.calibrate.deliverables import Deliverable, DeliverableKind, Deliverables
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, levenberg_marquardt
+from posegen.calibrate.file_judge import JUDGED_AS, Judged, judge
 from posegen.calibrate.folds import Fold, repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, ScaleSearch, select_model
 from posegen.calibrate.offsets import JointOffset, apply_offsets, joint_offsets, read_offsets
@@ -52,12 +46,14 @@ from posegen.calibrate.summary import (
     CvFigures,
     DeliverableSummary,
     ErrorFigures,
+    FileFigures,
     LeftOutRow,
-    ResidualTable,
+    SetFigures,
     read_summary,
     summary_from_dict,
     write_summary,
 )
+from posegen.calibrate.summary_text import file_lines, format_table, load_line, model_line
 from posegen.calibrate.urdf_export import calibrated_config, calibrated_robot, calibrated_urdf, check_exportable
 from posegen.calibrate.workflow import (
     Calibrated,
@@ -71,11 +67,33 @@ from posegen.calibrate.workflow import (
     truth_record,
 )
 
+if TYPE_CHECKING:
+    from posegen.calibrate.bag_workflow import (
+        TRUTH_FILE,
+        Measured,
+        SimulatedBag,
+        measure_bag,
+        simulate_route_bag,
+        wrench_topics,
+    )
+
+_BAG_NAMES = ("TRUTH_FILE", "Measured", "SimulatedBag", "measure_bag", "simulate_route_bag", "wrench_topics")
+
+
+def __getattr__(name: str) -> Any:
+    """The rosbag workflow's names, imported when first used (``calibrate`` needs none of its readers)."""
+    if name in _BAG_NAMES:
+        from posegen.calibrate import bag_workflow
+
+        return getattr(bag_workflow, name)
+    raise AttributeError(f"module 'posegen.calibrate' has no attribute {name!r}")
+
 __all__ = [
     "CALIBRATION_FILE",
     "CALIBRATION_FORMAT",
     "COMPONENTS",
     "DISPLAY",
+    "JUDGED_AS",
     "RULE",
     "TRUTH_FILE",
     "Calibrated",
@@ -96,17 +114,19 @@ __all__ = [
     "Deliverables",
     "ErrorFigures",
     "Estimate",
+    "FileFigures",
     "Flag",
     "Fold",
     "JointOffset",
+    "Judged",
     "LeftOutRow",
     "Measured",
     "ModelSelection",
     "Noise",
     "Perturbation",
     "Posterior",
-    "ResidualTable",
     "ScaleSearch",
+    "SetFigures",
     "Settings",
     "Simulated",
     "SimulatedBag",
@@ -121,14 +141,17 @@ __all__ = [
     "compensate",
     "contact_residuals",
     "estimate",
+    "file_lines",
     "fit",
     "format_table",
     "held_out_residuals",
     "held_out_x",
     "joint_offsets",
+    "judge",
     "levenberg_marquardt",
     "load_line",
     "measure_bag",
+    "model_line",
     "perturbation_of",
     "perturbed_robot",
     "posterior_of",
@@ -138,7 +161,6 @@ __all__ = [
     "read_offsets",
     "read_summary",
     "repeated_folds",
-    "residual_stats",
     "select_model",
     "simulate",
     "simulate_postures_file",

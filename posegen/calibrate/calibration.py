@@ -28,11 +28,12 @@ import numpy as np
 from posegen.arguments import check_count, check_seed, check_size
 from posegen.calibrate.deliverables import Deliverables, choose_deliverables
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec
+from posegen.calibrate.file_judge import with_training_planes
 from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, ScaleSearch, select_model
-from posegen.calibrate.screening import Flag, Screening, feet_off_the_floor, feet_offsets
+from posegen.calibrate.screening import Flag, Screening, feet_off_the_floor, feet_unexplained
 from posegen.calibrate.urdf_export import check_exportable
-from posegen.errors import InfeasibleError, InputError
+from posegen.errors import InputError
 from posegen.model import (
     DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
@@ -45,6 +46,7 @@ from posegen.model import (
     Spec,
     base_at,
     candidate_spec,
+    kind_sigmas,
     level_postures,
     row_counts,
     spec_for_rows,
@@ -144,14 +146,22 @@ def unusable_rows(model: CalibrationModel, observations: Observations, config: C
         if len(rows) == 1:
             flags.append(Flag(rows[0], contacts.labels[rows[0]], "alone in its session", 1.0, 0))
     if model.floor is not None:
-        offsets = feet_offsets(model, observations)
-        beyond = feet_off_the_floor(offsets, config.feet_tolerance_mm * 1e-3, np.deg2rad(config.feet_tolerance_deg))
-        for i in np.flatnonzero(beyond > 1.0):
+        tolerance = (config.feet_tolerance_mm * 1e-3, float(np.deg2rad(config.feet_tolerance_deg)))
+        offsets = feet_unexplained(model, observations, np.repeat(tolerance, 3), _leg_prior(config))
+        for i in np.flatnonzero(feet_off_the_floor(offsets, *tolerance) > 1.0):
             size = max(np.abs(offsets[i, :3]).max() * 1e3, np.degrees(np.abs(offsets[i, 3:]).max()))
             flags.append(Flag(int(i), contacts.labels[i], "feet off the floor (mm or deg)", float(size), 0))
     for flag in flags:  # the command prints them with the result (or names them in its error)
         LOG.info("row left out: %s: %s", flag.label, flag.reason)
     return sorted(flags, key=lambda f: f.row)
+
+
+def _leg_prior(config: CalibrationConfig) -> tuple[float, float]:
+    """Prior sigma of a placement's lengths (m) and angles (rad) at the middle prior scale."""
+    sigma = kind_sigmas(config.prior)
+    scale = sorted(config.prior_scales)[len(config.prior_scales) // 2]
+    angles = (Kind.JOINT_OFFSET, Kind.AXIS_TILT, Kind.FRAME_ROTATION)
+    return sigma[Kind.LINK_TRANSLATION] * scale, max(sigma[k] for k in angles) * scale
 
 
 def check_enough(
@@ -317,23 +327,10 @@ def held_out_x(calibration: Calibration, x: FloatArray, contacts: Contacts) -> F
 
     A session also present in training keeps its own plane. Another session takes the
     plane of the training session with the most kept rows of the held-out chain: the
-    plane's height is only known relative to the chain it was fitted with.
+    plane's height is only known relative to the chain it was fitted with
+    (:func:`posegen.calibrate.file_judge.with_training_planes`).
     """
-    plane = calibration.model.contact.plane_columns
-    out = x.copy()
-    train = calibration.train.subset(list(calibration.kept))
-    for session in sorted(set(contacts.sessions) - set(train.sessions)):
-        chains = [c for c, s in zip(contacts.chains, contacts.sessions, strict=True) if s == session]
-        chain = max(sorted(set(chains)), key=chains.count)
-        counts = {
-            s: sum(1 for c, t in zip(train.chains, train.sessions, strict=True) if c == chain and t == s)
-            for s in set(train.sessions)
-        }
-        source = max(sorted(counts), key=lambda s: counts[s])
-        if counts[source] == 0:
-            raise InfeasibleError(f"chain '{chain}' of held-out session '{session}' has no training contact")
-        out[plane(session)] = x[plane(source)]
-    return out
+    return with_training_planes(calibration.model, x, calibration.train.subset(list(calibration.kept)), contacts)
 
 
 def held_out_residuals(calibration: Calibration, contacts: Contacts) -> dict[str, dict[str, FloatArray]]:

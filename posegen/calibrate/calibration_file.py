@@ -2,8 +2,10 @@
 
 Output folder::
 
-    calibration.yaml     model selection, predicted error, rows left out, noise, parameters, residuals, provenance
-    residuals.csv        every contact's residuals before and after, and its joint angles
+    calibration.yaml     the files written and their errors first, then the interpretable model, model
+                         selection, rows left out, noise, parameters, provenance
+    residuals.csv        every contact's residuals under the nominal URDF and calibrated.urdf, as a stack
+                         loading each sees them, and its joint angles
     posterior.npz        posterior covariance of the fitted directions, conditioning of their regressor
     calibrated.urdf      the URDF alone: any stack loads it (same links and joints, calibrated origins;
                          a <link>_mount where a sole or gripper is a moving joint's link)
@@ -11,8 +13,8 @@ Output folder::
     offsets.yaml         calibrated.urdf as joint angle offsets and placement changes of the nominal URDF
     with_compliance/     the URDF, compliance.yaml and offsets.yaml of a compliant model, when one predicts best
                          (:mod:`posegen.calibrate.deliverable_files`)
-    parameters.png       fitted deviations (mm, deg)
-    residuals.png        held-out residuals before/after (or training ones without held-out data)
+    parameters.png       the interpretable model's fitted deviations (mm, deg)
+    residuals.png        held-out residuals, nominal URDF and calibrated.urdf (or training ones without held-out data)
     cross_validation.png CV score of every candidate over the prior scale
 """
 
@@ -24,16 +26,29 @@ from typing import Any
 
 import numpy as np
 
-from posegen.calibrate.calibration import Calibration, held_out_residuals
-from posegen.calibrate.deliverable_files import deliverables_report, write_deliverable
+from posegen.calibrate.calibration import Calibration
+from posegen.calibrate.deliverable_files import (
+    Judgements,
+    deliverables_report,
+    file_entry,
+    judge_all,
+    predicted_figures,
+    write_deliverable,
+)
+from posegen.calibrate.deliverables import DeliverableKind
 from posegen.calibrate.plots import plot_cross_validation, plot_parameters, plot_residuals
 from posegen.calibrate.record import CALIBRATION_FILE, CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
-from posegen.calibrate.scoring import RULE, CvResult, column_stats
-from posegen.calibrate.summary import CalibrationSummary, summary_from_dict, write_summary
-from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas, masked
-from posegen.robot import ContactKind, FloatArray
+from posegen.calibrate.scoring import RULE, CvResult
+from posegen.calibrate.summary import CALIBRATION_VERSION, CalibrationSummary, summary_from_dict, write_summary
+from posegen.calibrate.summary_text import SHORT
+from posegen.model import FLOOR_FIELDS, OFFSET_FIELDS, SESSION_FIELDS, Contacts, Kind, Parameter, kind_sigmas
+from posegen.robot import FloatArray
 
 LENGTH_KINDS = (Kind.LINK_TRANSLATION, Kind.CONTACT_HEIGHT, Kind.CONTACT_POINT)
+MODEL_ROLE = (
+    "the interpretable model: the one-standard-error rule's pick among the candidates (what this robot's physics "
+    "shows, and what a follow-up design plans for); not a file a robot loads: see deliverables"
+)
 
 
 def _shown(values: Sequence[float] | FloatArray, digits: int = 4) -> dict[str, float | None]:
@@ -42,29 +57,6 @@ def _shown(values: Sequence[float] | FloatArray, digits: int = 4) -> dict[str, f
         c: round(float(v), digits) if np.isfinite(v) else None
         for c, v in zip(COMPONENTS, np.asarray(values, dtype=float) * DISPLAY, strict=True)
     }
-
-
-def residual_stats(residuals: FloatArray, kinds: Sequence[ContactKind]) -> dict[str, dict[str, float | None]]:
-    """RMS and mean absolute of (n, 3) residuals over the rows the contacts (of these kinds) measure, mm and deg."""
-    mean_abs, rms = column_stats(masked(residuals, kinds))
-    return {"mean_abs": _shown(mean_abs), "rms": _shown(rms)}
-
-
-def residual_tables(calibration: Calibration, held_out: Contacts | None) -> dict[str, Any]:
-    """Training and held-out residual statistics, before and after."""
-    model = calibration.model
-    observations = model.observations(calibration.train.subset(list(calibration.kept)))
-    kinds = observations.contacts.kinds
-    training = {
-        name: residual_stats(model.evaluate(fitted.x, observations, floor=False).contact, kinds)
-        for name, fitted in (("before", calibration.before), ("after", calibration.after))
-    }
-    tables: dict[str, Any] = {"training": {**training, "contacts": len(observations)}}
-    if held_out is not None:
-        for protocol, by_model in held_out_residuals(calibration, held_out).items():
-            tables[f"held_out_{protocol}"] = {k: residual_stats(v, held_out.kinds) for k, v in by_model.items()}
-            tables[f"held_out_{protocol}"]["contacts"] = len(held_out)
-    return tables
 
 
 def _display(kind: Kind) -> tuple[str, float]:
@@ -148,19 +140,23 @@ def selection_report(calibration: Calibration) -> dict[str, Any]:
     }
 
 
-def predicted_error(calibration: Calibration) -> tuple[dict[str, Any], list[str]]:
-    """The chosen model's CV-predicted held-out error per chain, and warnings above the target."""
+def target_warnings(calibration: Calibration) -> list[str]:
+    """A warning per chain that no file written is predicted to meet ``calibration.target_error_mm`` on (height)."""
     target = calibration.config.target_error_mm
-    out, warnings = {}, []
-    for chain, error in calibration.selection.chosen.chains.items():
-        z_mm = error.mean_abs[0] * 1e3
-        out[chain] = {"mean_abs": _shown(error.mean_abs, 3), "rms": _shown(error.rms, 3), "above_target": z_mm > target}
-        if z_mm > target:
+    warnings = []
+    for chain in sorted(calibration.model.contact.chains):
+        predicted = {  # file -> its CV-predicted height error on this chain, mm
+            SHORT[d.kind]: d.result.chains[chain].mean_abs[0] * 1e3
+            for d in calibration.deliverables.all()
+            if chain in d.result.chains
+        }
+        if predicted and min(predicted.values()) > target:
+            shown = ", ".join(f"{name} {z:.2f} mm" for name, z in predicted.items())
             warnings.append(
-                f"chain '{chain}': predicted held-out height error {z_mm:.2f} mm is above the target {target:g} mm; "
-                f"record more contacts of this chain (posegen select POOL --given ...)"
+                f"chain '{chain}': predicted held-out height error above the target {target:g} mm ({shown}); "
+                "record more contacts of this chain (posegen select POOL --given ...)"
             )
-    return out, warnings
+    return warnings
 
 
 def left_out_rows(calibration: Calibration) -> list[dict[str, Any]]:
@@ -195,21 +191,26 @@ def _noise(calibration: Calibration) -> dict[str, Any]:
 
 
 def calibration_report(
-    calibration: Calibration, held_out: Contacts | None, seed: int | None, rejected_rows: Sequence[str]
+    calibration: Calibration,
+    held_out: Contacts | None,
+    seed: int | None,
+    rejected_rows: Sequence[str],
+    judged: Judgements,
 ) -> dict[str, Any]:
-    """The content of calibration.yaml."""
+    """The content of calibration.yaml: the files written and their errors first."""
     model = calibration.model
     x = calibration.after.x
-    predicted, warnings = predicted_error(calibration)
     sigmas = kind_sigmas(calibration.config.prior)
     scale = calibration.selection.chosen.prior_scale
     report: dict[str, Any] = {
         "format": CALIBRATION_FORMAT,
-        "format_version": 2,
+        "format_version": CALIBRATION_VERSION,
+        "deliverables": deliverables_report(calibration, judged, held_out),
         "provenance": model.scene.provenance(seed),
         "chains": sorted(model.contact.chains),
         "sessions": list(model.sessions),
         "model": {
+            "role": MODEL_ROLE,
             "candidate": calibration.candidate.name,
             "fit": list(calibration.candidate.fit),
             "floor_equations": calibration.spec.floor,
@@ -218,10 +219,10 @@ def calibration_report(
             "prior_sigma": {
                 k.value: round(float(v * scale * _display(k)[1]), 5) for k, v in sigmas.items() if np.isfinite(v)
             },
+            "predicted_error": predicted_figures(calibration.selection.chosen),
+            **file_entry(calibration, judged.model, held_out),
         },
-        "predicted_error": predicted,
-        "warnings": [*calibration.warnings, *warnings],
-        "deliverables": deliverables_report(calibration, held_out),
+        "warnings": [*calibration.warnings, *target_warnings(calibration)],
         "model_selection": selection_report(calibration),
         "noise": _noise(calibration),
         "left_out": left_out_rows(calibration),
@@ -233,7 +234,6 @@ def calibration_report(
             "note": "QR of the regressor at postures shaped like the training ones (identifiability only; the fit "
             "regularises every parameter by its prior)",
         },
-        "residuals": residual_tables(calibration, held_out),
         "compliance": {
             group: {
                 "joints": [model.scene.joint_names[j] for j in model.compliance[group]],
@@ -264,6 +264,10 @@ def write_calibration(
 ) -> CalibrationSummary:
     """Write every output of a calibration into ``out_dir`` and return its ``calibration.yaml``.
 
+    The deliverables' files are written first, then read back and judged as a stack
+    loading them sees them (:mod:`posegen.calibrate.file_judge`): the figures every
+    other file and the command print are those.
+
     Args:
         calibration: The calibration.
         held_out: Held-out contacts, if any.
@@ -273,49 +277,23 @@ def write_calibration(
 
     """
     out_dir.mkdir(parents=True, exist_ok=True)
-    report = calibration_report(calibration, held_out, seed, rejected_rows)
+    written = [write_deliverable(calibration, d, out_dir, seed) for d in calibration.deliverables.all()]
+    judged = judge_all(calibration, written, held_out)
+    report = calibration_report(calibration, held_out, seed, rejected_rows, judged)
     summary = summary_from_dict(report, str(out_dir / CALIBRATION_FILE))
-    for deliverable in calibration.deliverables.all():
-        write_deliverable(calibration, deliverable, out_dir, seed)
     plot_parameters([r for r in report["parameters"] if r["unit"] in ("mm", "deg")], out_dir / "parameters.png")
     chosen = calibration.selection.chosen
     plot_cross_validation(
         report["model_selection"]["curves"], (chosen.candidate, chosen.prior_scale), out_dir / "cross_validation.png"
     )
-    model = calibration.model
-    if held_out is not None:
-        res = held_out_residuals(calibration, held_out)["training_plane"]
-        title = "Held-out residuals (plane from training)"
-        kinds = held_out.kinds  # a point contact's roll and pitch (not measured) are not drawn
-        plot_residuals(masked(res["before"], kinds), masked(res["after"], kinds), title, out_dir / "residuals.png")
+    nominal, urdf = judged.nominal, judged.files[DeliverableKind.URDF]
+    if held_out is not None and nominal.held_out is not None and urdf.held_out is not None:
+        title = "Held-out residuals (plane from training): nominal URDF and calibrated.urdf"
+        plot_residuals(nominal.held_out, urdf.held_out, title, out_dir / "residuals.png")
     else:
-        observations = model.observations(calibration.train.subset(list(calibration.kept)))
-        kinds = observations.contacts.kinds
-        plot_residuals(
-            masked(model.evaluate(calibration.before.x, observations, floor=False).contact, kinds),
-            masked(model.evaluate(calibration.after.x, observations, floor=False).contact, kinds),
-            "Training residuals",
-            out_dir / "residuals.png",
-        )
-    write_record(calibration, held_out, out_dir)
+        kept = list(calibration.kept)
+        title = "Training residuals: nominal URDF and calibrated.urdf"
+        plot_residuals(nominal.training[kept], urdf.training[kept], title, out_dir / "residuals.png")
+    write_record(calibration, held_out, out_dir, (nominal, urdf))
     write_summary(out_dir / CALIBRATION_FILE, summary)
     return summary
-
-
-def _cell(value: float | None) -> str:
-    return f"{value:>7.2f}" if value is not None else f"{'-':>7}"
-
-
-def format_table(summary: CalibrationSummary) -> str:
-    """The before/after table printed by ``posegen calibrate`` (mean absolute; RMS)."""
-    lines = [
-        "set                         contacts  model    z (mm)        roll (deg)    pitch (deg)",
-        "                                              mean   rms    mean   rms    mean   rms",
-    ]
-    for key, table in summary.residuals.items():
-        for model, errors in (("before", table.before), ("after", table.after)):
-            cells = zip(errors.mean_abs.values(), errors.rms.values(), strict=True)
-            lines.append(
-                f"{key:<28}{table.contacts:>6}  {model:<7}" + "".join(f"{_cell(m)}{_cell(r)}" for m, r in cells)
-            )
-    return "\n".join(lines)

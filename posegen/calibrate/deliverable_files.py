@@ -15,21 +15,30 @@ dropped): loaded alone, it predicts what cross-validation said it would.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from posegen.calibrate.calibration import Calibration, held_out_x
-from posegen.calibrate.compliance import COMPLIANCE_FILE, Compliance, ComplianceGroup, write_compliance
+from posegen.calibrate.calibration import Calibration
+from posegen.calibrate.compliance import (
+    COMPLIANCE_FILE,
+    Compliance,
+    ComplianceGroup,
+    read_compliance,
+    write_compliance,
+)
 from posegen.calibrate.deliverables import Deliverable, DeliverableKind
+from posegen.calibrate.file_judge import JUDGED_AS, Judged, errors_by_chain, judge
 from posegen.calibrate.offsets import OFFSETS_FILE, joint_offsets, write_offsets
-from posegen.calibrate.scoring import DELIVERABLE_RULE, CvResult, column_stats
-from posegen.calibrate.summary import CalibrationSummary
-from posegen.calibrate.urdf_export import calibrated_robot, calibrated_urdf
+from posegen.calibrate.scoring import DELIVERABLE_RULE, CvResult
+from posegen.calibrate.summary import NOMINAL_KEY
+from posegen.calibrate.urdf_export import calibrated_robot
 from posegen.io import dump_yaml, write_atomic
-from posegen.model import Contacts, Kind, masked
-from posegen.robot import FloatArray
+from posegen.model import Contacts, Kind
+from posegen.robot import FloatArray, Scene, load_config, parse_config
 
 URDF_FILE = "calibrated.urdf"
 CONFIG_FILE = "calibrated.yaml"
@@ -69,11 +78,22 @@ def compliance_of(calibration: Calibration, deliverable: Deliverable) -> Complia
     return Compliance(groups, tuple(model.scene.stance.sole_frames))
 
 
-def write_deliverable(calibration: Calibration, deliverable: Deliverable, out_dir: Path, seed: int | None) -> str:
-    """Write a deliverable's files into the calibration folder ``out_dir``; its URDF text.
+@dataclass(frozen=True)
+class Written:
+    """A deliverable's files, written and read back: the robot a stack loading them has."""
+
+    deliverable: Deliverable
+    scene: Scene  # the robot its URDF (and config's frames) describe
+    compliance: Compliance | None  # its compliance.yaml, read back; None for the URDF alone
+
+
+def write_deliverable(calibration: Calibration, deliverable: Deliverable, out_dir: Path, seed: int | None) -> Written:
+    """Write a deliverable's files into the calibration folder ``out_dir``, and read them back.
 
     The URDF is the nominal one as it is, or the URDF of the deliverable's fit (built once,
-    with its config for the URDF deliverable).
+    with its config). The URDF alone ships its config (``calibrated.yaml``); the
+    compensated deliverable's robot is read with the same config's frames at its own
+    placements (not written: a posegen command does not compensate).
     """
     model = calibration.model
     scene = model.scene
@@ -81,55 +101,78 @@ def write_deliverable(calibration: Calibration, deliverable: Deliverable, out_di
     folder.mkdir(parents=True, exist_ok=True)
     nominal = scene.files.urdf.read_text()
     theta = model.contact.nominal() if deliverable.nominal else model.theta(deliverable.estimate.x)
-    urdf, config = nominal, None
-    if deliverable.kind == DeliverableKind.URDF:  # nominal: the config's frames as they are
-        exported, config = calibrated_robot(nominal, model.contact, theta, folder / URDF_FILE)
-        urdf = nominal if deliverable.nominal else exported
-    elif not deliverable.nominal:
-        urdf = calibrated_urdf(nominal, model.contact, theta)
+    exported, config = calibrated_robot(nominal, model.contact, theta, folder / URDF_FILE)
+    urdf = nominal if deliverable.nominal else exported  # nominal: the config's frames as they are
     write_atomic(folder / URDF_FILE, urdf)
     provenance = scene.provenance(seed)
     write_offsets(folder / OFFSETS_FILE, joint_offsets(nominal, urdf), URDF_FILE, str(scene.files.urdf), provenance)
-    if config is None:  # the compensated deliverable
+    if deliverable.kind == DeliverableKind.COMPENSATED:
         write_compliance(folder / COMPLIANCE_FILE, compliance_of(calibration, deliverable), URDF_FILE, provenance)
-    else:
-        write_atomic(folder / CONFIG_FILE, dump_yaml(config))
-    return urdf
+        robot = Scene(parse_config(config, str(folder / CONFIG_FILE)))  # the URDF as written, beside this config
+        return Written(deliverable, robot, read_compliance(folder / COMPLIANCE_FILE))
+    write_atomic(folder / CONFIG_FILE, dump_yaml(config))
+    return Written(deliverable, Scene(load_config(folder / CONFIG_FILE)), None)
 
 
-def _errors(values: FloatArray) -> dict[str, float | None]:
-    return {f: round(float(v), 3) if np.isfinite(v) else None for f, v in zip(FIELDS, values * SHOWN, strict=True)}
+@dataclass(frozen=True)
+class Judgements:
+    """Every file, and the interpretable model, judged as a stack loading it sees it (:mod:`file_judge`)."""
+
+    nominal: Judged  # the nominal URDF as it is
+    files: dict[DeliverableKind, Judged]  # each deliverable, from its files as written
+    model: Judged  # the interpretable model (one-SE rule), not written
 
 
-def _predicted(result: CvResult) -> dict[str, Any]:
+def judge_all(calibration: Calibration, written: Sequence[Written], held_out: Contacts | None) -> Judgements:
+    """Judge the nominal URDF, every deliverable from its written files, and the interpretable model alike."""
+    scene, train, kept = calibration.model.scene, calibration.train, calibration.kept
+    model = calibration.model
+    x = calibration.after.x
+    groups = tuple(
+        ComplianceGroup(g, tuple(scene.joint_names[j] for j in model.compliance[g]), model.compliances(x)[g])
+        for g in calibration.candidate.compliance
+    )
+    own = Compliance(groups, tuple(scene.stance.sole_frames)) if groups else None
+    parameters = {p.name: float(x[i]) for i, p in enumerate(model.contact.parameters)}
+    return Judgements(
+        nominal=judge(scene, train, kept, held_out),
+        files={w.deliverable.kind: judge(w.scene, train, kept, held_out, w.compliance) for w in written},
+        model=judge(scene, train, kept, held_out, own, parameters),
+    )
+
+
+def _errors(values: Sequence[float] | FloatArray, digits: int) -> dict[str, float | None]:
+    shown = np.asarray(values, dtype=float) * SHOWN
+    return {f: round(float(v), digits) if np.isfinite(v) else None for f, v in zip(FIELDS, shown, strict=True)}
+
+
+def predicted_figures(result: CvResult) -> dict[str, Any]:
+    """CV-predicted held-out error per chain (mean abs, RMS; mm, deg), as calibration.yaml writes it."""
+    return {chain: {"mean_abs": _errors(e.mean_abs, 3), "rms": _errors(e.rms, 3)} for chain, e in result.chains.items()}
+
+
+def judged_figures(residuals: FloatArray, contacts: Contacts) -> dict[str, Any]:
+    """Mean abs and RMS (mm, deg; six decimals) of judged residuals, over all rows and per chain."""
     return {
-        chain: {"mean_abs": _errors(np.array(e.mean_abs)), "rms": _errors(np.array(e.rms))}
-        for chain, e in result.chains.items()
+        chain: {"contacts": e.contacts, "mean_abs": _errors(e.mean_abs, 6), "rms": _errors(e.rms, 6)}
+        for chain, e in errors_by_chain(residuals, contacts).items()
     }
 
 
-def held_out_errors(calibration: Calibration, x: FloatArray, held_out: Contacts) -> dict[str, Any]:
-    """Held-out errors of parameters ``x`` with the planes from training, per chain and in all (mean abs, RMS)."""
-    model = calibration.model
-    observations = model.observations(held_out)
-    residuals = masked(
-        model.evaluate(held_out_x(calibration, x, held_out), observations, floor=False).contact, held_out.kinds
-    )
-    out: dict[str, Any] = {}
-    chains = np.array(held_out.chains)
-    for chain in ["all", *sorted(set(held_out.chains))]:
-        rows = residuals if chain == "all" else residuals[chains == chain]
-        mean_abs, rms = column_stats(rows)
-        out[chain] = {"contacts": len(rows), "mean_abs": _errors(mean_abs), "rms": _errors(rms)}
-    return out
+def file_entry(calibration: Calibration, judged: Judged, held_out: Contacts | None) -> dict[str, Any]:
+    """A file's figures as a stack loading it sees them: its kept training rows and the held-out ones."""
+    kept = list(calibration.kept)
+    entry = {"training": judged_figures(judged.training[kept], calibration.train.subset(kept))}
+    if held_out is not None and judged.held_out is not None:
+        entry["held_out"] = judged_figures(judged.held_out, held_out)
+    return entry
 
 
-def deliverables_report(calibration: Calibration, held_out: Contacts | None) -> dict[str, Any]:
-    """The ``deliverables`` section of ``calibration.yaml``: each one's files, fit and predicted error."""
-    section: dict[str, Any] = {"rule": DELIVERABLE_RULE}
-    nominal = calibration.selection.nominal
+def deliverables_report(calibration: Calibration, judged: Judgements, held_out: Contacts | None) -> dict[str, Any]:
+    """The ``deliverables`` section of ``calibration.yaml``: each file, its model, predicted and judged errors."""
+    section: dict[str, Any] = {"rule": DELIVERABLE_RULE, "judged": JUDGED_AS}
     for deliverable in calibration.deliverables.all():
-        entry: dict[str, Any] = {
+        section[deliverable.kind.value] = {
             "files": files_of(deliverable),
             "load_with": LOADED_BY[deliverable.kind],
             "candidate": deliverable.candidate.name,
@@ -137,27 +180,16 @@ def deliverables_report(calibration: Calibration, held_out: Contacts | None) -> 
             "free_parameters": deliverable.result.free,
             "score": round(deliverable.result.score, 2),
             "se": round(deliverable.result.se, 2),
-            "predicted_error": _predicted(deliverable.result),
+            "predicted_error": predicted_figures(deliverable.result),
+            **file_entry(calibration, judged.files[deliverable.kind], held_out),
         }
-        if held_out is not None:
-            entry["held_out_training_plane"] = held_out_errors(calibration, deliverable.estimate.x, held_out)
-        section[deliverable.kind.value] = entry
-    section["nominal_urdf"] = {
+    nominal = calibration.selection.nominal
+    section[NOMINAL_KEY] = {
+        "files": [],
+        "load_with": "for comparison: the URDF as it is (not written)",
         "score": round(nominal.score, 2),
         "se": round(nominal.se, 2),
-        "predicted_error": _predicted(nominal),
+        "predicted_error": predicted_figures(nominal),
+        **file_entry(calibration, judged.nominal, held_out),
     }
     return section
-
-
-def load_line(summary: CalibrationSummary) -> str:
-    """One line: which file to load for which stack, with each one's predicted held-out height error."""
-    parts = []
-    for kind, deliverable in summary.deliverables.items():
-        errors = ", ".join(
-            f"{chain} {e.mean_abs.z_mm:.2f} mm" for chain, e in sorted(deliverable.predicted_error.items())
-        )
-        what = deliverable.files[0] if kind == DeliverableKind.URDF else f"{COMPLIANT_DIR}/ (URDF + {COMPLIANCE_FILE})"
-        who = "any stack" if kind == DeliverableKind.URDF else "stacks that compensate compliance"
-        parts.append(f"{what} for {who} (predicted held-out z {errors})")
-    return "load: " + "; or ".join(parts)

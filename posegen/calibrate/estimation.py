@@ -21,7 +21,7 @@ roll and pitch sigmas keep their values.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -198,7 +198,8 @@ def frozen_jacobian(
     blocks = [out.contact_jacobian / np.array(noise.contact)[None, :, None]]
     if spec.floor:
         blocks.append(out.floor_jacobian / np.array(noise.floor)[None, :, None])
-    per_posture = np.einsum("nmx,xf->nmf", np.concatenate(blocks, axis=1), basis)
+    stacked = np.concatenate(blocks, axis=1)  # (n, m, nx)
+    per_posture = (stacked.reshape(-1, stacked.shape[2]) @ basis).reshape(*stacked.shape[:2], basis.shape[1])
     sd = spec.prior_sd[free]
     prior = np.isfinite(sd)
     return per_posture, np.diag(1.0 / np.where(prior, sd, 1.0))[prior]
@@ -219,20 +220,58 @@ def refit_frozen(
     close by (the fit on all rows, for a fold of it): one factorisation, then one
     residual evaluation per step. ``jacobian`` holds these postures' rows and the prior rows.
     """
+    every = [range(len(observations))]
+    return refit_frozen_folds(model, observations, spec, noise, start, jacobian, every, iterations)[0]
+
+
+def refit_frozen_folds(
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    start: FloatArray,
+    jacobian: tuple[FloatArray, FloatArray],
+    folds: Sequence[Sequence[int]],
+    iterations: int,
+) -> FloatArray:
+    """:func:`refit_frozen` of F folds at once, each on its own rows of ``observations``. Shape (F, nx).
+
+    Every fold takes its steps from ``start`` with its rows of the frozen Jacobian
+    ``jacobian`` (of all the observations' postures, and the prior rows); the residuals of
+    every fold's parameters are evaluated together (:meth:`CalibrationModel.evaluate_batch`),
+    the same numbers as one fold at a time.
+
+    Example:
+        >>> deltas = refit_frozen_folds(model, observations, spec, noise, x, jacobian, [f.train for f in folds], 3)
+
+    """
     per_posture, prior_rows = jacobian
     f = per_posture.shape[2]
-    # in the order of the residual: every contact row, then every floor row, then the prior
-    matrix = np.vstack([per_posture[:, :3].reshape(-1, f), per_posture[:, 3:].reshape(-1, f), prior_rows])
-    factor = scipy.linalg.cho_factor(matrix.T @ matrix)
     free = np.array(spec.free, dtype=int)
     fixed = model.delta_of(start)
-    fun, _ = _problem(model, observations, spec, noise, fixed, np.ones(len(observations)))
-    values = fixed[free]
+    sd = spec.prior_sd[free]
+    prior = np.isfinite(sd)
+    sigma = np.array(noise.contact + noise.floor)[: 9 if spec.floor else 3]
+    rows = [np.asarray(list(fold), dtype=int) for fold in folds]
+    if not rows:
+        return np.zeros((0, model.size))
+    matrices, factors = [], []
+    for mine in rows:
+        # in the order of the residual: every contact row, then every floor row, then the prior
+        matrix = np.vstack([per_posture[mine, :3].reshape(-1, f), per_posture[mine, 3:].reshape(-1, f), prior_rows])
+        matrices.append(matrix)
+        factors.append(scipy.linalg.cho_factor(matrix.T @ matrix))
+    deltas = np.tile(fixed, (len(rows), 1))
     for _ in range(iterations):
-        values = values - scipy.linalg.cho_solve(factor, matrix.T @ fun(values))
-    delta = fixed.copy()
-    delta[free] = values
-    return delta
+        contact, floor = model.evaluate_batch(model.nominal() + deltas @ model.basis.T, observations, spec.floor)
+        whitened = np.concatenate([contact, floor], axis=2) / sigma  # (F, n, 3 or 9)
+        for k, mine in enumerate(rows):
+            values = deltas[k, free]
+            residual = np.concatenate(
+                [whitened[k, mine, :3].ravel(), whitened[k, mine, 3:].ravel(), values[prior] / sd[prior]]
+            )
+            deltas[k, free] = values - scipy.linalg.cho_solve(factors[k], matrices[k].T @ residual)
+    return deltas
 
 
 def held_at_urdf(model: CalibrationModel, spec: Spec, x: FloatArray) -> FloatArray:
@@ -257,7 +296,7 @@ def _hat_terms(
     data = full[:n_data]
     information = full.T @ full
     covariance = np.linalg.pinv(information)
-    leverage = np.einsum("ij,jk,ik->i", data, covariance, data)
+    leverage = np.sum((data @ covariance) * data, axis=1)
     return data, fun(values)[:n_data], leverage, covariance
 
 

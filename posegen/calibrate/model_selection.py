@@ -50,7 +50,7 @@ from posegen.calibrate.estimation import (
     frozen_jacobian,
     held_at_urdf,
     plane_spec,
-    refit_frozen,
+    refit_frozen_folds,
 )
 from posegen.calibrate.folds import Fold
 from posegen.calibrate.scoring import CvResult, implausible, one_standard_error, score_folds
@@ -116,24 +116,38 @@ def cross_validate(
     with that fit's Jacobian frozen; a session fold (whose plane is unknown in training)
     takes Levenberg-Marquardt steps.
     """
-    per_posture, prior_rows = frozen_jacobian(model, observations, spec, full.noise, full.x)
-    out = []
-    for fold in folds:
-        train = observations.subset(fold.train)
-        test = observations.subset(fold.test)
-        own = spec_for_rows(model, spec, set(train.contacts.sessions))
-        if own.free == spec.free:
-            rows = (per_posture[list(fold.train)], prior_rows)
-            delta = refit_frozen(model, train, spec, full.noise, full.x, rows, iterations)
-        else:
-            delta, _ = fit(model, train, own, full.noise, full.x, iterations)
-        x = model.x_of(delta)
+    if not folds:
+        return []
+    jacobian = frozen_jacobian(model, observations, spec, full.noise, full.x)
+    frozen = [k for k, fold in enumerate(folds) if _fold_spec(model, spec, observations, fold).free == spec.free]
+    deltas = dict(
+        zip(
+            frozen,
+            refit_frozen_folds(
+                model, observations, spec, full.noise, full.x, jacobian, [folds[k].train for k in frozen], iterations
+            ),
+            strict=True,
+        )
+    )
+    xs = []
+    for k, fold in enumerate(folds):
+        if k not in deltas:
+            own = _fold_spec(model, spec, observations, fold)
+            deltas[k], _ = fit(model, observations.subset(fold.train), own, full.noise, full.x, iterations)
+        x = model.x_of(deltas[k])
         if fold.new_session:
-            sessions = set(test.contacts.sessions)
-            planes = plane_spec(model, sessions)
+            test = observations.subset(fold.test)
+            planes = plane_spec(model, set(test.contacts.sessions))
             x = model.x_of(fit(model, test, planes, full.noise, start_point_planes(model, test, x))[0])
-        out.append(masked(model.evaluate(x, test, floor=False).contact, test.contacts.kinds))
-    return out
+        xs.append(x)
+    contact, _ = model.evaluate_batch(np.array(xs), observations, floor=False)  # (F, n, 3): every fold at every row
+    kinds = observations.contacts.kinds
+    return [masked(contact[k, list(fold.test)], [kinds[i] for i in fold.test]) for k, fold in enumerate(folds)]
+
+
+def _fold_spec(model: CalibrationModel, spec: Spec, observations: Observations, fold: Fold) -> Spec:
+    """``spec`` less the planes of sessions the fold's training rows lack (their planes are unknown there)."""
+    return spec_for_rows(model, spec, {observations.contacts.sessions[i] for i in fold.train})
 
 
 def start_point_planes(model: CalibrationModel, observations: Observations, x: FloatArray) -> FloatArray:

@@ -40,14 +40,20 @@ def plot_parameters(rows: list[dict[str, Any]], path: Path) -> None:
     plt.close(fig)
 
 
-def plot_residuals(before: FloatArray, after: FloatArray, title: str, path: Path) -> None:
-    """Per-contact residuals before and after, for height, roll and pitch."""
+def plot_residuals(
+    before: FloatArray,
+    after: FloatArray,
+    title: str,
+    path: Path,
+    labels: tuple[str, str] = ("nominal URDF", "calibrated.urdf"),
+) -> None:
+    """Per-contact residuals (n, 3) of two models (m, rad; NaN: not measured), for height, roll and pitch."""
     plt = _pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(14, 4))
     x = np.arange(len(before))
     for k, (ax, name) in enumerate(zip(axes, ("height (mm)", "roll (deg)", "pitch (deg)"), strict=True)):
-        ax.bar(x - 0.2, before[:, k] * DISPLAY[k], width=0.4, label="before", color="tab:gray")
-        ax.bar(x + 0.2, after[:, k] * DISPLAY[k], width=0.4, label="after", color="tab:green")
+        ax.bar(x - 0.2, before[:, k] * DISPLAY[k], width=0.4, label=labels[0], color="tab:gray")
+        ax.bar(x + 0.2, after[:, k] * DISPLAY[k], width=0.4, label=labels[1], color="tab:green")
         ax.axhline(0, color="black", lw=0.5)
         ax.set_xlabel("contact")
         ax.set_title(name)

@@ -4,15 +4,18 @@ Besides ``calibration.yaml`` (:mod:`posegen.calibrate.calibration_file`), a cali
 
     residuals.csv    one row per contact: set (training | outlier | held_out), label,
                      chain, session, kind (flush | point), height/roll/pitch residuals
-                     before and after (mm, deg; a point contact's roll and pitch are
+                     before (the nominal URDF) and after (calibrated.urdf), each as a stack
+                     loading it sees them (mm, deg; a point contact's roll and pitch are
                      empty: not measured), then the joint angles (rad, one per joint)
     posterior.npz    the fitted directions' names (parameter kinds, :mod:`posegen.model.kinds`),
                      their posterior covariance (f, f), the singular values of the
                      noise-whitened regressor (f,) and the condition numbers of the
                      regressor alone and with the prior
 
-Held-out residuals are those of the plane fitted on the training contacts. Viewers and
-the HTML report read a folder through :func:`read_calibration` only.
+Residuals are judged as :mod:`posegen.calibrate.file_judge` says: the file's kinematics
+frozen, the planes and contact tilts fitted on the kept training rows, held-out rows
+judged with the training plane. Viewers and the HTML report read a folder through
+:func:`read_calibration` only.
 """
 
 from __future__ import annotations
@@ -26,20 +29,20 @@ from typing import Any
 
 import numpy as np
 
-from posegen.calibrate.calibration import Calibration, held_out_residuals
+from posegen.calibrate.calibration import Calibration
 from posegen.calibrate.estimation import frozen_jacobian
+from posegen.calibrate.file_judge import Judged
+from posegen.calibrate.summary import CALIBRATION_FORMAT, COMPONENTS, summary_from_dict
 from posegen.errors import InputError, reason
 from posegen.io import load_yaml_file, write_atomic
-from posegen.model import Contacts, masked
+from posegen.model import Contacts
 from posegen.robot import DEFAULT_KIND, ContactKind, FloatArray, kind_named
 
 CALIBRATION_FILE = "calibration.yaml"
-CALIBRATION_FORMAT = "posegen-calibration"
 RESIDUALS_FILE = "residuals.csv"
 POSTERIOR_FILE = "posterior.npz"
 CALIBRATED_CONFIG_FILE = "calibrated.yaml"
 DISPLAY = np.array([1e3, 180.0 / np.pi, 180.0 / np.pi])  # m, rad, rad -> mm, deg, deg
-COMPONENTS = ("z_mm", "roll_deg", "pitch_deg")  # residual components, as displayed
 
 
 class ContactSet(str, enum.Enum):
@@ -59,8 +62,8 @@ class ContactResidual:
     chain: str
     session: str
     joints: FloatArray  # (nj,) rad, in ``joint_names`` order
-    before: FloatArray  # (3,) height (m), roll, pitch (rad): nominal model, fitted plane; NaN: not measured
-    after: FloatArray  # (3,) the same, calibrated model
+    before: FloatArray  # (3,) height (m), roll, pitch (rad): the nominal URDF as a stack sees it; NaN: not measured
+    after: FloatArray  # (3,) the same, calibrated.urdf
     kind: ContactKind = DEFAULT_KIND
 
 
@@ -98,12 +101,15 @@ class CalibrationRecord:
         return dict(self.report.get("provenance") or {})
 
 
-def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> list[ContactResidual]:
-    """Every training contact (fitted or left out) and every held-out one, with its residuals."""
-    model, train = calibration.model, calibration.train
-    observations = model.observations(train)
-    before = masked(model.evaluate(calibration.before.x, observations, floor=False).contact, train.kinds)
-    after = masked(model.evaluate(calibration.after.x, observations, floor=False).contact, train.kinds)
+def contact_residuals(
+    calibration: Calibration, held_out: Contacts | None, judged: tuple[Judged, Judged]
+) -> list[ContactResidual]:
+    """Every training contact (fitted or left out) and every held-out one, with its residuals.
+
+    ``judged``: the nominal URDF and calibrated.urdf, each judged as a stack loading it sees it.
+    """
+    train = calibration.train
+    before, after = judged
     kept = set(calibration.kept)
     rows = [
         ContactResidual(
@@ -112,14 +118,13 @@ def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> li
             chain=train.chains[i],
             session=train.sessions[i],
             joints=train.joints[i].copy(),
-            before=before[i],
-            after=after[i],
+            before=before.training[i],
+            after=after.training[i],
             kind=train.kinds[i],
         )
         for i in range(len(train))
     ]
-    if held_out is not None:
-        judged = held_out_residuals(calibration, held_out)["training_plane"]
+    if held_out is not None and before.held_out is not None and after.held_out is not None:
         rows.extend(
             ContactResidual(
                 set=ContactSet.HELD_OUT,
@@ -127,8 +132,8 @@ def contact_residuals(calibration: Calibration, held_out: Contacts | None) -> li
                 chain=held_out.chains[i],
                 session=held_out.sessions[i],
                 joints=held_out.joints[i].copy(),
-                before=masked(judged["before"][i : i + 1], held_out.kinds[i : i + 1])[0],
-                after=masked(judged["after"][i : i + 1], held_out.kinds[i : i + 1])[0],
+                before=before.held_out[i],
+                after=after.held_out[i],
                 kind=held_out.kinds[i],
             )
             for i in range(len(held_out))
@@ -155,8 +160,10 @@ def posterior_of(calibration: Calibration) -> Posterior:
     )
 
 
-def write_record(calibration: Calibration, held_out: Contacts | None, out_dir: Path) -> None:
-    """Write ``residuals.csv`` and ``posterior.npz`` into a calibration folder."""
+def write_record(
+    calibration: Calibration, held_out: Contacts | None, out_dir: Path, judged: tuple[Judged, Judged]
+) -> None:
+    """Write ``residuals.csv`` (``judged``: the nominal URDF and calibrated.urdf) and ``posterior.npz``."""
     names = calibration.model.scene.joint_names
     buffer = io.StringIO()
     writer = csv.writer(buffer)
@@ -166,7 +173,7 @@ def write_record(calibration: Calibration, held_out: Contacts | None, out_dir: P
         + [f"{c}_after" for c in COMPONENTS]
         + list(names)
     )
-    for row in contact_residuals(calibration, held_out):
+    for row in contact_residuals(calibration, held_out, judged):
         writer.writerow(
             [row.set.value, row.label, row.chain, row.session, row.kind.value]
             + [_cell(v) for v in np.concatenate([row.before, row.after]) * np.tile(DISPLAY, 2)]
@@ -256,8 +263,7 @@ def read_calibration(path: str | Path) -> CalibrationRecord:
     report = load_yaml_file(directory / CALIBRATION_FILE, InputError)
     if not isinstance(report, dict) or report.get("format") != CALIBRATION_FORMAT:
         raise InputError(f"{directory / CALIBRATION_FILE}: not a {CALIBRATION_FORMAT} file")
-    if not isinstance(report.get("provenance") or {}, dict):
-        raise InputError(f"{directory / CALIBRATION_FILE}: 'provenance' must be a mapping")
+    summary_from_dict(report, str(directory / CALIBRATION_FILE))  # every section a reader needs, of this version
     for name in (RESIDUALS_FILE, POSTERIOR_FILE, CALIBRATED_CONFIG_FILE):
         if not (directory / name).is_file():
             raise InputError(f"{directory}: no {name} (calibrate again with this posegen version)")

@@ -190,7 +190,7 @@ def simulate_recording(
     else:
         model, theta = perturbed_robot(scene, chains, [session], perturbation, seed, planned.kinds_by_chain())
     offsets = contact_offsets(planned, perturbation, seed)  # each contact's local plane (contact noise)
-    settled, converged = settle_true(model, theta, planned, stand=False, offsets=offsets)  # legs follow the route
+    settled, converged, _ = settle_true(model, theta, planned, stand=False, offsets=offsets)  # legs follow the route
     if not np.all(converged):
         label = planned.labels[int(np.flatnonzero(~converged)[0])]
         raise InfeasibleError(f"simulated contact {label!r} does not settle on the true plane")

@@ -7,13 +7,17 @@ planned posture the real experiment's physics is reproduced:
 
 * both soles stay flat on the floor where the reference posture puts them: the second
   leg's joints take whatever angles close the true chain (the floor, not the nominal
-  model, holds the feet);
+  model, holds the feet); when the second leg alone cannot (its knee nearly stretched,
+  the true leg a little short), both legs do, the pelvis moving as a standing robot's;
 * the force-controlled contact moves the chain's own arm and torso joints by the
   smallest amount that makes the true contact frame flush with the true plane;
+* no joint goes past its limit (by more than a recording reads, ``LIMIT_TOLERANCE_RAD``):
+  one that would stops there, and the others settle;
 
-both under the true robot's deflection by gravity (Gauss-Newton, minimum-norm steps,
-the gravity torques recomputed until the angles stop moving). The encoders then read
-those angles plus noise.
+both under the true robot's deflection by gravity (Levenberg-Marquardt, minimum-norm
+steps, the gravity torques recomputed until the angles stop moving). The encoders then
+read those angles plus noise. A posture the true robot still cannot take is left out and
+logged with why (a closure left open and by how much, or a joint past its limit).
 
 Contact noise (the table's unevenness, the fingertips, the force control: what a real
 calibration reports on top of the encoders') is physical too: each contact settles flush
@@ -118,95 +122,153 @@ def contact_offsets(planned: Contacts, perturbation: Perturbation, seed: int) ->
     return np.where(row_mask(planned.kinds), offsets, 0.0)
 
 
-def settle_true(
-    model: CalibrationModel,
-    x: FloatArray,
-    planned: Contacts,
-    stand: bool = True,
-    offsets: FloatArray | None = None,
-) -> tuple[Contacts, NDArray[np.bool_]]:
-    """Joint angles at which each planned posture stands and touches under parameters ``x``.
+class _TrueSettle:
+    """The residuals a true robot's posture settles to zero: its contacts on their local planes, its soles flat."""
 
-    With ``stand`` false the legs keep their planned angles and only the contacts settle
-    (a route's rehearsal, whose legs follow the planned trajectory). ``offsets`` (n, 3):
-    each contact settles flush on its local plane, this far (height m, roll, pitch rad)
-    from the true table (:func:`contact_offsets`); None: on the true table.
+    locked: NDArray[np.bool_]  # (n, nj) joints held at a limit in the current solve
 
-    Returns:
-        The settled postures and which of them converged (n,): a posture whose second
-        sole or contact is out of reach of the true robot (a stretched knee) does not.
+    def __init__(
+        self, model: CalibrationModel, x: FloatArray, planned: Contacts, stand: bool, offsets: FloatArray | None
+    ) -> None:
+        self.model, self.x, self.planned = model, x, planned
+        self.floor = model.floor if stand else None
+        self.local = np.zeros((len(planned), 3)) if offsets is None else np.asarray(offsets, dtype=float)  # (n, 3)
+        self.target = np.zeros((len(planned), 6))  # floor: x, y, yaw of the session
+        # a joint stays within its limits, as far past them as recordings read (or where the plan put it)
+        scene = model.scene
+        self.lower = np.minimum(scene.lower - LIMIT_TOLERANCE_RAD, planned.joints)  # (n, nj) rad
+        self.upper = np.maximum(scene.upper + LIMIT_TOLERANCE_RAD, planned.joints)
+        sessions = np.array(planned.sessions)
+        for session in set(planned.sessions):
+            self.target[np.ix_(sessions == session, [0, 1, 5])] = x[model.floor_columns(session)]
 
-    """
-    scene = model.scene
-    legs = set(scene.stance_leg_joints())
-    floor = model.floor if stand else None
-    second_leg = scene.leg_joints(scene.second_sole) if floor is not None else []
-    own = {name: sorted(set(chain.joint_indices) - legs) + second_leg for name, chain in model.contact.chains.items()}
-    joints = planned.joints.copy()
-    local = np.zeros((len(planned), 3)) if offsets is None else np.asarray(offsets, dtype=float)  # (n, 3)
-    sessions = np.array(planned.sessions)
-    target = np.zeros((len(planned), 6))  # floor: x, y, yaw of the session
-    for session in set(planned.sessions):
-        target[np.ix_(sessions == session, [0, 1, 5])] = x[model.floor_columns(session)]
+    def own(self, legs: Sequence[str]) -> dict[str, list[int]]:
+        """Chain -> the joints a posture of it moves: its arm and torso, and the legs of ``legs`` (soles)."""
+        scene = self.model.scene
+        stance = set(scene.stance_leg_joints())
+        moved = sorted({j for sole in legs for j in scene.leg_joints(sole)}) if self.floor is not None else []
+        return {name: sorted(set(c.joint_indices) - stance) + moved for name, c in self.model.contact.chains.items()}
 
-    def residuals(rows: NDArray[np.intp], values: FloatArray, jacobian: bool) -> tuple[FloatArray, FloatArray]:
+    def residuals(self, rows: NDArray[np.intp], values: FloatArray, jacobian: bool) -> tuple[FloatArray, FloatArray]:
         """Contact and floor residuals of some postures (m, 3 or 9) and, gravity torques held, joint derivatives."""
-        posture = planned.subset(rows)
+        model, x, floor = self.model, self.x, self.floor
+        posture = self.planned.subset(rows)
         observations = model.observations(posture.at(values[rows]))
         if not jacobian:
             out = model.evaluate(x, observations, floor=floor is not None)
             floor_blocks = [out.floor] if floor is not None else []  # floor: less its session's
-            blocks = [out.contact - local[rows], *floor_blocks]
-            return np.concatenate(blocks, axis=1), np.zeros(0)
+            return np.concatenate([out.contact - self.local[rows], *floor_blocks], axis=1), np.zeros(0)
         bent = posture.at(model.deflected(x, observations))
         theta = model.theta(x)
         res, _, d_joints = model.contact.derivatives(theta, bent)
-        blocks, jacs = [res - local[rows]], [d_joints]
+        blocks, jacs = [res - self.local[rows]], [d_joints]
         if floor is not None:
             pose, _, f_joints = floor.derivatives(theta, bent.joints)
-            blocks.append(pose - target[rows])
+            blocks.append(pose - self.target[rows])
             jacs.append(f_joints)
         return np.concatenate(blocks, axis=1), np.concatenate(jacs, axis=1)
 
-    everything = np.arange(len(planned))
-    residual, jacobian = residuals(everything, joints, True)
-    damping = np.full(len(planned), 1e-6)  # per posture: Levenberg-Marquardt on the joints
-    active = np.abs(residual).max(axis=1) >= CONTACT_TOLERANCE  # neither converged nor stalled
-    for _ in range(MAX_STEPS):
-        rows = np.flatnonzero(active)
-        if not len(rows):
-            break
+    def solve(
+        self, joints: FloatArray, rows: NDArray[np.intp], own: dict[str, list[int]]
+    ) -> tuple[FloatArray, FloatArray]:
+        """Levenberg-Marquardt on each posture's own joints (minimum-norm steps); the joints and residuals (n, m).
+
+        A posture stops when it settles (every residual below CONTACT_TOLERANCE) or when no
+        step helps even heavily damped (stalled). A step that would take a joint past its
+        limit stops it there, and the posture's other joints settle without it.
+        """
+        joints = joints.copy()
+        self.locked = np.zeros(joints.shape, dtype=bool)  # (n, nj) joints held at a limit
+        residual = np.full((len(self.planned), 9 if self.floor is not None else 3), np.inf)
+        jacobian = np.zeros((len(self.planned), residual.shape[1], joints.shape[1]))
+        residual[rows], jacobian[rows] = self.residuals(rows, joints, True)
+        damping = np.full(len(self.planned), 1e-6)  # per posture
+        active = np.zeros(len(self.planned), dtype=bool)
+        active[rows] = np.abs(residual[rows]).max(axis=1) >= CONTACT_TOLERANCE
+        for _ in range(MAX_STEPS):
+            moving = np.flatnonzero(active)
+            if not len(moving):
+                break
+            joints, improved = self._step(joints, moving, residual, jacobian, damping, own)
+            res, jac = self.residuals(moving, joints, True)
+            residual[moving], jacobian[moving] = res, jac
+            active[moving] = np.abs(res).max(axis=1) >= CONTACT_TOLERANCE
+            active[moving[~improved]] = False  # no step helps even heavily damped: stalled
+        return joints, residual
+
+    def _step(
+        self,
+        joints: FloatArray,
+        rows: NDArray[np.intp],
+        residual: FloatArray,
+        jacobian: FloatArray,
+        damping: FloatArray,
+        own: dict[str, list[int]],
+    ) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """One damped step of every posture in ``rows``, the damping raised until the residual falls (or capped)."""
         norm = np.linalg.norm(residual[rows], axis=1)
         pending = np.ones(len(rows), dtype=bool)
         improved = np.zeros(len(rows), dtype=bool)
         trial = joints.copy()
+        stopped = np.zeros(joints.shape, dtype=bool)  # (n, nj) joints the trial step stops at a limit
         for _attempt in range(20):  # damping from 1e-6 up to its cap
             for k in np.flatnonzero(pending):
                 i = rows[k]
-                cols = own[planned.chains[i]]
+                cols = [c for c in own[self.planned.chains[i]] if not self.locked[i, c]]
                 a = jacobian[i][:, cols]
-                trial[i, cols] = joints[i, cols] - a.T @ np.linalg.solve(
-                    a @ a.T + damping[i] * np.eye(a.shape[0]), residual[i]
-                )
-            new, _ = residuals(rows[pending], trial, False)
+                step = joints[i, cols] - a.T @ np.linalg.solve(a @ a.T + damping[i] * np.eye(a.shape[0]), residual[i])
+                trial[i, cols] = np.clip(step, self.lower[i, cols], self.upper[i, cols])
+                stopped[i, cols] = trial[i, cols] != step
+            new, _ = self.residuals(rows[pending], trial, False)
             better = np.zeros(len(rows), dtype=bool)
             better[pending] = np.linalg.norm(new, axis=1) < norm[pending]
             worse = pending & ~better
             improved |= better
+            self.locked[rows[better]] |= stopped[rows[better]]
             damping[rows[better]] = np.maximum(damping[rows[better]] / 3.0, 1e-12)
             damping[rows[worse]] *= 4.0
             trial[rows[worse]] = joints[rows[worse]]
             pending = worse & (damping[rows] < 1e6)
             if not np.any(pending):
                 break
-        stalled = rows[~improved]  # no step helps even heavily damped: out of reach
-        joints = trial
-        res, jac = residuals(rows, joints, True)
-        residual[rows], jacobian[rows] = res, jac
-        active[rows] = np.abs(res).max(axis=1) >= CONTACT_TOLERANCE
-        active[stalled] = False
+        return trial, improved
+
+
+def settle_true(
+    model: CalibrationModel,
+    x: FloatArray,
+    planned: Contacts,
+    stand: bool = True,
+    offsets: FloatArray | None = None,
+) -> tuple[Contacts, NDArray[np.bool_], FloatArray]:
+    """Joint angles at which each planned posture stands and touches under parameters ``x``.
+
+    The contact settles by the chain's arm and torso; the second sole by the second leg
+    (the anchor leg keeps its planned angles). A posture whose second leg cannot close
+    the floor alone (a leg too short for its stretched knee under the true robot's
+    lengths) settles again from its planned angles with both legs free: the pelvis moves,
+    as a standing robot's does. With ``stand`` false the legs keep their planned angles
+    and only the contacts settle (a route's rehearsal, whose legs follow the planned
+    trajectory). ``offsets`` (n, 3): each contact settles flush on its local plane, this
+    far (height m, roll, pitch rad) from the true table (:func:`contact_offsets`); None: on
+    the true table.
+
+    Returns:
+        The settled postures, which of them converged (n,), and their residuals (n, 3) or
+        (n, 9): the contact's (m, rad, rad), then the second sole's (m, m, m, rad, rad, rad).
+
+    """
+    settle = _TrueSettle(model, x, planned, stand, offsets)
+    scene = model.scene
+    everything = np.arange(len(planned))
+    joints, residual = settle.solve(planned.joints, everything, settle.own([scene.second_sole]))
+    retry = np.flatnonzero(np.abs(residual).max(axis=1) >= 1e-9) if settle.floor is not None else np.zeros(0, int)
+    if len(retry):  # the second leg alone cannot close the floor: both legs move (the pelvis too)
+        both = settle.own([scene.anchor_sole, scene.second_sole])
+        again, again_residual = settle.solve(planned.joints, retry, both)
+        joints[retry], residual[retry] = again[retry], again_residual[retry]
     converged = np.abs(residual).max(axis=1) < 1e-9
-    return planned.at(joints), converged
+    return planned.at(joints), converged, residual
 
 
 def perturbed_robot(
@@ -254,24 +316,52 @@ def simulate(
 
     Returns:
         The recorded contacts (settled joints, on their local planes with contact noise,
-        plus encoder noise; postures the
-        perturbed robot cannot reach are left out and logged), the model and the true
-        parameter vector (nx,).
+        plus encoder noise; a posture the perturbed robot cannot take is left out and
+        logged with why: :func:`left_out_reason`), the model and the true parameter
+        vector (nx,).
 
     Raises:
         InfeasibleError: No posture can be reached.
 
     """
     model, x = perturbed_robot(scene, planned.chains, planned.sessions, perturbation, seed, planned.kinds_by_chain())
-    settled, converged = settle_true(model, x, planned, offsets=contact_offsets(planned, perturbation, seed))
+    offsets = contact_offsets(planned, perturbation, seed)
+    settled, converged, residual = settle_true(model, x, planned, offsets=offsets)
     # a joint the true robot would have to take past its limits (a knee stretched backwards) cannot be recorded
     beyond = (settled.joints < scene.lower - LIMIT_TOLERANCE_RAD) | (settled.joints > scene.upper + LIMIT_TOLERANCE_RAD)
     converged = converged & ~beyond.any(axis=1)
     if not np.any(converged):
         raise InfeasibleError("no planned posture stands and touches the table on the perturbed robot")
     for i in np.flatnonzero(~converged):
-        LOG.warning("planned posture %d (%s) is out of reach of the perturbed robot: left out", i, planned.labels[i])
+        why = left_out_reason(scene, settled.joints[i], residual[i])
+        LOG.warning("planned posture %d (%s) left out: %s", i, planned.labels[i], why)
     settled = settled.subset(np.flatnonzero(converged))
     rng = np.random.default_rng([seed, 1])
     noisy = settled.joints + rng.normal(0.0, perturbation.encoder_noise_rad, settled.joints.shape)
     return settled.at(noisy), model, x
+
+
+def left_out_reason(scene: Scene, joints: FloatArray, residual: FloatArray) -> str:
+    """Why a posture the true robot cannot take is left out: a joint past its limit, or a closure left open.
+
+    Args:
+        scene: The robot.
+        joints: (nj,) the settled joint angles, rad.
+        residual: (3,) or (9,) what remains of the contact (m, rad, rad) and, standing, the
+            second sole's closure (m, m, m, rad, rad, rad).
+
+    Example:
+        >>> left_out_reason(scene, settled.joints[i], residual[i])
+        'the second sole stays 3.21 mm, 0.04 deg off the floor (no angles of the legs close it)'
+
+    """
+    over = np.maximum(scene.lower - LIMIT_TOLERANCE_RAD - joints, joints - scene.upper - LIMIT_TOLERANCE_RAD)
+    if np.any(over > 0.0):
+        j = int(np.argmax(over))
+        return f"joint {scene.joint_names[j]} past its limit by {over[j] + LIMIT_TOLERANCE_RAD:.4f} rad"
+    contact, floor = residual[:3], residual[3:]
+    if floor.size and np.abs(floor).max() >= np.abs(contact).max():
+        mm, deg = np.abs(floor[:3]).max() * 1e3, np.degrees(np.abs(floor[3:]).max())
+        return f"the second sole stays {mm:.2f} mm, {deg:.2f} deg off the floor (no angles of the legs close it)"
+    mm, deg = abs(contact[0]) * 1e3, np.degrees(np.abs(contact[1:]).max())
+    return f"the contact stays {mm:.2f} mm, {deg:.2f} deg off its table (out of reach of the arm and torso)"

@@ -1,11 +1,11 @@
 """A calibration folder's ``calibration.yaml`` as an object: :class:`CalibrationSummary`, its reader and writer.
 
 The document (its sections in :mod:`posegen.calibrate.calibration_file`) is written as it is
-built; the summary gives the fields a caller acts on typed (the chosen model, the
-predicted error per chain, the deliverables, the rows left out, the residual tables),
-parsed from that same document, so what ``calibrate`` returns is what a reader of the
-file finds. The document is kept whole (:attr:`CalibrationSummary.document`) for the
-viewer's sections (parameters, curves, planes).
+built; the summary gives the fields a caller acts on typed (the files written with their
+predicted and judged errors, the nominal URDF's, the interpretable model and its
+figures, the rows left out), parsed from that same document, so what ``calibrate``
+returns is what a reader of the file finds. The document is kept whole
+(:attr:`CalibrationSummary.document`) for the viewer's sections (parameters, curves, planes).
 """
 
 from __future__ import annotations
@@ -15,11 +15,13 @@ from pathlib import Path
 from typing import Any
 
 from posegen.calibrate.deliverables import DeliverableKind
-from posegen.calibrate.record import CALIBRATION_FORMAT, COMPONENTS
 from posegen.errors import InputError, reason
 from posegen.io import dump_yaml, read_yaml, write_atomic
 
-CALIBRATION_VERSION = 2
+CALIBRATION_FORMAT = "posegen-calibration"
+CALIBRATION_VERSION = 3
+COMPONENTS = ("z_mm", "roll_deg", "pitch_deg")  # residual components, as displayed
+NOMINAL_KEY = "nominal_urdf"  # the nominal URDF's entry in the deliverables section (for comparison; not written)
 
 
 @dataclass(frozen=True)
@@ -66,13 +68,41 @@ class CvFigures:
 
 
 @dataclass(frozen=True)
+class SetFigures:
+    """Some contacts' residuals as a stack loading a file sees them: their number, mean absolute and RMS."""
+
+    contacts: int
+    mean_abs: Components
+    rms: Components
+
+
+@dataclass(frozen=True)
+class FileFigures:
+    """What is known of a file's error (mm, deg), per chain: predicted by cross-validation, and judged.
+
+    ``training`` and ``held_out`` hold ``"all"`` (every chain) and each chain; judged as a
+    stack loading the file sees it (:data:`posegen.calibrate.file_judge.JUDGED_AS`).
+    """
+
+    predicted_error: dict[str, ErrorFigures]  # by chain: grouped CV
+    training: dict[str, SetFigures]  # the kept training rows
+    held_out: dict[str, SetFigures]  # empty without held-out files
+
+
+@dataclass(frozen=True)
 class DeliverableSummary:
-    """One set of files a robot loads, and its predicted held-out error."""
+    """One set of files a robot loads, its model and its figures."""
 
     kind: DeliverableKind
     files: tuple[str, ...]  # relative to the calibration folder, the URDF first
     candidate: str
-    predicted_error: dict[str, ErrorFigures]  # by chain
+    prior_scale: float
+    figures: FileFigures
+
+    @property
+    def predicted_error(self) -> dict[str, ErrorFigures]:
+        """By chain: the held-out error cross-validation predicts for these files."""
+        return self.figures.predicted_error
 
 
 @dataclass(frozen=True)
@@ -88,36 +118,32 @@ class LeftOutRow:
 
 
 @dataclass(frozen=True)
-class ResidualTable:
-    """Residuals of one set of contacts (training, or held out under a protocol), before and after."""
-
-    contacts: int
-    before: ErrorFigures
-    after: ErrorFigures
-
-
-@dataclass(frozen=True)
 class CalibrationSummary:
-    """What ``calibration.yaml`` says: the model, its predicted error, the deliverables and the rows left out.
+    """What ``calibration.yaml`` says: the files written and their errors, the interpretable model, the rows left out.
 
     Example:
         >>> summary = posegen.load("plans/calibration")  # the folder calibrate wrote
-        >>> summary.predicted_error  # per chain, by grouped cross-validation
+        >>> summary.deliverables[DeliverableKind.URDF].figures.held_out["left"].mean_abs.z_mm  # as a stack sees it
 
     """
 
     document: dict[str, Any]  # the file's content, as written
     provenance: dict[str, Any]  # config, robot model hash, seed, posegen version
-    model: ChosenModel
-    chosen: CvFigures  # the chosen model's cross-validation
+    deliverables: dict[DeliverableKind, DeliverableSummary]  # the files written, the URDF alone first
+    nominal: FileFigures  # the nominal URDF, judged alike (for comparison; not written)
+    model: ChosenModel  # the interpretable model (one-SE rule): not a file
+    model_figures: FileFigures  # its CV-predicted error, and its fit judged as the files are
+    chosen: CvFigures  # the interpretable model's cross-validation
     stability: float  # share of the fold seeds that pick the chosen pair
-    predicted_error: dict[str, ErrorFigures]  # chain -> the chosen model's CV-predicted held-out error
-    deliverables: dict[DeliverableKind, DeliverableSummary]  # the URDF alone first
     contact_noise: Components  # fitted contact noise
     warnings: tuple[str, ...]
     left_out: tuple[LeftOutRow, ...]
     rejected_rows: tuple[str, ...]  # input rows not usable, one message each
-    residuals: dict[str, ResidualTable]  # training, held_out_<protocol>
+
+    @property
+    def predicted_error(self) -> dict[str, ErrorFigures]:
+        """By chain: the interpretable model's CV-predicted held-out error (a file's: its own figures)."""
+        return self.model_figures.predicted_error
 
 
 def write_summary(path: str | Path, summary: CalibrationSummary) -> None:
@@ -146,13 +172,17 @@ def summary_from_dict(document: dict[str, Any], where: str = "calibration") -> C
     if version != CALIBRATION_VERSION or isinstance(version, bool):
         raise InputError(f"{where}: unsupported format_version {version!r} (this posegen reads {CALIBRATION_VERSION})")
     try:
-        model, selection = document["model"], document["model_selection"]
+        model, selection, files = document["model"], document["model_selection"], document["deliverables"]
         chosen = selection["chosen"]
         if not isinstance(document["provenance"], dict):
             raise TypeError("provenance must be a mapping")
         return CalibrationSummary(
             document=document,
             provenance=dict(document["provenance"]),
+            deliverables={
+                kind: _deliverable(kind, files[kind.value]) for kind in DeliverableKind if kind.value in files
+            },
+            nominal=_figures(files[NOMINAL_KEY]),
             model=ChosenModel(
                 str(model["candidate"]),
                 tuple(str(p) for p in model["fit"]),
@@ -160,6 +190,7 @@ def summary_from_dict(document: dict[str, Any], where: str = "calibration") -> C
                 tuple(str(g) for g in model["compliance"]),
                 float(model["prior_scale"]),
             ),
+            model_figures=_figures(model),
             chosen=CvFigures(
                 str(chosen["candidate"]),
                 float(chosen["prior_scale"]),
@@ -168,20 +199,10 @@ def summary_from_dict(document: dict[str, Any], where: str = "calibration") -> C
                 float(chosen["se"]),
             ),
             stability=float(selection["stability"]["share_of_seeds"]),
-            predicted_error=_by_chain(document["predicted_error"]),
-            deliverables={
-                kind: _deliverable(kind, document["deliverables"][kind.value])
-                for kind in DeliverableKind
-                if kind.value in document["deliverables"]
-            },
             contact_noise=_components(document["noise"]["contact"]),
             warnings=tuple(str(w) for w in document["warnings"]),
             left_out=tuple(_left_out(row) for row in document["left_out"]),
             rejected_rows=tuple(str(r) for r in document["rejected_rows"]),
-            residuals={
-                str(name): ResidualTable(int(t["contacts"]), _errors(t["before"]), _errors(t["after"]))
-                for name, t in dict(document["residuals"]).items()
-            },
         )
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:
         raise InputError(f"{where}: not a posegen calibration ({reason(exc)})") from exc
@@ -204,9 +225,20 @@ def _by_chain(raw: dict[str, Any]) -> dict[str, ErrorFigures]:
     return {str(chain): _errors(e) for chain, e in dict(raw).items()}
 
 
+def _sets(raw: dict[str, Any]) -> dict[str, SetFigures]:
+    return {
+        str(name): SetFigures(int(e["contacts"]), _components(e["mean_abs"]), _components(e["rms"]))
+        for name, e in dict(raw).items()
+    }
+
+
+def _figures(raw: dict[str, Any]) -> FileFigures:
+    return FileFigures(_by_chain(raw["predicted_error"]), _sets(raw["training"]), _sets(raw.get("held_out") or {}))
+
+
 def _deliverable(kind: DeliverableKind, raw: dict[str, Any]) -> DeliverableSummary:
     return DeliverableSummary(
-        kind, tuple(str(f) for f in raw["files"]), str(raw["candidate"]), _by_chain(raw["predicted_error"])
+        kind, tuple(str(f) for f in raw["files"]), str(raw["candidate"]), float(raw["prior_scale"]), _figures(raw)
     )
 
 

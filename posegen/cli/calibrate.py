@@ -6,9 +6,13 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from posegen.cli.options import DEFAULT_CONFIG, positive, positive_size, seed
 from posegen.cli.progress import ProgressBar
+
+if TYPE_CHECKING:
+    from posegen.calibrate import Calibrated
 
 NAME = "calibrate"
 HELP = "identify the kinematics from recorded contacts"
@@ -51,13 +55,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Calibrate, write the calibration folder and its HTML report, and print the before/after table."""
-    from posegen.calibrate import DeliverableKind, Settings, calibrate_files, format_table, load_line
+    """Calibrate, write the calibration folder and its HTML report, and print the files written first."""
+    from posegen.calibrate import Settings, calibrate_files
     from posegen.errors import ExtraError
     from posegen.parallel import open_backend
 
     try:
-        from posegen.view import REPORT_FILE, write_report_into
+        from posegen.view import write_report_into
     except ExtraError as exc:  # the calibration needs no viewer: only its HTML report does
         missing: ExtraError | None = exc
     else:
@@ -76,20 +80,28 @@ def run(args: argparse.Namespace) -> int:
         return write_report_into(folder, args.config, shown_as=args.output)
 
     finish = None if missing else report_html
-    with ProgressBar(args.quiet) as bar, open_backend(args.workers) as backend:
+    preload = ("posegen.calibrate.model_selection",)  # the workers' imports, while the files are read
+    with ProgressBar(args.quiet) as bar, open_backend(args.workers, preload=preload) as backend:
         calibrated = calibrate_files(
             args.measurements, args.validate, args.output, settings, config, bar, backend, finish
         )
+    _print(calibrated, args.output, missing)
+    return 0
+
+
+def _print(calibrated: Calibrated, output: str, missing: Exception | None) -> None:
+    """The files written first (each judged as a stack loading it sees it), the model, the rows, what to load."""
+    from posegen.calibrate import DeliverableKind, file_lines, format_table, load_line, model_line
+
     summary = calibrated.summary
-    chosen = summary.chosen
+    kept = calibrated.training_contacts - sum(1 for row in summary.left_out if not row.kept)
     print(
-        f"calibrate: {calibrated.training_contacts} training contacts; model {summary.model.candidate} at prior "
-        f"x{summary.model.prior_scale:g} ({chosen.free_parameters} free parameters, CV score {chosen.score} "
-        f"+- {chosen.se}; picked by {summary.stability:.0%} of the fold seeds)"
+        f"calibrate: {calibrated.training_contacts} training contacts ({kept} kept); the files written, each judged "
+        "as a stack loading it sees it (mean absolute z mm / roll deg / pitch deg):"
     )
-    for chain, error in summary.predicted_error.items():
-        z, roll, pitch = ("-" if v is None else f"{v:.2f}" for v in error.mean_abs.values())  # None: not measured
-        print(f"  predicted held-out error, {chain}: {z} mm, {roll} deg, {pitch} deg (mean absolute, grouped CV)")
+    for line in file_lines(summary):
+        print(line)
+    print(model_line(summary))
     for message in summary.rejected_rows:
         print(f"  row left out: {message}")
     for row in summary.left_out:
@@ -98,9 +110,9 @@ def run(args: argparse.Namespace) -> int:
     for warning in summary.warnings:
         print(f"  warning: {warning}")
     print(format_table(summary))
-    report_name = "no report.html" if missing else REPORT_FILE
+    report_name = "no report.html" if missing else "report.html"
     print(
-        f"-> {args.output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, offsets.yaml, residuals.csv, "
+        f"-> {output}/ (calibration.yaml, calibrated.urdf, calibrated.yaml, offsets.yaml, residuals.csv, "
         f"posterior.npz, parameters.png, residuals.png, cross_validation.png, {report_name}"
         + (", with_compliance/" if DeliverableKind.COMPENSATED in summary.deliverables else "")
         + ")"
@@ -108,7 +120,6 @@ def run(args: argparse.Namespace) -> int:
     print(load_line(summary))
     if missing:
         print(f"posegen: report.html not written: {missing}", file=sys.stderr)
-    return 0
 
 
 def _any_posegen_file(items: list[str]) -> bool:

@@ -139,6 +139,7 @@ def _planned(session: str, batch: Any) -> None:
 
 def _added(session: str, added: Any) -> None:
     """Print a batch's verdict and what comes next."""
+    from posegen.calibrate import file_lines, read_summary
     from posegen.view import write_report
 
     batch, index = added.batch, added.index
@@ -149,15 +150,19 @@ def _added(session: str, added: Any) -> None:
     if assessment.error:
         print(f"  no calibration yet: {assessment.error}")
     else:
+        folder = f"{session}/{batch.folder}/calibration"
         print(
-            f"  calibrated on {assessment.contacts} contacts; predicted held-out height error of the "
-            f"{assessment.deliverable} deliverable ({assessment.candidate}; mean abs, grouped CV as calibrate "
-            "reports):"
+            f"  calibrated on {assessment.contacts} contacts; the files written (mean absolute z mm / roll deg / "
+            "pitch deg, as calibrate reports them):"
         )
+        for line in file_lines(read_summary(f"{folder}/calibration.yaml")):
+            print(f"  {line}")
+        deliverable = f"{assessment.deliverable} deliverable ({assessment.candidate})"
+        print(f"  the session follows the {deliverable}: its predicted held-out height error against the target:")
         for chain, error in assessment.predicted_z_mm.items():
             verdict = "ok" if error <= target else "above"
             print(f"    {chain}: {error:.2f} mm ({verdict} the target {target:g} mm)")
-        write_report(f"{session}/{batch.folder}/calibration", None)
+        write_report(folder, None)
         for chain, before, after in index.stalled:
             print(
                 f"  {chain}: no gain from the last batch ({before:.2f} -> {after:.2f} mm): the "

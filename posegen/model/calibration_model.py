@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 
 import numpy as np
 
@@ -43,9 +44,19 @@ class Observations:
 
     contacts: Contacts
     torques: FloatArray  # (n, nj) N m, zero where no joint is compliant
+    _loads: dict[tuple[int, ...], FloatArray] = dataclass_field(default_factory=dict, compare=False, repr=False)
 
     def __len__(self) -> int:
         return len(self.contacts)
+
+    def load(self, joints: Sequence[int]) -> FloatArray:
+        """Mean holding torque of some joints at each posture (n,) N m (computed once per set of joints)."""
+        key = tuple(joints)
+        found = self._loads.get(key)
+        if found is None:
+            found = self.torques[:, list(key)].mean(axis=1)
+            self._loads[key] = found
+        return found
 
     def subset(self, rows: Indices) -> Observations:
         """The observations at the given row indices (copies)."""
@@ -161,7 +172,7 @@ class CalibrationModel:
         """Joint angles under gravity, q - c mean(tau) per group. Shape (n, nj)."""
         joints = observations.contacts.joints.copy()
         for k, indices in enumerate(self.compliance.values()):
-            load = observations.torques[:, indices].mean(axis=1, keepdims=True)  # (n, 1) N m
+            load = observations.load(indices)[:, None]  # (n, 1) N m
             joints[:, indices] -= x[self._compliance_start + k] * load
         return joints
 
@@ -202,10 +213,42 @@ class CalibrationModel:
                 floor_jac[rows, field, col] = -1.0
         return Evaluation(contact, pose - floor_offset, contact_jac, floor_jac)
 
+    def evaluate_batch(
+        self, xs: FloatArray, observations: Observations, floor: bool = True
+    ) -> tuple[FloatArray, FloatArray]:
+        """Residuals of F parameter vectors (F, nx) at once: contacts (F, n, 3) and floors (F, n, 6) or (F, n, 0).
+
+        The same numbers as :meth:`evaluate` of each vector (a fold's refits evaluate many at once).
+
+        Example:
+            >>> contact, floor = model.evaluate_batch(np.stack([x, y]), observations)  # contact[1]: evaluate(y).contact
+
+        """
+        sets, n = xs.shape[0], len(observations)
+        joints = None
+        if self.compliance:
+            joints = np.broadcast_to(observations.contacts.joints, (sets, *observations.contacts.joints.shape)).copy()
+            for k, indices in enumerate(self.compliance.values()):
+                load = observations.load(indices)  # (n,) N m
+                joints[:, :, indices] -= xs[:, self._compliance_start + k, None, None] * load[None, :, None]
+        thetas = xs[:, : self.contact.size]
+        contact = self.contact.residuals_batch(thetas, observations.contacts, joints)
+        if not floor or self.floor is None:
+            return contact, np.zeros((sets, n, 0))
+        measured = self.floor.measure_batch(thetas, observations.contacts.joints if joints is None else joints)
+        sessions = np.array(observations.contacts.sessions)
+        for session in set(observations.contacts.sessions):
+            rows = sessions == session
+            constants = xs[:, self.floor_columns(session)]  # (F, 3) x, y, yaw
+            measured[:, rows] -= np.stack(
+                [constants[:, 0], constants[:, 1], *np.zeros((3, sets)), constants[:, 2]], axis=1
+            )[:, None]
+        return contact, measured
+
     def _compliance_columns(self, jac: FloatArray, d_joints: FloatArray, observations: Observations) -> None:
         """Add d residual / d compliance = -(sum over the group's joints of d residual / d q_j) * mean tau."""
         for k, indices in enumerate(self.compliance.values()):
-            load = observations.torques[:, indices].mean(axis=1)  # (n,) N m
+            load = observations.load(indices)  # (n,) N m
             jac[:, :, self._compliance_start + k] = -d_joints[:, :, indices].sum(axis=2) * load[:, None]
 
 

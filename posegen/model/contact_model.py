@@ -21,7 +21,8 @@ from dataclasses import field as dataclass_field
 import numpy as np
 from numpy.typing import NDArray
 
-from posegen.model.kinematics import ChainModel, element_derivatives, joint_derivative, rigid_inverse
+from posegen.model.chain_pass import placement_stack, rigid_inverses, row_derivatives
+from posegen.model.kinematics import ChainModel
 from posegen.model.parameters import OFFSET_FIELDS, PLACEMENT_FIELDS, Group, Parameter
 from posegen.robot import DEFAULT_KIND, ContactKind, FloatArray, Indices, Scene, offset_derivatives, offset_matrix
 
@@ -85,6 +86,10 @@ def planned_kinds(scene: Scene, chains: Sequence[str]) -> tuple[ContactKind, ...
     return tuple(scene.chain(c).contact_kind for c in chains)
 
 
+Block = tuple[ChainModel, str, ContactKind, NDArray[np.intp]]  # a chain, session and kind, and its contacts' rows
+GROUPS_REMEMBERED = 256  # sets of contacts whose grouping by chain, session and kind a model remembers
+
+
 class ContactModel:
     """Measurement model of contacts of some chains at some table sessions."""
 
@@ -145,6 +150,11 @@ class ContactModel:
         for p, i in self._columns.items():
             self._blocks.setdefault((p.group, p.owner), []).append(i)
         self._nominal = np.array(nominal)
+        self._groups: dict[tuple[object, ...], list[Block]] = {}  # contacts -> their blocks
+        self._chain_columns = {  # chain -> (E, 6) columns of its elements' placements, in chain order
+            name: np.array([self.placement_columns(e.name) for e in chain.elements])
+            for name, chain in self.chains.items()
+        }
 
     @property
     def size(self) -> int:
@@ -206,6 +216,29 @@ class ContactModel:
         assert d_joints is not None
         return res, jac, d_joints
 
+    def residuals_batch(self, thetas: FloatArray, contacts: Contacts, joints: FloatArray | None = None) -> FloatArray:
+        """:meth:`residuals` of F parameter vectors (F, p) at once. Shape (F, n, 3).
+
+        ``joints`` (F, n, nj): each vector's own joint angles (a compliant model's deflection);
+        None: the contacts' joints for every vector.
+
+        Example:
+            >>> model.residuals_batch(np.stack([theta, other]), contacts)[1]  # == model.residuals(other, contacts)
+
+        """
+        sets, n = thetas.shape[0], len(contacts)
+        res = np.zeros((sets, n, 3))
+        angles = contacts.joints if joints is None else joints
+        for model, session, kind, rows in self._blocks_of(contacts):
+            product = model.products(angles[..., rows, :], thetas[:, self._chain_columns[model.chain]])  # (F, m, 4, 4)
+            tips = np.array([model.tip(c, kind) for c in thetas[:, self.tip_columns(model.chain, kind)]])  # (F, 4, 4)
+            plane = np.zeros((sets, 6))
+            plane[:, 2:5] = thetas[:, self.plane_columns(session)]  # offset_matrix(z, roll, pitch) as a placement
+            planes_inv = placement_stack(plane, derivatives=False).inverses  # (F, 4, 4)
+            frames = planes_inv[:, None] @ product @ tips[:, None]
+            res[:, rows] = kind.measure(frames.reshape(-1, 4, 4), model.config).reshape(sets, len(rows), 3)
+        return res
+
     def _evaluate(
         self, theta: FloatArray, contacts: Contacts, jacobian: bool, joints: bool
     ) -> tuple[FloatArray, FloatArray, FloatArray | None]:
@@ -213,12 +246,33 @@ class ContactModel:
         res = np.zeros((n, 3))
         jac = np.zeros((n, 3, self.size if jacobian else 0))
         d_joints = np.zeros((n, 3, contacts.joints.shape[1])) if joints else None
+        for model, session, kind, rows in self._blocks_of(contacts):
+            out = self._evaluate_block(theta, model, session, kind, contacts.joints[rows], jacobian, joints)
+            res[rows] = out[0]
+            if jacobian:
+                jac[rows] = out[1]
+            if d_joints is not None:
+                d_joints[rows] = out[2]
+        return res, jac, d_joints
+
+    def _blocks_of(self, contacts: Contacts) -> list[Block]:
+        """The contacts grouped by chain, kind and session: each group's rows (remembered: fits ask again and again).
+
+        Raises:
+            ValueError: Contacts of a chain, session or kind the model does not have.
+
+        """
+        key = (contacts.chains, contacts.sessions, contacts.kinds)
+        found = self._groups.get(key)
+        if found is not None:
+            return found
         unknown = set(contacts.chains) - set(self.chains) or set(contacts.sessions) - set(self.sessions)
         if unknown:
             raise ValueError(f"contacts of chains/sessions the model does not have: {sorted(unknown)}")
         chains = np.array(contacts.chains)
         sessions = np.array(contacts.sessions)
         kinds = np.array([k.value for k in contacts.kinds])
+        found = []
         for name, model in self.chains.items():
             for kind in sorted(set(contacts.kinds)):
                 mine = (chains == name) & (kinds == kind.value)
@@ -228,15 +282,17 @@ class ContactModel:
                     raise ValueError(f"{kind.value} contacts of chain '{name}': the model has no such contact")
                 for session in self.sessions:
                     rows = np.flatnonzero(mine & (sessions == session))
-                    if len(rows) == 0:
-                        continue
-                    out = self._evaluate_block(theta, model, session, kind, contacts.joints[rows], jacobian, joints)
-                    res[rows] = out[0]
-                    if jacobian:
-                        jac[rows] = out[1]
-                    if d_joints is not None:
-                        d_joints[rows] = out[2]
-        return res, jac, d_joints
+                    if len(rows):
+                        found.append((model, session, kind, rows))
+        if len(self._groups) >= GROUPS_REMEMBERED:
+            self._groups.clear()
+        self._groups[key] = found
+        return found
+
+    def __getstate__(self) -> dict[str, object]:
+        state = dict(self.__dict__)
+        state["_groups"] = {}  # a cache, not state: not sent to worker processes
+        return state
 
     def _evaluate_block(
         self,
@@ -248,43 +304,34 @@ class ContactModel:
         jacobian: bool,
         by_joint: bool,
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        placements = self._placements(theta, model)
         tip_columns = self.tip_columns(model.chain, kind)
         contact = theta[tip_columns]
-        elements, tip = model.transforms(joints, placements, contact, kind=kind)
+        state = model.pass_at(joints, theta[self._chain_columns[model.chain]], derivatives=jacobian)
+        tip = model.tip(contact, kind)
         plane = offset_matrix(*theta[self.plane_columns(session)])
-        plane_inv = rigid_inverse(plane)
+        plane_inv = rigid_inverses(plane)
         n = joints.shape[0]
-        prefixes = [np.broadcast_to(np.eye(4), (n, 4, 4))]
-        for t in elements:
-            prefixes.append(prefixes[-1] @ t)
-        sole_to_contact = prefixes[-1] @ tip  # (n, 4, 4)
-        frames = plane_inv @ sole_to_contact
+        frames = plane_inv @ (state.prefixes[-1] @ tip)  # (n, 4, 4) tip frames in the plane frame
         measured = kind.measure_jacobian
         res = kind.measure(frames, model.config)
         if not jacobian:
             return res, np.zeros((n, 3, 0)), np.zeros((n, 3, 0))
         jac = np.zeros((n, 3, self.size))
-        d_joints = np.zeros((n, 3, joints.shape[1])) if by_joint else None
         w = plane_inv[2]  # (4,) third row: the measurement only reads row 2 of the frame
-        suffix = np.broadcast_to(tip, (n, 4, 4))
-        for k in range(len(elements) - 1, -1, -1):
-            element = model.elements[k]
-            u = w @ prefixes[k]  # (n, 4)
-            d_e = element_derivatives(element, elements[k], placements[element.name])  # (n, 6, 4, 4)
-            d_row = np.einsum("ni,npij,njk->npk", u, d_e, suffix)  # (n, 6, 4)
-            jac[:, :, self.placement_columns(element.name)] += measured(frames[:, 2], d_row)
-            if d_joints is not None and element.joint is not None:
-                d_row = np.einsum("ni,nij,njk->nk", u, joint_derivative(element, elements[k]), suffix)[:, None]
-                d_joints[:, :, element.joint] += measured(frames[:, 2], d_row)[:, :, 0]
-            suffix = elements[k] @ suffix
+        d_place, d_joint = row_derivatives(state, plane_inv[2:3], tip)
+        jac[:, :, self._chain_columns[model.chain].ravel()] = measured(frames[:, 2], d_place[:, :, 0])
+        d_joints = None
+        if by_joint:
+            d_joints = np.zeros((n, 3, joints.shape[1]))
+            d_joints[:, :, model.joint_indices] = measured(frames[:, 2], d_joint[:, :, 0])
+        prefix_last = state.prefixes[-1]
         # contact parameters: tip = C_nom Off(contact), the kind's offset (flush: z, roll, pitch; point: x, y, z)
         offset = kind.tip_offset_derivatives(contact)  # (m, 4, 4)
-        u = w @ prefixes[-1]  # (n, 4)
-        d_row = np.einsum("ni,pij->npj", u, model.tip_nominal(kind) @ offset)
+        u = w @ prefix_last  # (n, 4)
+        d_row = np.swapaxes(u @ (model.tip_nominal(kind) @ offset), 0, 1)  # (n, m, 4)
         jac[:, :, tip_columns] += measured(frames[:, 2], d_row)
         # plane: frames = P^-1 T -> d frames = -P^-1 dP frames
         d_plane = offset_derivatives(theta[self.plane_columns(session)])
-        d_row = -np.einsum("i,pij,njk->npk", w, d_plane, frames)
+        d_row = -((w @ d_plane)[None] @ frames)  # (n, 3, 4)
         jac[:, :, self.plane_columns(session)] += measured(frames[:, 2], d_row)
         return res, jac, (d_joints if d_joints is not None else np.zeros((n, 3, 0)))

@@ -15,14 +15,9 @@ from __future__ import annotations
 import numpy as np
 
 from posegen.errors import InfeasibleError
+from posegen.model.chain_pass import ChainPass, rigid_inverses, row_derivatives
 from posegen.model.contact_model import ContactModel
-from posegen.model.kinematics import (
-    ChainModel,
-    Element,
-    element_derivatives,
-    joint_derivative,
-    rigid_inverse,
-)
+from posegen.model.kinematics import ChainModel
 from posegen.robot import FloatArray, tilt_measurement, tilt_measurement_jacobian
 
 FLOOR_FIELDS = ("x", "y", "z", "roll", "pitch", "yaw")  # m, m, m, rad, rad, rad
@@ -48,26 +43,25 @@ class FloorModel:
                 f"the floor equations need a chain from each sole; no chain starts at {', '.join(missing)}"
             )
         self.legs: tuple[ChainModel, ChainModel] = (by_sole[soles[0]], by_sole[soles[1]])
+        self._columns = {  # leg -> (E, 6) columns of its elements' placements, sole to root
+            leg.chain: np.array([contacts.placement_columns(e.name) for e in leg.elements if e.reverse])
+            for leg in self.legs
+        }
 
-    def _leg(
-        self, chain: ChainModel, theta: FloatArray, joints: FloatArray
-    ) -> tuple[list[tuple[Element, FloatArray, FloatArray]], list[FloatArray], list[FloatArray]]:
-        """The leg's elements with their transforms and parameters, prefix and suffix products."""
-        placements = {e.name: theta[self.contacts.placement_columns(e.name)] for e in chain.elements if e.reverse}
-        transforms, _ = chain.transforms(joints, placements, np.zeros(3), legs_only=True)
-        items = [(e, t, placements[e.name]) for e, t in zip(chain.elements, transforms, strict=False)]
-        n = joints.shape[0]
-        prefixes: list[FloatArray] = [np.broadcast_to(np.eye(4), (n, 4, 4))]
-        for _, t, _ in items:
-            prefixes.append(prefixes[-1] @ t)
-        suffixes: list[FloatArray] = [np.broadcast_to(np.eye(4), (n, 4, 4))]
-        for _, t, _ in reversed(items):
-            suffixes.append(t @ suffixes[-1])
-        return items, prefixes, suffixes[::-1]  # suffixes[k]: product of items k..end
+    def _leg(self, chain: ChainModel, theta: FloatArray, joints: FloatArray, jacobian: bool) -> ChainPass:
+        """The leg's elements from its sole up to the root, at n postures."""
+        params = theta[self._columns[chain.chain]]  # (E, 6)
+        return chain.pass_at(joints, params, legs_only=True, derivatives=jacobian)
 
     def measure(self, theta: FloatArray, joints: FloatArray) -> FloatArray:
         """x, y, z (m), roll, pitch, yaw (rad) of the second sole in the first sole's frame. Shape (n, 6)."""
         return self._evaluate(theta, joints, jacobian=False)[0]
+
+    def measure_batch(self, thetas: FloatArray, joints: FloatArray) -> FloatArray:
+        """:meth:`measure` of F parameter vectors (F, p) at joints (n, nj), or each one's own (F, n, nj). (F, n, 6)."""
+        first, second = (leg.products(joints, thetas[:, self._columns[leg.chain]], legs_only=True) for leg in self.legs)
+        frames = first @ rigid_inverses(second)  # (F, n, 4, 4) second sole in the first
+        return _pose_measurement(frames.reshape(-1, 4, 4)).reshape(*frames.shape[:2], 6)
 
     def derivatives(self, theta: FloatArray, joints: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The measurement (n, 6), its derivatives w.r.t. the parameters (n, 6, p) and the joints (n, 6, nj)."""
@@ -76,9 +70,9 @@ class FloorModel:
     def _evaluate(
         self, theta: FloatArray, joints: FloatArray, jacobian: bool
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        first, second = (self._leg(chain, theta, joints) for chain in self.legs)
-        up, down = first[1][-1], second[1][-1]  # root in each sole frame
-        down_inv = rigid_inverse(down)
+        first, second = (self._leg(chain, theta, joints, jacobian) for chain in self.legs)
+        up, down = first.prefixes[-1], second.prefixes[-1]  # root in each sole frame
+        down_inv = rigid_inverses(down)
         frames = up @ down_inv  # (n, 4, 4) second sole in the first
         meas = _pose_measurement(frames)
         n = joints.shape[0]
@@ -88,16 +82,11 @@ class FloorModel:
         d_frames = np.zeros((n, p, 4, 4))
         d_joint_frames = np.zeros((n, nj, 4, 4))
         # F = U D^-1: an element of the first leg gives dF = P dE S D^-1, one of the second -F P dE S D^-1
-        for (items, prefixes, suffixes), first_leg in ((first, True), (second, False)):
-            for k, (element, transform, params) in enumerate(items):
-                left = prefixes[k] if first_leg else frames @ prefixes[k]
-                sign = 1.0 if first_leg else -1.0
-                right = suffixes[k + 1] @ down_inv
-                d_e = element_derivatives(element, transform, params)  # (n, 6, 4, 4)
-                cols = self.contacts.placement_columns(element.name)
-                d_frames[:, cols] += sign * (left[:, None] @ d_e @ right[:, None])
-                if element.joint is not None:
-                    d_joint_frames[:, element.joint] += sign * (left @ joint_derivative(element, transform) @ right)
+        for chain, state, rows in ((self.legs[0], first, np.eye(4)[:3]), (self.legs[1], second, -frames[:, :3])):
+            d_place, d_joint = row_derivatives(state, rows, down_inv)  # rows 0-2 of dF: the measurement reads them
+            d_frames[:, self._columns[chain.chain].ravel(), :3] += d_place
+            leg_joints = [e.joint for e in chain.elements[: len(state.transforms)] if e.joint is not None]
+            d_joint_frames[:, leg_joints, :3] += d_joint
         return meas, _pose_measurement_jacobian(frames, d_frames), _pose_measurement_jacobian(frames, d_joint_frames)
 
 

@@ -24,13 +24,12 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.errors import ConfigError
+from posegen.model.chain_pass import ChainPass, chain_pass, joint_rotations, placement_stack, rigid_inverses
 from posegen.robot import (
     DEFAULT_KIND,
     ContactKind,
     FloatArray,
     Scene,
-    placement_derivatives,
-    placement_matrix,
     registered_kinds,
 )
 
@@ -99,7 +98,12 @@ class ChainModel:
         known = dict.fromkeys((*registered_kinds(), *kinds))
         self._tips = {kind: kind.nominal_tip(scene, cfg) for kind in known}  # kind -> (4, 4) in the gripper, or None
         self.placement_names = tuple(e.name for e in elements)
+        self._reverse = np.array([e.reverse for e in elements])
+        self._joint = np.array([-1 if e.joint is None else e.joint for e in elements])
+        self._axes = np.array([np.zeros(3) if e.axis is None else e.axis for e in elements])
+        self._legs = int(np.argmin(self._reverse)) if not self._reverse.all() else len(elements)  # sole .. root
         self._rotation_cache: dict[tuple[int, bytes], FloatArray] = {}
+        self._rotation_bytes = 0  # held by the cache
 
     @property
     def joint_indices(self) -> list[int]:
@@ -150,19 +154,94 @@ class ChainModel:
             A list of (n, 4, 4) element transforms and the (4, 4) gripper-to-tip transform.
 
         """
-        n = joints.shape[0]
-        out = []
-        for k, e in enumerate(self.elements):
-            if legs_only and not e.reverse:
-                break
-            m = placement_matrix(placements[e.name])
-            if e.axis is None:
-                t = np.broadcast_to(rigid_inverse(m) if e.reverse else m, (n, 4, 4))
+        count = self._legs if legs_only else len(self.elements)
+        params = np.array([placements[e.name] for e in self.elements[:count]])
+        state = self.pass_at(joints, params, legs_only, derivatives=False)
+        return list(state.transforms), np.eye(4) if legs_only else self.tip(contact, kind)
+
+    def pass_at(
+        self, joints: FloatArray, params: FloatArray, legs_only: bool = False, derivatives: bool = True
+    ) -> ChainPass:
+        """The chain's elements at n postures in one pass (:mod:`posegen.model.chain_pass`).
+
+        Args:
+            joints: (n, nj) joint angles, rad.
+            params: (E, 6) placement parameters of the elements, in chain order (the first
+                E: the legs' elements alone with ``legs_only``).
+            legs_only: Only the elements from the sole up to the root.
+            derivatives: Whether the placements' derivatives are needed.
+
+        Example:
+            >>> state = chain.pass_at(joints, params)
+            >>> frames = state.prefixes[-1] @ chain.tip(contact)  # (n, 4, 4) tip frames in the sole frame
+
+        """
+        count = self._legs if legs_only else len(self.elements)
+        stack = placement_stack(params[:count], derivatives)
+        rotations = self._rotation_stack(joints, count)
+        return chain_pass(stack, rotations, self._reverse[:count], self._joint[:count], self._axes[:count])
+
+    def products(self, joints: FloatArray, params: FloatArray, legs_only: bool = False) -> FloatArray:
+        """The chain's product ``T_0 ... T_{E-1}`` for F parameter sets at n postures each. Shape (F, n, 4, 4).
+
+        Args:
+            joints: (n, nj) joint angles shared by the F sets, or (F, n, nj) each set's own, rad.
+            params: (F, E, 6) each set's placement parameters, in chain order.
+            legs_only: Only the elements from the sole up to the root.
+
+        Example:
+            >>> frames = chain.products(joints, params)[:, :, :, :] @ tip  # (F, n, 4, 4)
+
+        """
+        count = self._legs if legs_only else len(self.elements)
+        sets = params.shape[0]
+        matrices = placement_stack(params[:, :count].reshape(-1, 6), derivatives=False).matrices
+        matrices = matrices.reshape(sets, count, 4, 4).transpose(1, 0, 2, 3)[:, :, None]  # (E, F, 1, 4, 4)
+        shared = joints if joints.ndim == 2 else joints[0]
+        rotations = self._rotation_stack(shared, count)  # (E, n, 4, 4)
+        varying = set() if joints.ndim == 2 else set(np.flatnonzero(np.any(joints != shared, axis=(0, 1))))
+        total: FloatArray | None = None
+        for k in range(count):
+            joint = int(self._joint[k])
+            if joint in varying:  # this joint's angle is each set's own (a compliant joint's deflection)
+                t = matrices[k] @ joint_rotations(self._axes[k : k + 1], joints[:, :, joint].reshape(-1, 1))[0].reshape(
+                    sets, -1, 4, 4
+                )
+            elif joint < 0:
+                t = matrices[k]  # a fixed placement: (F, 1, 4, 4), broadcast over the postures
             else:
-                rot = self._rotations(k, e.axis, joints[:, e.joint])  # (n, 4, 4)
-                t = rigid_inverse(m @ rot) if e.reverse else m @ rot
-            out.append(t)
-        return out, np.eye(4) if legs_only else self.tip(contact, kind)
+                t = matrices[k] @ rotations[k]  # (F, n, 4, 4)
+            if self._reverse[k]:
+                t = rigid_inverses(t)
+            total = t if total is None else total @ t
+        assert total is not None, "a chain has elements"
+        return np.broadcast_to(total, (sets, len(shared), 4, 4))
+
+    def _rotation_stack(self, joints: FloatArray, count: int) -> FloatArray:
+        """:meth:`_rotations_at`, remembered (fits evaluate the same angles often). Shape (E, n, 4, 4).
+
+        The arrays returned are read-only: they are shared by every caller with the same angles.
+        """
+        moving = self._joint[:count] >= 0
+        key = (count, np.ascontiguousarray(joints[:, self._joint[:count][moving]]).tobytes())
+        found = self._rotation_cache.get(key)
+        if found is None:
+            found = self._rotations_at(joints, count)
+            if self._rotation_bytes + found.nbytes > ROTATION_CACHE_BYTES:
+                self._rotation_cache.clear()
+                self._rotation_bytes = 0
+            self._rotation_bytes += found.nbytes
+            found.flags.writeable = False
+            self._rotation_cache[key] = found
+        return found
+
+    def _rotations_at(self, joints: FloatArray, count: int) -> FloatArray:
+        """Joint rotations of the first ``count`` elements at (n, nj) joints; identity for a fixed one. (E, n, 4, 4)."""
+        moving = np.flatnonzero(self._joint[:count] >= 0)
+        found = np.zeros((count, len(joints), 4, 4))
+        found[:] = np.eye(4)
+        found[moving] = joint_rotations(self._axes[moving], joints[:, self._joint[moving]])
+        return found
 
     def sole_to_contact(
         self,
@@ -172,30 +251,12 @@ class ChainModel:
         kind: ContactKind = DEFAULT_KIND,
     ) -> FloatArray:
         """Contact (flush) or point frame, at its offset, in the sole frame. Shape (n, 4, 4)."""
-        elements, tip = self.transforms(joints, placements, contact, kind=kind)
-        total = elements[0]
-        for t in elements[1:]:
-            total = total @ t
-        return np.asarray(total @ tip)
-
-    def _rotations(self, element: int, axis: FloatArray, angles: FloatArray) -> FloatArray:
-        """:func:`_rotations` of an element's joint angles, remembered (fits evaluate the same angles often).
-
-        The arrays returned are read-only: they are shared by every caller with the same angles.
-        """
-        key = (element, np.ascontiguousarray(angles).tobytes())
-        found = self._rotation_cache.get(key)
-        if found is None:
-            if len(self._rotation_cache) >= ROTATION_CACHE_SIZE:
-                self._rotation_cache.clear()
-            found = _rotations(axis, angles)
-            found.flags.writeable = False
-            self._rotation_cache[key] = found
-        return found
+        params = np.array([placements[e.name] for e in self.elements])
+        return np.asarray(self.pass_at(joints, params, derivatives=False).prefixes[-1] @ self.tip(contact, kind))
 
     def __getstate__(self) -> dict[str, object]:
         state = dict(self.__dict__)
-        state["_rotation_cache"] = {}  # a cache, not state: not sent to worker processes
+        state["_rotation_cache"], state["_rotation_bytes"] = {}, 0  # a cache, not state: not sent to workers
         return state
 
     def nominal_placements(self) -> dict[str, FloatArray]:
@@ -203,65 +264,7 @@ class ChainModel:
         return {e.name: e.nominal.copy() for e in self.elements}
 
 
-def rigid_inverse(transforms: FloatArray) -> FloatArray:
-    """Inverse of rigid transforms (..., 4, 4): [R p]^-1 = [R^T -R^T p]."""
-    out = np.zeros_like(transforms)
-    rot_t = np.swapaxes(transforms[..., :3, :3], -1, -2)
-    out[..., :3, :3] = rot_t
-    out[..., :3, 3] = -np.einsum("...ij,...j->...i", rot_t, transforms[..., :3, 3])
-    out[..., 3, 3] = 1.0
-    return out
-
-
-def element_derivatives(element: Element, transforms: FloatArray, params: FloatArray) -> FloatArray:
-    """Derivatives of an element's transforms w.r.t. its six placement parameters.
-
-    Args:
-        element: The element.
-        transforms: (n, 4, 4) its transforms at ``params`` (from :meth:`ChainModel.transforms`).
-        params: (6,) its placement parameters.
-
-    Returns:
-        (n, 6, 4, 4) derivatives.
-
-    """
-    n = transforms.shape[0]
-    m = placement_matrix(params)
-    d_m = placement_derivatives(params)  # (6, 4, 4)
-    if element.axis is None:
-        if element.reverse:  # E = M^-1 -> dE = -M^-1 dM M^-1
-            m_inv = rigid_inverse(m)
-            return np.broadcast_to(-m_inv @ d_m @ m_inv, (n, 6, 4, 4))
-        return np.broadcast_to(d_m, (n, 6, 4, 4))
-    if element.reverse:  # E = (M R)^-1 -> dE = -E dM M^-1
-        return np.asarray(-transforms[:, None] @ (d_m @ rigid_inverse(m))[None])
-    return np.asarray(d_m[None] @ (rigid_inverse(m) @ transforms)[:, None])  # E = M R -> dE = dM R
-
-
-def joint_derivative(element: Element, transforms: FloatArray) -> FloatArray:
-    """Derivative of a joint element's transforms w.r.t. its joint angle. Shape (n, 4, 4).
-
-    E = M R(q) gives dE/dq = E K; traversed in reverse, E = R(-q) M^-1 gives -K E, with K
-    the (4, 4) generator of rotations about the joint axis.
-    """
-    assert element.axis is not None, "a fixed placement has no joint angle"
-    generator = np.zeros((4, 4))
-    generator[:3, :3] = pin.skew(element.axis)
-    return np.asarray(-generator @ transforms if element.reverse else transforms @ generator)
-
-
-ROTATION_CACHE_SIZE = 8192  # joint rotations a chain model remembers (~40 MB at most for 40 postures)
-
-
-def _rotations(axis: FloatArray, angles: FloatArray) -> FloatArray:
-    """Homogeneous rotations about ``axis`` by each angle. Shape (n, 4, 4)."""
-    k = np.asarray(pin.skew(axis))
-    s = np.sin(angles)[:, None, None]
-    c = np.cos(angles)[:, None, None]
-    out = np.zeros((len(angles), 4, 4))
-    out[:, :3, :3] = np.eye(3) + s * k + (1 - c) * (k @ k)
-    out[:, 3, 3] = 1.0
-    return out
+ROTATION_CACHE_BYTES = 64 * 2**20  # rotation stacks a chain model remembers, at most
 
 
 def _ancestors(model: pin.Model, joint: int) -> list[int]:

@@ -19,12 +19,14 @@ from posegen.extras import Extra, require
 from posegen.parallel.backend import Backend, Job, ProcessBackend, job_name
 
 
-def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:
+def open_backend(workers: int = 1, scheduler: str | None = None, preload: tuple[str, ...] = ()) -> Backend:
     """The backend a command asked for.
 
     Args:
         workers: Local worker processes (ignored with ``scheduler``).
         scheduler: Address of a Dask scheduler (``tcp://host:8786``); None: local processes.
+        preload: Modules the local workers will need, imported while the command still
+            reads its inputs (:class:`ProcessBackend`).
 
     Raises:
         BackendError: The scheduler cannot be reached, has no worker, or a worker runs
@@ -33,7 +35,7 @@ def open_backend(workers: int = 1, scheduler: str | None = None) -> Backend:
 
     """
     if scheduler is None:
-        return ProcessBackend(workers)
+        return ProcessBackend(workers, preload)
     require(Extra.DASK, "scheduler (a Dask cluster)")
     from posegen.parallel.cluster import DaskBackend
 

@@ -214,6 +214,9 @@ def _greedy(
     return chosen, gains, covariance
 
 
+CALIBRATION_VERSION = 3  # of the calibration.yaml read here (posegen.calibrate writes it)
+
+
 def read_calibration_model(path: str, scene: Scene) -> tuple[CandidateConfig, float, tuple[float, ...], str]:
     """The model, prior scale, contact noise (m, rad, rad) and weakest chain a ``calibration.yaml`` records.
 
@@ -225,6 +228,11 @@ def read_calibration_model(path: str, scene: Scene) -> tuple[CandidateConfig, fl
 
     """
     report = read_yaml(path, "posegen-calibration")
+    if report.get("format_version") != CALIBRATION_VERSION:
+        raise InputError(
+            f"{path}: calibration format_version {report.get('format_version')!r}; this posegen reads "
+            f"{CALIBRATION_VERSION} (calibrate again)"
+        )
     try:
         model = report["model"]
         candidate = parse_candidate(
@@ -236,7 +244,7 @@ def read_calibration_model(path: str, scene: Scene) -> tuple[CandidateConfig, fl
         scale = float(model["prior_scale"])
         shown = report["noise"]["contact"]
         noise = (float(shown["z_mm"]) * 1e-3, math.radians(shown["roll_deg"]), math.radians(shown["pitch_deg"]))
-        predicted = report["predicted_error"]
+        predicted = model["predicted_error"]  # the interpretable model's, by chain
         weakest = str(max(sorted(predicted), key=lambda c: float(predicted[c]["mean_abs"]["z_mm"])))
     except (KeyError, TypeError, ValueError, AttributeError, IndexError, OverflowError) as exc:
         raise InputError(f"{path}: not a posegen calibration ({reason(exc)})") from exc

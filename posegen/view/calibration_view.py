@@ -1,9 +1,10 @@
 """The view of a calibration: nominal and calibrated robot overlaid, residuals as arrows.
 
-At each contact the nominal robot (grey ghost) and the calibrated one (solid) stand at
-the recorded joint angles. Every contact's height residual is an arrow from the table
-top along its normal, magnified ``ARROW_GAIN`` times: grey before calibration, and
-after it green within one noise sigma, amber within three, red beyond. One step per
+At each contact the nominal robot (grey ghost) and the calibrated one (``calibrated.urdf``,
+solid) stand at the recorded joint angles. Every contact's height residual is an arrow
+from the table top along its normal, magnified ``ARROW_GAIN`` times: grey under the
+nominal URDF, and under calibrated.urdf (each as a stack loading it sees it) green within
+one noise sigma, amber within three, red beyond. One step per
 contact (training, then outliers, then held-out); the live viewer adds a contact
 slider, toggles for the arrows and the parameter table.
 """

@@ -1,6 +1,7 @@
 """The calibration report's figures, as PNG images inlined in the page (base64).
 
-Residuals before and after per contact (training and held-out), their distribution,
+Residuals per contact (training and held-out) under the nominal URDF and calibrated.urdf,
+each as a stack loading it sees them, their distribution,
 the singular values of the base regressor, and the posterior correlation matrix.
 """
 
@@ -47,8 +48,8 @@ def residual_figure(contacts: Sequence[ContactResidual]) -> str:
     colours = [SET_COLOURS[c.set] for c in contacts]
     for k in range(3):
         both, alone = axes[k]
-        both.scatter(x, before[:, k], s=9, color="0.6", label="before (nominal model)")
-        both.scatter(x, after[:, k], s=9, color=colours, label="after")
+        both.scatter(x, before[:, k], s=9, color="0.6", label="nominal URDF")
+        both.scatter(x, after[:, k], s=9, color=colours, label="calibrated.urdf")
         alone.scatter(x, after[:, k], s=9, color=colours)
         both.set_ylabel(COMPONENTS[k])
         for ax in (both, alone):
@@ -59,8 +60,8 @@ def residual_figure(contacts: Sequence[ContactResidual]) -> str:
                 if rows:
                     ax.axvspan(rows[0] - 0.5, rows[-1] + 0.5, color=SET_COLOURS[contact_set], alpha=0.06)
     axes[0][0].legend(loc="lower right", fontsize=8)
-    axes[0][0].set_title("before and after calibration")
-    axes[0][1].set_title("after calibration (its own scale)")
+    axes[0][0].set_title("nominal URDF and calibrated.urdf (as a stack loading each sees it)")
+    axes[0][1].set_title("calibrated.urdf (its own scale)")
     labels = ", ".join(f"{s.value.replace('_', '-')} ({SET_COLOURS[s].removeprefix('tab:')})" for s in ContactSet)
     for ax in axes[-1]:
         ax.set_xlabel("contact: " + labels if ax is axes[-1][0] else "contact")
@@ -69,7 +70,7 @@ def residual_figure(contacts: Sequence[ContactResidual]) -> str:
 
 
 def distribution_figure(contacts: Sequence[ContactResidual]) -> str:
-    """Histograms of |residual| after calibration, training against held-out (NaN: not measured, not drawn)."""
+    """Histograms of |residual| under calibrated.urdf, training against held-out (NaN: not measured, not drawn)."""
     plt = _pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(11, 3))
     for k, ax in enumerate(axes):

@@ -64,12 +64,18 @@ def _summary(report: dict[str, Any], artefact: CalibrationArtefact) -> str:
     model = report.get("model") or {}
     noise = (report.get("noise") or {}).get("contact") or {}
     base = report.get("base_parameters") or {}
-    predicted = report.get("predicted_error") or {}
     rows = [
         ("chains", ", ".join(report.get("chains") or [])),
         ("table sessions", ", ".join(report.get("sessions") or [])),
         ("contacts: training / left out / held-out", " / ".join(str(counts[s]) for s in ContactSet)),
-        ("model (chosen by cross-validation)", f"{model.get('candidate')}, prior x{model.get('prior_scale')}"),
+        (
+            "interpretable model (one-standard-error rule; not a file)",
+            f"{model.get('candidate')}, prior x{model.get('prior_scale')}",
+        ),
+        *(
+            (f"its predicted held-out error, {chain} (grouped CV)", _components(error.get("mean_abs") or {}))
+            for chain, error in (model.get("predicted_error") or {}).items()
+        ),
         (
             "base parameters, contacts (and floor equations), of all",
             f"{base.get('contacts')} ({base.get('contacts_and_floor')}) of {base.get('parameters')}",
@@ -78,10 +84,6 @@ def _summary(report: dict[str, Any], artefact: CalibrationArtefact) -> str:
             "contact noise (estimated)",
             f"{noise.get('z_mm')} mm, {noise.get('roll_deg')} deg, {noise.get('pitch_deg')} deg",
         ),
-        *(
-            (f"predicted held-out error, {chain} (grouped CV)", _components(error.get("mean_abs") or {}))
-            for chain, error in predicted.items()
-        ),
         ("robot model sha256", str(prov.get("robot_model_sha256", ""))[:16] + "..."),
         ("posegen", prov.get("posegen_version", "")),
     ]
@@ -89,29 +91,35 @@ def _summary(report: dict[str, Any], artefact: CalibrationArtefact) -> str:
     return table(("", "value"), rows, names=2) + warnings
 
 
+FILES = (("urdf", "calibrated.urdf"), ("compensated", "with_compliance/"), ("nominal_urdf", "nominal URDF"))
+
+
 def _deliverables(report: dict[str, Any]) -> str:
-    """What to load for which stack, each file's model and its predicted (and held-out) error."""
+    """What to load for which stack: each file's model, its predicted error and its error as a stack sees it."""
     section = report.get("deliverables") or {}
     rows = []
-    for kind in ("urdf", "compensated", "nominal_urdf"):
-        entry = section.get(kind)
+    for key, _ in FILES:
+        entry = section.get(key)
         if not isinstance(entry, dict):
             continue
         files = ", ".join(entry.get("files") or ["the URDF as it is (not written)"])
         model = f"{entry.get('candidate', 'nominal URDF')}, prior x{entry.get('prior_scale', '-')}"
         head = (files, entry.get("load_with", "for comparison"), model)
         for chain, error in (entry.get("predicted_error") or {}).items():
-            rows.append((*head, f"{chain}: CV predicted", _components(error.get("mean_abs") or {})))
-        held = (entry.get("held_out_training_plane") or {}).get("all")
-        if held:
-            rows.append((*head, f"held-out ({held.get('contacts')} contacts)", _components(held.get("mean_abs") or {})))
-    note = f'<p class="muted">{_e(section.get("rule", ""))}; mean absolute errors, plane from training</p>'
-    return table(("files", "load with", "model", "error", "height / roll / pitch"), rows, names=3) + note
+            rows.append((*head, f"{chain}: predicted held-out (grouped CV)", _components(error.get("mean_abs") or {})))
+        for chain, error in (entry.get("held_out") or {}).items():
+            if chain != "all":
+                label = f"{chain}: held-out, {error.get('contacts')} contacts"
+                rows.append((*head, label, _components(error.get("mean_abs") or {})))
+    note = f'<p class="muted">{_e(section.get("rule", ""))}. Judged {_e(section.get("judged", ""))}.</p>'
+    return table(("files", "load with", "model", "error", "height / roll / pitch"), rows, names=4) + note
 
 
 def _components(values: dict[str, Any]) -> str:
     shown = (values.get(c, "") for c in COMPONENTS)
-    return " / ".join("-" if v is None else f"{v}" for v in shown) + " (mm / deg / deg)"
+    return " / ".join("-" if v is None else f"{v:.2f}" if isinstance(v, float) else f"{v}" for v in shown) + (
+        " (mm / deg / deg)"
+    )
 
 
 def _number(value: float | None) -> str:
@@ -120,14 +128,19 @@ def _number(value: float | None) -> str:
 
 
 def _residual_tables(report: dict[str, Any]) -> str:
+    """Every file's errors as a stack loading it sees them, per set and chain (and the interpretable model's)."""
+    section = report.get("deliverables") or {}
+    entries = [(name, section.get(key)) for key, name in FILES]
+    entries.append(("interpretable model (not a file)", report.get("model")))
     rows = []
-    for key, result in (report.get("residuals") or {}).items():
-        for model in ("before", "after"):
-            mean, rms = result[model]["mean_abs"], result[model]["rms"]
-            shown = (f"{_number(mean[c])} / {_number(rms[c])}" for c in COMPONENTS)
-            rows.append((key.replace("_", " "), model, result.get("contacts", ""), *shown))
-    header = ("set", "model", "contacts", "height (mm)", "roll (deg)", "pitch (deg)")
-    return table(header, rows, names=2) + '<p class="muted">mean absolute / RMS</p>'
+    for label, key in (("training", "training"), ("held-out", "held_out")):
+        for name, entry in entries:
+            for chain, result in ((entry or {}).get(key) or {}).items() if isinstance(entry, dict) else ():
+                mean, rms = result["mean_abs"], result["rms"]
+                shown = (f"{_number(mean[c])} / {_number(rms[c])}" for c in COMPONENTS)
+                rows.append((label, chain, name, result.get("contacts", ""), *shown))
+    header = ("set", "chain", "file", "contacts", "height (mm)", "roll (deg)", "pitch (deg)")
+    return table(header, rows, names=3) + '<p class="muted">mean absolute / RMS</p>'
 
 
 def _cross_validation(report: dict[str, Any]) -> str:
@@ -203,21 +216,22 @@ def report_html(artefact: CalibrationArtefact, shown_as: Path | None = None) -> 
     contacts = artefact.record.contacts
     view = html_page(artefact).html
     sections = [
+        ("What to load: the files written", _deliverables(report)),
         ("Summary", _summary(report, artefact)),
-        ("What to load: the deliverables", _deliverables(report)),
-        ("Residuals before and after calibration", _residual_tables(report)),
+        ("Every file's errors, as a stack loading it sees them", _residual_tables(report)),
         (
             "Every contact",
             f'<img src="{residual_figure(contacts)}" alt="residuals per contact">'
             f'<img src="{distribution_figure(contacts)}" alt="residual distributions">',
         ),
         ("Model selection: repeated grouped cross-validation", _cross_validation(report)),
-        ("Identified parameters", _parameters(report)),
+        ("The interpretable model's parameters", _parameters(report)),
         ("Conditioning and correlation of the regressor", _conditioning(artefact)),
         ("Rows left out", _outliers(report)),
         (
             "3D: nominal (grey) and calibrated (blue) robot at each contact",
-            "<p>Arrows: height residual at each contact, 20x magnified; grey before, after coloured by "
+            "<p>Arrows: height residual at each contact, 20x magnified; grey under the nominal URDF, under "
+            "calibrated.urdf coloured by "
             "noise sigmas (green within 1, amber within 3, red beyond). The playback time is the contact "
             "number.</p>"
             f'<iframe title="3D view" srcdoc="{html.escape(view, quote=True)}"></iframe>',

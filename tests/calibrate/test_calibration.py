@@ -60,7 +60,7 @@ def truth(scene, example_pool):
             delta[i] = (1e-3 if d.kind == Kind.CONTACT_HEIGHT else np.deg2rad(0.2)) * rng.normal()
     rigid = Perturbation(length_m=0.0, angle_rad=0.0, compliance_rad_per_nm=COMPLIANCE)
     x = true_parameters(model, rigid, seed=21) + model.basis @ delta
-    recorded, converged = settle_true(model, x, planned(example_pool, list(range(80))))
+    recorded, converged, _ = settle_true(model, x, planned(example_pool, list(range(80))))
     recorded = recorded.subset(np.flatnonzero(converged))
     return model, x, recorded.subset(range(60)), recorded.subset(range(60, len(recorded)))
 

@@ -7,8 +7,9 @@ import pytest
 
 from posegen.calibrate import Noise, Perturbation, calibrate, estimate, held_out_residuals, simulate
 from posegen.calibrate.calibration import check_enough
-from posegen.calibrate.calibration_file import residual_tables
+from posegen.calibrate.deliverable_files import judged_figures
 from posegen.calibrate.estimation import held_at_urdf
+from posegen.calibrate.file_judge import judge
 from posegen.calibrate.scoring import column_stats, fold_loss
 from posegen.calibrate.screening import chi_thresholds, row_dof
 from posegen.calibrate.simulation import settle_true, true_parameters
@@ -59,7 +60,7 @@ def point_truth(point_scene, example_pool):
             delta[i] = 1.5e-3 * rng.normal()
     rigid = Perturbation(length_m=0.0, angle_rad=0.0)
     x = true_parameters(model, rigid, seed=8) + model.basis @ delta
-    recorded, converged = settle_true(model, x, contacts)
+    recorded, converged, _ = settle_true(model, x, contacts)
     recorded = recorded.subset(np.flatnonzero(converged))
     assert len(recorded) >= 100
     return model, x, recorded.subset(range(80)), recorded.subset(range(80, len(recorded)))
@@ -127,8 +128,9 @@ def test_a_mixed_chain_calibrates_and_reports_what_each_kind_measures(mixed):
     for name in ("before", "after"):
         assert np.all(residuals[name][points, 1:] == 0.0)
     assert np.abs(residuals["after"][:, 0]).mean() < 0.2 * np.abs(residuals["before"][:, 0]).mean()
-    tables = residual_tables(calibration, test.subset(np.flatnonzero(points)))
-    only_points = tables["held_out_training_plane"]["after"]["mean_abs"]
+    scene = calibration.model.scene
+    judged = judge(scene, calibration.train, calibration.kept, test.subset(np.flatnonzero(points)))
+    only_points = judged_figures(judged.held_out, test.subset(np.flatnonzero(points)))["all"]["mean_abs"]
     assert only_points["roll_deg"] is None and only_points["z_mm"] is not None  # no roll measured, none reported
     assert calibration.after.noise.contact[1] < DEFAULT_NOISE[1]  # roll noise estimated from the flush rows
 

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from posegen.calibrate import ContactSet, held_out_residuals, read_calibration
+from posegen.calibrate import ContactSet, judge, read_calibration
 from posegen.errors import InputError
+from posegen.robot import Scene, load_config
 
 
 @pytest.fixture(scope="module")
@@ -20,14 +21,14 @@ def test_every_contact_is_read_back_with_its_residuals(calibration_folder, recor
     assert sets.count(ContactSet.TRAINING) + sets.count(ContactSet.OUTLIER) == len(train)
     assert sets.count(ContactSet.OUTLIER) == len(train) - len(calibration.kept)
     fitted = record.contacts[: len(train)]
-    model = calibration.model
-    before = model.evaluate(calibration.before.x, model.observations(train), floor=False).contact
-    after = model.evaluate(calibration.after.x, model.observations(train), floor=False).contact
-    assert np.allclose([c.before for c in fitted], before, rtol=1e-12, atol=1e-15)
-    assert np.allclose([c.after for c in fitted], after, rtol=1e-12, atol=1e-15)
+    # before: the nominal URDF, after: calibrated.urdf as written, each as a stack loading it sees it
+    nominal = judge(calibration.model.scene, train, calibration.kept, held_out)
+    urdf = judge(Scene(load_config(calibration_folder.path / "calibrated.yaml")), train, calibration.kept, held_out)
+    for rows, judged in ((fitted, nominal.training), (record.contacts[len(train) :], nominal.held_out)):
+        assert np.allclose([c.before for c in rows], judged, rtol=1e-9, atol=1e-12)
+    for rows, judged in ((fitted, urdf.training), (record.contacts[len(train) :], urdf.held_out)):
+        assert np.allclose([c.after for c in rows], judged, rtol=1e-9, atol=1e-12)
     assert np.array_equal([c.joints for c in fitted], train.joints)
-    judged = held_out_residuals(calibration, held_out)["training_plane"]
-    assert np.allclose([c.after for c in record.contacts[len(train) :]], judged["after"], rtol=1e-12, atol=1e-15)
     assert record.joint_names == calibration.model.scene.joint_names
 
 

@@ -6,6 +6,7 @@ import yaml
 
 from posegen.calibrate import (
     DeliverableKind,
+    file_lines,
     format_table,
     load_line,
     read_summary,
@@ -32,8 +33,10 @@ def test_the_typed_fields_are_the_calibration_s(calibration_folder, summary):
         assert error.mean_abs.z_mm == pytest.approx(chosen.chains[chain].mean_abs[0] * 1e3, abs=5e-4)
     assert summary.deliverables[DeliverableKind.URDF].files[0] == "calibrated.urdf"
     assert (DeliverableKind.COMPENSATED in summary.deliverables) == (calibration.deliverables.compensated is not None)
-    assert summary.residuals["training"].contacts == len(calibration.kept)
-    assert summary.residuals["held_out_training_plane"].contacts == len(held_out)
+    for figures in (summary.nominal, *(d.figures for d in summary.deliverables.values()), summary.model_figures):
+        assert figures.training["all"].contacts == len(calibration.kept)
+        assert figures.held_out["all"].contacts == len(held_out)
+        assert set(figures.held_out) == {"all", *held_out.chains}
     assert len(summary.left_out) == len(calibration.flags)
     assert summary.contact_noise.z_mm == pytest.approx(calibration.after.noise.contact[0] * 1e3, abs=5e-5)
     assert summary.provenance["seed"] == 3
@@ -48,11 +51,16 @@ def test_the_summary_is_written_back_to_the_byte(calibration_folder, summary, tm
 
 def test_the_table_and_the_load_line_render_the_summary(summary):
     table = format_table(summary).splitlines()
-    assert len(table) == 2 + 2 * len(summary.residuals)
-    after = next(line for line in table if line.startswith("training") and " after " in line)
-    shown = summary.residuals["training"].after
-    assert float(after.split()[3]) == pytest.approx(shown.mean_abs.z_mm, abs=5e-3)
-    assert float(after.split()[4]) == pytest.approx(shown.rms.z_mm, abs=5e-3)
+    files = 1 + len(summary.deliverables)  # the nominal URDF and each file written
+    chains = len(summary.nominal.training) - 1 + len(summary.nominal.held_out) - 1
+    assert len(table) == 2 + files * chains
+    row = next(line for line in table if line.startswith("held-out") and " calibrated.urdf " in line)
+    chain = row.split()[1]
+    shown = summary.deliverables[DeliverableKind.URDF].figures.held_out[chain]
+    assert float(row.split()[4]) == round(shown.mean_abs.z_mm, 2) and float(row.split()[5]) == round(shown.rms.z_mm, 2)
+    lines = file_lines(summary)
+    assert lines[0].startswith("  calibrated.urdf (any stack; offsets_legs x5)")
+    assert f"{chain} {shown.mean_abs.z_mm:.2f} / " in lines[2] and lines[2].lstrip().startswith("held-out")
     line = load_line(summary)
     urdf = summary.deliverables[DeliverableKind.URDF]
     assert line.startswith(f"load: {urdf.files[0]} for any stack")
@@ -62,8 +70,8 @@ def test_the_table_and_the_load_line_render_the_summary(summary):
 
 def test_a_point_contact_s_roll_and_pitch_are_none(calibration_folder, tmp_path):
     data = yaml.safe_load((calibration_folder.path / "calibration.yaml").read_text())
-    chain = next(iter(data["predicted_error"]))
-    data["predicted_error"][chain]["mean_abs"] |= {"roll_deg": None, "pitch_deg": None}
+    chain = next(iter(data["model"]["predicted_error"]))
+    data["model"]["predicted_error"][chain]["mean_abs"] |= {"roll_deg": None, "pitch_deg": None}
     write_yaml(tmp_path / "calibration.yaml", data)
     error = read_summary(tmp_path / "calibration.yaml").predicted_error[chain]
     assert error.mean_abs.roll_deg is None and error.mean_abs.pitch_deg is None
@@ -76,8 +84,10 @@ def test_a_point_contact_s_roll_and_pitch_are_none(calibration_folder, tmp_path)
         (lambda d: d.pop("model"), "not a posegen calibration"),
         (lambda d: d["model_selection"]["stability"].pop("share_of_seeds"), "not a posegen calibration"),
         (lambda d: d["deliverables"]["urdf"].update(files=None), "not a posegen calibration"),
-        (lambda d: d["predicted_error"].update(left={"mean_abs": {}}), "not a posegen calibration"),
-        (lambda d: d.update(format_version=1), "unsupported format_version"),
+        (lambda d: d["model"]["predicted_error"].update(left={"mean_abs": {}}), "not a posegen calibration"),
+        (lambda d: d["deliverables"]["urdf"]["held_out"].update(left={"contacts": 3}), "not a posegen calibration"),
+        (lambda d: d["deliverables"].pop("nominal_urdf"), "not a posegen calibration"),
+        (lambda d: d.update(format_version=2), "unsupported format_version"),
     ],
 )
 def test_a_malformed_calibration_yaml_is_refused_in_one_line(calibration_folder, tmp_path, edit, message):

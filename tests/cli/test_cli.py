@@ -121,7 +121,8 @@ def test_simulate_then_calibrate(tmp_path, capsys):
     assert code == 0, stdout
     assert "training" in stdout and (out / "calibrated.urdf").exists()
     assert (out / "report.html").exists() and "report.html" in stdout
-    assert "predicted held-out error, left" in stdout and "model offsets" in stdout
+    assert "predicted held-out (grouped CV)  left " in stdout
+    assert "interpretable model (one-standard-error rule; not a file): offsets" in stdout
 
 
 def test_simulate_contact_noise_is_recorded_and_checked(tmp_path, capsys):
@@ -165,7 +166,10 @@ def test_calibrate_real_csv(tmp_path, capsys, real_data):
         capsys,
     )
     assert code == 0
-    assert "held_out_training_plane" in stdout and "held_out_refitted_plane" in stdout
+    head = stdout.splitlines()[:3]  # the files written lead, each with its predicted and its held-out error
+    assert head[1].startswith("  calibrated.urdf (any stack;") and "predicted held-out (grouped CV)  left " in head[2]
+    assert "interpretable model (one-standard-error rule; not a file): offsets_hip_pitch x10" in stdout
+    assert any(line.startswith("held-out  left    calibrated.urdf          9") for line in stdout.splitlines())
     assert "right_train.csv:4 (table/contact_19): residual" in stdout  # a bad row, with its file and line
 
 

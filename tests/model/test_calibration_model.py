@@ -78,3 +78,16 @@ def test_a_compliance_group_bends_together_under_its_mean_torque(scene, model, o
 def _meta(observations):
     c = observations.contacts
     return c.chains, c.sessions, c.labels
+
+
+def test_a_batch_of_parameter_vectors_gives_each_ones_residuals(model, observations):
+    """``evaluate_batch`` (the folds' refits) is ``evaluate`` of each vector, the compliant deflection included."""
+    rng = np.random.default_rng(6)
+    xs = np.array([model.nominal() + model.basis @ rng.normal(0.0, 2e-3, model.size) for _ in range(3)])
+    xs[:, model.columns([Kind.COMPLIANCE])] = rng.uniform(0.0, 5e-4, (3, 2))  # each vector its own deflection
+    contact, floor = model.evaluate_batch(xs, observations)
+    for x, c, f in zip(xs, contact, floor, strict=True):
+        one = model.evaluate(x, observations)
+        np.testing.assert_allclose(c, one.contact, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(f, one.floor, rtol=0, atol=1e-14)
+    assert not np.allclose(contact[0], contact[1])  # each vector is judged with its own parameters

@@ -131,3 +131,13 @@ def test_the_design_counts_the_rows_a_point_contact_measures(point_scene, point_
     assert o1[0] > 0.0 and o1[1] > 0.0
     flush, _ = build_design(point_scene, contacts.joints, contacts.chains, kinds=(FLUSH,) * len(contacts))
     assert np.all(flush.rows == 3) and flush.fewest() == -(-flush.n_params // 3)
+
+
+def test_a_batch_of_parameter_vectors_gives_each_ones_point_residuals(mixed_postures):
+    """``residuals_batch`` of a chain making both kinds is ``residuals`` of each parameter vector."""
+    model, contacts = mixed_postures
+    rng = np.random.default_rng(8)
+    thetas = model.nominal() + rng.normal(0.0, 1e-3, (3, model.size))
+    batch = model.residuals_batch(thetas, contacts)
+    for theta, residuals in zip(thetas, batch, strict=True):
+        np.testing.assert_allclose(residuals, model.residuals(theta, contacts), rtol=0, atol=1e-14)

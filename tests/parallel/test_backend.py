@@ -205,3 +205,22 @@ def test_a_worker_whose_setup_fails_says_why_and_is_no_broken_pool():
         with pytest.raises(BackendError, match="could not set up"):
             list(backend.map(job, range(4)))
         assert [r[0] for r in backend.map(Job(name="squares", setup=_setup, run=_run), range(4))] == [0, 1, 4, 9]
+
+
+def test_preloaded_modules_are_imported_before_a_worker_sets_up(tmp_path):
+    """Entered with ``preload``, the backend's workers start with those modules imported (read while the run works)."""
+    body = (
+        "import functools, sys\n"
+        "def seen(name, item):\n"
+        "    return name in sys.modules\n"
+        "if __name__ == '__main__':\n"
+        "    job = Job(name='seen', setup=functools.partial(str, 'tabnanny'), run=seen)\n"
+        "    for preload in ((), ('tabnanny',)):\n"
+        "        with ProcessBackend(2, preload) as backend:\n"
+        "            print(list(backend.map(job, range(4))))\n"
+        "        import multiprocessing.forkserver as fs\n"
+        "        fs._forkserver._stop()\n"  # the next backend starts its own forkserver
+    )
+    result = _run_script(tmp_path, body)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines() == ["[False, False, False, False]", "[True, True, True, True]"]

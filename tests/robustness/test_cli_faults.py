@@ -539,8 +539,8 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     put("calibration_v1.yaml", {k: v for k, v in report.items() if k != "model"} | {"format_version": 1})
     put("calibration_bad_fit.yaml", report | {"model": report["model"] | {"fit": ["wing.joint_offset"]}})
     put("calibration_nan_scale.yaml", report | {"model": report["model"] | {"prior_scale": float("nan")}})
-    error = next(iter(report["predicted_error"].values()))
-    put("calibration_other_chain.yaml", report | {"predicted_error": {"tail": error}})
+    error = next(iter(report["model"]["predicted_error"].values()))
+    put("calibration_other_chain.yaml", report | {"model": report["model"] | {"predicted_error": {"tail": error}}})
     damaged = folder / "damaged_calibration"
     shutil.copytree(calibration_folder.path, damaged)
     text = (damaged / "calibration.yaml").read_text()

@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from posegen.calibrate import read_calibration
+from posegen.calibrate import DeliverableKind, read_calibration, read_summary
 from posegen.errors import InputError
 from posegen.view import REPORT_FILE, write_report
 from posegen.view.report_figures import strongest_correlations
@@ -21,35 +21,40 @@ def report(calibration_folder):
 def test_the_report_is_written_beside_calibration_yaml_with_every_section(calibration_folder, report):
     path, text = report
     assert path == calibration_folder.path / REPORT_FILE
-    for title in (
-        "What to load: the deliverables",
-        "Residuals before and after calibration",
+    titles = (
+        "What to load: the files written",
+        "Summary",
+        "Every file's errors, as a stack loading it sees them",
         "Every contact",
         "Model selection: repeated grouped cross-validation",
-        "Identified parameters",
+        "The interpretable model's parameters",
         "Conditioning and correlation of the regressor",
         "Rows left out",
         "3D: nominal (grey) and calibrated (blue) robot at each contact",
-    ):
-        assert f"<h2>{title}</h2>" in text
+    )
+    assert re.findall(r"<h2>(.*?)</h2>", html.unescape(text)) == list(titles)  # the files first
     images = re.findall(r"<img src=\"data:image/png;base64,", text)
     assert len(images) == 4  # residuals, their spread, singular values, correlation
 
 
 def test_what_to_load_names_each_file_with_its_predicted_and_held_out_error(calibration_folder, report):
     _, text = report
-    section = text.split("<h2>What to load: the deliverables</h2>")[1].split("<h2>")[0]
+    section = text.split("<h2>What to load: the files written</h2>")[1].split("<h2>")[0]
     deliverables = calibration_folder.calibration.deliverables
+    summary = read_summary(calibration_folder.path / "calibration.yaml")
     assert "calibrated.urdf, calibrated.yaml, offsets.yaml" in section
-    assert deliverables.urdf.candidate.name in section and "CV predicted" in section
-    assert f"held-out ({len(calibration_folder.held_out)} contacts)" in section
+    assert deliverables.urdf.candidate.name in section and "left: predicted held-out (grouped CV)" in section
+    rows = [r for r in re.findall(r"<tr>(.*?)</tr>", section) if "calibrated.urdf, calibrated.yaml" in r]
+    held = summary.deliverables[DeliverableKind.URDF].figures.held_out["left"]
+    [row] = [r for r in rows if f"left: held-out, {held.contacts} contacts" in r]
+    assert f"{held.mean_abs.z_mm:.2f} / {held.mean_abs.roll_deg:.2f} / {held.mean_abs.pitch_deg:.2f}" in row
     z = deliverables.urdf.result.chains["left"].mean_abs[0] * 1e3
-    assert f"{round(z, 3)}" in section
+    assert f"{z:.2f} / " in section
 
 
 def test_every_identified_parameter_is_listed_with_its_std(calibration_folder, report):
     _, text = report
-    section = text.split("<h2>Identified parameters</h2>")[1].split("<h2>")[0]
+    section = html.unescape(text).split("<h2>The interpretable model's parameters</h2>")[1].split("<h2>")[0]
     rows = re.findall(r"<tr>(.*?)</tr>", section)
     parameters = read_calibration(calibration_folder.path).report["parameters"]
     assert len(rows) == len(parameters) + 1
