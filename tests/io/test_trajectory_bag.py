@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import yaml
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
@@ -110,3 +111,28 @@ def test_a_bag_is_replaced_whole_and_anything_else_is_kept(exported, tmp_path):
     with pytest.raises(InputError, match="not a rosbag2 directory"):
         write_trajectory_bag(keep, NAMES, times, arrays, segments, TRAJECTORY_TOPIC, "/s", {})
     assert (keep / "a.txt").read_text() == "mine"
+
+
+def _without_provenance(bag):
+    meta = bag / "metadata.yaml"
+    info = yaml.safe_load(meta.read_text())
+    info["rosbag2_bagfile_information"].pop("custom_data", None)
+    meta.write_text(yaml.safe_dump(info))
+
+
+@pytest.mark.parametrize("kind", ["recording", "notes", "bad_metadata"])
+def test_a_recording_or_a_bag_holding_other_files_is_never_replaced(kind, tmp_path):
+    times, arrays, segments = route()
+    target = tmp_path / "bag"
+    write_trajectory_bag(target, NAMES, times, arrays, segments, TRAJECTORY_TOPIC, "/s", {"posegen_version": "x"})
+    if kind == "recording":  # a real recording: no posegen provenance in its metadata
+        _without_provenance(target)
+    elif kind == "notes":
+        (target / "notes.txt").write_text("mine")
+    else:
+        (target / "metadata.yaml").write_text("rosbag2_bagfile_information: 3\n")
+    before = {p.name: p.read_bytes() for p in target.iterdir()}
+    message = {"recording": "posegen did not write", "notes": r"files posegen did not write \(notes\.txt\)"}
+    with pytest.raises(InputError, match=message.get(kind, "not a rosbag2 bag")):
+        write_trajectory_bag(target, NAMES, times, arrays, segments[:1], TRAJECTORY_TOPIC, "/s", {})
+    assert {p.name: p.read_bytes() for p in target.iterdir()} == before
