@@ -210,7 +210,7 @@ def test_route_commands_on_mutated_routes(good_route, spec, capsys):
 
 # --- pools, selections, measurements and recorded sessions through the commands that read them ----
 
-FAST = max(settings().max_examples // 8, 10)  # 0.1-3 s an example: 10 in make test, 250 in make fuzz
+FAST = max(settings().max_examples // 8, 10)  # 0.1-3 s an example: 10 in make test, 100 in make fuzz
 CAPSYS = [*settings().suppress_health_check, HealthCheck.function_scoped_fixture]  # capsys: read per run
 JOINT_TOPIC = "/joint_states"
 
