@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             result = check_pool_file(args.file, args.config, bar, backend)
     unit = "point" if is_route else "posture"
-    geometry = "meshes" if result.geometry is None else result.geometry.describe()
+    geometry = "collision geometry" if result.geometry is None else result.geometry.describe()
     print(f"checked {result.checked} {unit}s of {args.file} ({geometry}; pinocchio; not the planner's word)")
     if result.geometry is not None and result.geometry.bare_links:
         bare = result.geometry.bare_links

@@ -28,17 +28,14 @@ import pinocchio as pin
 from posegen.draft.geometry import Geometry, load_geometry
 from posegen.draft.heading import TURNED, Bearing, forward_of, knees_face_back
 from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limit, outside_limits
+from posegen.draft.soles import ANKLE_HEIGHT, Sole, find_sole, sole_pose
 from posegen.draft.source import DraftSource
 from posegen.draft.stance import (
-    ANKLE_HEIGHT,
-    Sole,
     bend_legs,
-    find_sole,
     find_up,
     foot_joint,
     joint_path,
     reaching_branches,
-    sole_pose,
     upper_branches,
     waist_joints,
 )

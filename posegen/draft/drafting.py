@@ -12,8 +12,9 @@ names, and records every guess with how to check it (:attr:`Draft.checks`):
   that ends a chain stays in it: lock it by hand;
 * contact: :func:`posegen.draft.geometry.hand_contact` (a flat face pointing down,
   else a point at the hand's tip);
-* collision geometry for the links that move without any, and capsules for links whose
-  collision geometry misses their centre of mass: :mod:`posegen.draft.geometry`;
+* collision geometry for the links that move without any (or whose collision shapes leave
+  out their visual geometry), and capsules for links whose collision geometry misses their
+  centre of mass: :mod:`posegen.draft.covering`;
 * table: in front of the shoulders, its top about 0.7 arm lengths below them;
 * velocity limits the URDF lacks (0) or gives implausibly (> 20 rad/s);
 * collision pairs to disable: :mod:`posegen.robot.collision_matrix`.
@@ -28,17 +29,8 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.draft.body import Body, study_body
-from posegen.draft.geometry import (
-    Geometry,
-    HandContact,
-    below_floor,
-    hand_contact,
-    link_of_joint,
-    misplaced_geometry,
-    missing_geometry,
-    skeleton,
-    vertices,
-)
+from posegen.draft.covering import collision_additions
+from posegen.draft.geometry import Geometry, HandContact, hand_contact, link_of_joint, vertices
 from posegen.draft.limits import (
     IMPLAUSIBLE_SPEED_RAD_S,
     JOINT_LIMIT_MARGIN_RAD,
@@ -47,8 +39,8 @@ from posegen.draft.limits import (
     missing_efforts,
     velocity_placeholders,
 )
+from posegen.draft.soles import Sole, floor_height
 from posegen.draft.source import DraftSource, load_draft_source
-from posegen.draft.stance import Sole, floor_height, foot_box
 from posegen.draft.table import Table, arm_length, place_table
 from posegen.robot import (
     CollisionConfig,
@@ -99,6 +91,8 @@ class Draft:
     shapes: tuple[Shape, ...]  # collision shapes added (missing or misplaced geometry)
     covered: dict[str, str]  # link -> what it gets for lacking collision geometry
     misplaced: dict[str, str]  # link -> why its collision geometry is replaced (CoM outside it, below the floor)
+    left_out: dict[str, str]  # link -> how much of its visual geometry its collision shapes leave out (replaced)
+    bare: tuple[str, ...]  # moving links left without collision geometry (a CHECK line; `posegen check` warns too)
     table_center_m: tuple[float, float, float]
     table_size_m: tuple[float, float, float]
     spots_x_m: tuple[float, ...]
@@ -122,8 +116,8 @@ def draft_robot(
     """Study a humanoid (an example-robot-data name or a URDF file) and draft its config.
 
     The steps: :func:`~posegen.draft.body.study_body` (stance, legs, arms, locks),
-    :func:`collision_additions`, :func:`find_hands`, velocity placeholders, :func:`table_for`
-    and the collision pairs to disable (:func:`~posegen.robot.collision_matrix.survey_pairs`).
+    :func:`~posegen.draft.covering.collision_additions`, :func:`find_hands`, velocity placeholders,
+    :func:`table_for` and the collision pairs to disable (:func:`~posegen.robot.collision_matrix.survey_pairs`).
 
     Raises:
         ConfigError: Unknown robot, a description that does not load, or a structure that
@@ -134,8 +128,8 @@ def draft_robot(
     model, body = src.model, study_body(src)
     data = model.createData()
     pin.framesForwardKinematics(model, data, body.reference)
-    added, checks = collision_additions(model, data, body)
-    geometry = _with_shapes(body.geometry, model, src, added.shapes)
+    added, checks = collision_additions(model, data, body, src.text, src.files.package_dirs)
+    geometry = added.geometry
     chains, found = find_hands(model, data, geometry, body)
     speeds, urdf_speed = velocity_placeholders(model, body.kept)
     if speeds:
@@ -164,7 +158,7 @@ def draft_robot(
         soles=(soles[0], soles[1]),
         foot_x_m=(max(s.x_m[0] for s in soles), min(s.x_m[1] for s in soles)),
         foot_y_m=(max(s.y_m[0] for s in soles), min(s.y_m[1] for s in soles)),
-        floor_contact=floor_links(model, body.geometry, soles, src.text),
+        floor_contact=floor_links(model, geometry, soles, src.text),
         chains=(chains[0], chains[1]),
         locked=body.locked,
         velocity_limits=speeds,
@@ -172,6 +166,8 @@ def draft_robot(
         shapes=added.shapes,
         covered=added.covered,
         misplaced=added.misplaced,
+        left_out=added.left_out,
+        bare=added.bare,
         table_center_m=table[0],
         table_size_m=table[1],
         spots_x_m=table[2],
@@ -200,50 +196,6 @@ def floor_links(model: pin.Model, geometry: Geometry, soles: list[Sole], urdf_te
         ]
         links += ([] if sole.foot_link in empty and carriers else [sole.foot_link]) + carriers
     return tuple(dict.fromkeys(links))
-
-
-@dataclass(frozen=True)
-class AddedGeometry:
-    """Collision shapes the draft adds, and why."""
-
-    shapes: tuple[Shape, ...]  # for links without collision geometry, then for misplaced geometry
-    covered: dict[str, str]  # link -> what it gets for lacking collision geometry
-    misplaced: dict[str, str]  # link -> why its collision geometry is replaced (CoM outside it, below the floor)
-
-
-def collision_additions(model: pin.Model, data: pin.Data, body: Body) -> tuple[AddedGeometry, tuple[str, ...]]:
-    """Shapes for the moving links without collision geometry, capsules for geometry contradicting the kinematics.
-
-    A foot without geometry gets a box over its guessed footprint; geometry is misplaced when a
-    link's CoM lies outside it, or when it reaches below the floor (off the feet) at the posture
-    of ``data``.
-    """
-    soles = body.legs.soles
-    bare_feet = [s for s in soles if not s.from_geometry]
-    geometry = body.geometry
-    moving = [j for j in range(1, model.njoints) if j not in {s.foot_joint for s in bare_feet}]
-    covered, added = missing_geometry(model, geometry, moving)
-    for sole in bare_feet:
-        covered[sole.foot_link] = "a box over the guessed footprint"
-        added += (foot_box(model, data, sole),)
-    misplaced = misplaced_geometry(model, geometry)
-    feet_joints = {j for f in body.legs.feet for j in body.tree.subtree(f)}
-    misplaced.update(below_floor(model, data, geometry, feet_joints, floor_height(model, data, soles)))
-    shapes = added + tuple(s for link in misplaced for s in skeleton(model, link))
-    checks = []
-    if covered:
-        checks.append(
-            f"{len(covered)} moving links have no collision geometry: given "
-            + ", ".join(sorted(set(covered.values())))
-            + " (robot.collision.shapes)"
-        )
-    if misplaced:
-        checks.append(
-            f"{len(misplaced)} links' collision geometry contradicts the kinematics ("
-            + "; ".join(f"{link}: {why}" for link, why in misplaced.items())
-            + "): replaced by capsules along the joints"
-        )
-    return AddedGeometry(shapes, covered, misplaced), tuple(checks)
 
 
 def find_hands(model: pin.Model, data: pin.Data, geometry: Geometry, body: Body) -> tuple[list[Chain], tuple[str, ...]]:
@@ -279,14 +231,6 @@ def table_for(model: pin.Model, data: pin.Data, geometry: Geometry, body: Body, 
 
 def _apart(a: FloatArray, b: FloatArray) -> bool:
     return bool(np.linalg.norm(a - b) > 0.01)
-
-
-def _with_shapes(geometry: Geometry, model: pin.Model, src: DraftSource, shapes: tuple[Shape, ...]) -> Geometry:
-    """The geometry with the added shapes as collision geometry (what the hands are read from)."""
-    if not shapes:
-        return geometry
-    collision = robot_geometry(model, src.text, src.files.package_dirs, CollisionConfig(shapes=shapes), convex=False)
-    return Geometry(collision=collision, visual=geometry.visual)
 
 
 def _survey(

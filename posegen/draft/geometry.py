@@ -1,9 +1,6 @@
-"""What ``posegen robot init`` reads from a robot's geometry, and what it adds where there is none.
+"""What ``posegen robot init`` reads from a robot's geometry: its vertices, and a hand's contact.
 
 * vertices a joint carries (collision geometry, else visual), in any frame;
-* links that move and have no collision geometry: the convex hull of their visual
-  meshes (a :class:`~posegen.robot.additions.VisualHull`), else capsules along the
-  kinematics (from the joint to each child joint);
 * a hand's contact: three frames on a flat face of its geometry that points down
   (a flush contact), else a point at its tip (a point contact), else, without any
   geometry, a point beyond the wrist at a stated guess.
@@ -19,14 +16,12 @@ import pinocchio as pin
 
 from posegen.errors import ConfigError
 from posegen.io import native_output
-from posegen.robot import Capsule, FloatArray, FrameConfig, Shape, VisualHull
+from posegen.robot import FloatArray, FrameConfig
 
 FLAT_TOL_M = 0.002  # vertices this close to a face's plane lie on it
 FLAT_FILL = 0.5  # a face is flat when its touching vertices span this share of its box face in both directions
 HAND_GUESS = 0.35  # without geometry, the tip is this share of the forearm beyond the wrist
 TIP_RADIUS_M = 0.01  # guessed rounding of a point contact's tip
-COM_OUTSIDE_M = 0.02  # a link's CoM (or geometry below the floor) this far out: geometry contradicting the kinematics
-MIN_SEGMENT_M = 0.01  # a link shorter than this and without mass needs no geometry
 
 
 @dataclass(frozen=True)
@@ -43,7 +38,7 @@ class HandContact:
 
     frames: tuple[FrameConfig, ...]  # three for a flush contact, one for a point contact
     flush: bool
-    touching: tuple[str, ...]  # other links of the hand (locked fingers) that may touch the table too
+    touching: tuple[str, ...]  # other links of the hand (locked fingers, a palm fixed to it) that may touch the table
     radius_m: float  # a point's tip rounding (0 for flush)
     how: str  # what was found, for the draft's CHECK line
 
@@ -116,67 +111,6 @@ def link_of_joint(model: pin.Model, joint: int) -> str:
     return str(model.names[joint])
 
 
-def missing_geometry(
-    model: pin.Model, geometry: Geometry, joints: list[int]
-) -> tuple[dict[str, str], tuple[Shape, ...]]:
-    """Shapes for the moving links without collision geometry.
-
-    Args:
-        model: The robot model.
-        geometry: Its geometry.
-        joints: The joints whose links to cover (those that move, and the root).
-
-    Returns:
-        What each covered link gets ("visual hull" or "capsules") and the shapes.
-
-    """
-    with_collision = {int(o.parentJoint) for o in geometry.collision.geometryObjects}
-    with_visual = {int(o.parentJoint) for o in geometry.visual.geometryObjects}
-    how: dict[str, str] = {}
-    shapes: list[Shape] = []
-    for joint in joints:
-        if joint in with_collision:
-            continue
-        link = link_of_joint(model, joint)
-        if joint in with_visual:
-            how[link] = "the convex hull of its visual meshes"
-            shapes.append(VisualHull(link))
-            continue
-        capsules = skeleton(model, link)
-        if capsules:
-            how[link] = "capsules along the joints"
-            shapes += capsules
-    return how, tuple(shapes)
-
-
-def skeleton(model: pin.Model, link: str) -> list[Capsule]:
-    """Capsules from a link's joint to each child joint (or through its CoM, for an end link).
-
-    None for a link of no extent (its children and CoM within MIN_SEGMENT_M of its joint:
-    a link between coincident joints, which a sphere would only make collide with its
-    neighbours).
-    """
-    frame = model.frames[model.getFrameId(link)]
-    joint = frame.parentJoint
-    to_link = frame.placement.inverse()  # joint frame -> link frame
-    ends = [model.jointPlacements[c].translation for c in range(2, model.njoints) if model.parents[c] == joint]
-    inertia = model.inertias[joint]
-    ends = [e for e in ends if np.linalg.norm(e) >= MIN_SEGMENT_M]
-    at_joint = bool(ends)  # the capsules end at child joints (else one through the CoM)
-    if not ends and inertia.mass > 0 and np.linalg.norm(inertia.lever) >= MIN_SEGMENT_M:
-        ends = [2.0 * inertia.lever]
-    origin = to_link.translation
-    out = []
-    for end in ends:
-        tip = to_link.act(np.asarray(end))
-        length = float(np.linalg.norm(tip - origin))
-        radius = round(float(np.clip(0.2 * length, 0.02, 0.06)), 3)
-        if at_joint and length - radius >= MIN_SEGMENT_M:  # its cap reaches the child joint, not past it
-            tip = origin + (tip - origin) * (length - radius) / length  # (a shank's cap past the ankle: the floor)
-        out.append(Capsule(link, round3(origin), round3(tip), radius))
-    return out
-
-
 def hand_contact(
     model: pin.Model,
     data: pin.Data,
@@ -214,10 +148,14 @@ def hand_contact(
             f"no geometry: a point {HAND_GUESS:.0%} of the forearm's length beyond the wrist, tip radius "
             f"{1e3 * TIP_RADIUS_M:.0f} mm",
         )
-    face = _flat_face(points, placement.rotation.T @ np.array([0.0, 0.0, -1.0]))
+    down = placement.rotation.T @ np.array([0.0, 0.0, -1.0])  # in the hand frame
+    face = _flat_face(points, down)
     if face is not None:
         frames = tuple(FrameConfig(f"{chain}_touch_{k + 1}", hand, round3(p)) for k, p in enumerate(face))
-        return HandContact(frames, True, (), 0.0, "a flat face of the hand's geometry pointing down")
+        axis = int(np.argmax(np.abs(down)))
+        on_face = _face_links(model, data, geometry, {joint, *fingers}, placement, axis, float(face[0][axis]))
+        how = "a flat face of the hand's geometry pointing down"
+        return HandContact(frames, True, tuple(sorted(on_face - {hand})), 0.0, how)
     owner, tip = _tip(model, data, geometry, {joint, *fingers}, placement, along)
     link_pose = data.oMf[model.getFrameId(owner)]
     local_tip = link_pose.actInv(placement.act(tip - along * TIP_RADIUS_M))
@@ -257,6 +195,25 @@ def _tip(
             break
     assert best is not None, "called with geometry"
     return best[1], best[2]
+
+
+def _face_links(
+    model: pin.Model, data: pin.Data, geometry: Geometry, joints: set[int], frame: pin.SE3, axis: int, level: float
+) -> frozenset[str]:
+    """The links whose geometry (as :func:`carried` reads it) reaches a face: ``axis`` at ``level`` in ``frame``.
+
+    A palm fixed below the hand's link, or locked fingers, whose vertices make the face touch
+    the table with it (``touching_links``).
+    """
+    source = geometry.collision if len(vertices(model, data, geometry.collision, joints, frame)) else geometry.visual
+    out = set()
+    for obj in source.geometryObjects:
+        if obj.parentJoint not in joints:
+            continue
+        points = vertices(model, data, _single(source, obj), {int(obj.parentJoint)}, frame)
+        if len(points) and np.any(np.abs(points[:, axis] - level) < FLAT_TOL_M):
+            out.add(str(model.frames[obj.parentFrame].name))
+    return frozenset(out)
 
 
 def _single(source: pin.GeometryModel, obj: pin.GeometryObject) -> pin.GeometryModel:
@@ -303,44 +260,3 @@ def _flat_face(points: FloatArray, down: FloatArray) -> list[FloatArray] | None:
 def round3(v: FloatArray) -> tuple[float, float, float]:
     """A 3-vector rounded to 0.1 mm (or 1e-4 of its unit), without -0.0."""
     return (round(float(v[0]), 4) + 0.0, round(float(v[1]), 4) + 0.0, round(float(v[2]), 4) + 0.0)
-
-
-def below_floor(model: pin.Model, data: pin.Data, geometry: Geometry, feet: set[int], floor: float) -> dict[str, str]:
-    """Links off the feet whose collision geometry reaches below the floor at the reference."""
-    out = {}
-    level = pin.SE3(np.eye(3), np.array([0.0, 0.0, floor]))
-    for joint in range(1, model.njoints):
-        if joint in feet:
-            continue
-        points = vertices(model, data, geometry.collision, {joint}, level)
-        if len(points) and points[:, 2].min() < -COM_OUTSIDE_M:
-            link = _geometry_link(model, geometry, joint)
-            out[link] = f"reaches {-1e3 * points[:, 2].min():.0f} mm below the floor standing"
-    return out
-
-
-def _geometry_link(model: pin.Model, geometry: Geometry, joint: int) -> str:
-    """The link that carries a joint's collision geometry (its first one)."""
-    for obj in geometry.collision.geometryObjects:
-        if obj.parentJoint == joint:
-            return str(model.frames[obj.parentFrame].name)
-    return link_of_joint(model, joint)
-
-
-def misplaced_geometry(model: pin.Model, geometry: Geometry) -> dict[str, str]:
-    """Links whose centre of mass lies outside their collision geometry's box, and by how far."""
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, pin.neutral(model))
-    out = {}
-    for joint in range(1, model.njoints):
-        inertia = model.inertias[joint]
-        if inertia.mass <= 0:
-            continue
-        points = vertices(model, data, geometry.collision, {joint}, data.oMi[joint])
-        if len(points) == 0:
-            continue
-        gap = np.maximum(0.0, np.maximum(points.min(axis=0) - inertia.lever, inertia.lever - points.max(axis=0)))
-        distance = float(np.linalg.norm(gap))
-        if distance > COM_OUTSIDE_M:
-            out[_geometry_link(model, geometry, joint)] = f"CoM {1e3 * distance:.0f} mm outside it"
-    return out

@@ -8,10 +8,7 @@
   to a pelvis, :func:`reaching_branches`);
 * forward: the root's x axis (REP 103, and the biomechanics convention of y-up models),
   left: up x forward;
-* soles: a link of the foot (fixed to it) with z up at the lowest point under the ankle
-  when there is one, else a frame declared there; the footprint: the lowest vertices of the foot's
-  geometry (collision, else visual), else a rectangle in proportion to the leg, below the
-  ankle by a share of the leg's length;
+* soles: :mod:`posegen.draft.soles`;
 * the reference posture, when no SRDF gives one: soles flat where they stand, pelvis
   lowered so that the knees bend, CoM over the middle of the feet.
 """
@@ -19,40 +16,19 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from posegen.draft.geometry import Geometry, carried, link_of_joint, round3
 from posegen.errors import ConfigError
-from posegen.robot import Box, FloatArray, FrameConfig
+from posegen.robot import FloatArray
 
 FLOOR_TOL_M = 0.02  # a branch whose lowest frame is this close to the lowest one reaches the floor
-SOLE_VERTEX_TOL_M = 0.005  # foot vertices this close to the lowest one make the footprint
-SOLE_FRAME_TOL_M = 0.005  # an existing link this close to the sole point is the sole frame
-FOOT_LENGTH = 0.28  # a foot without geometry: this share of the leg's length
-FOOT_WIDTH = 0.12
-ANKLE_HEIGHT = 0.12  # a foot without geometry: its sole this share of the leg's length below the ankle
 KNEE_START_RAD = 0.4
 CROUCH = 0.03  # the pelvis is lowered by this share of the leg's length at the reference
 IK_TOL = 1e-9
-FOOT_BOX_M = 0.02  # thickness of the box given to a foot without geometry
 LEG_MASS_RATIO = 0.5  # two legs weigh alike within this ratio
 LIMIT_MARGIN_RAD = 0.05  # the bent legs keep this far inside their joints' limits
-
-
-@dataclass(frozen=True)
-class Sole:
-    """One foot's sole as found."""
-
-    frame: str  # the sole frame's name
-    declared: FrameConfig | None  # the frame to declare in the config (None: the robot's own link)
-    foot_link: str
-    foot_joint: int
-    x_m: tuple[float, float]  # footprint in the sole frame
-    y_m: tuple[float, float]
-    from_geometry: bool  # False: guessed from the leg's length (a CHECK line)
 
 
 Subtree = Callable[[int], list[int]]
@@ -196,43 +172,6 @@ def foot_joint(model: pin.Model, leg: int, children: dict[int, list[int]], subtr
     return joint
 
 
-def find_sole(
-    model: pin.Model, data: pin.Data, geometry: Geometry, side: str, foot: int, leg_length: float, heading: pin.SE3
-) -> Sole:
-    """A foot's sole frame (the robot's, or one to declare) and its footprint, at the posture of ``data``."""
-    ankle = data.oMi[foot].translation
-    flat = pin.SE3(heading.rotation, np.array([ankle[0], ankle[1], 0.0]))
-    points = carried(model, data, geometry, {foot}, flat)  # (k, 3) in a level frame under the ankle
-    link = link_of_joint(model, foot)
-    if len(points) == 0:
-        length, width = FOOT_LENGTH * leg_length, FOOT_WIDTH * leg_length
-        x = (round(-0.3 * length, 3), round(0.7 * length, 3))
-        y = (round(-width / 2, 3), round(width / 2, 3))
-        sole_world = pin.SE3(heading.rotation, ankle - np.array([0.0, 0.0, ANKLE_HEIGHT * leg_length]))
-        from_geometry = False
-    else:
-        low = points[points[:, 2] < points[:, 2].min() + SOLE_VERTEX_TOL_M]
-        sole_world = pin.SE3(heading.rotation, np.array([ankle[0], ankle[1], float(points[:, 2].min())]))
-        x = (round(float(low[:, 0].min()), 3), round(float(low[:, 0].max()), 3))
-        y = (round(float(low[:, 1].min()), 3), round(float(low[:, 1].max()), 3))
-        from_geometry = True
-    for f, frame in enumerate(model.frames):
-        if frame.parentJoint != foot or frame.type != pin.FrameType.BODY:
-            continue
-        if model.frames[frame.parentFrame].type != pin.FrameType.FIXED_JOINT:
-            continue  # a joint's own link: calibration moves its joint, not a sole placement
-        pose = data.oMf[f]
-        if np.linalg.norm(pose.translation - sole_world.translation) < SOLE_FRAME_TOL_M and pose.rotation[2, 2] > 0.999:
-            shift = pose.actInv(sole_world)  # the footprint, read in the robot's own sole frame
-            x = (round(x[0] + float(shift.translation[0]), 3), round(x[1] + float(shift.translation[0]), 3))
-            y = (round(y[0] + float(shift.translation[1]), 3), round(y[1] + float(shift.translation[1]), 3))
-            return Sole(str(frame.name), None, link, foot, x, y, from_geometry)
-    local = data.oMf[model.getFrameId(link)].actInv(sole_world)
-    rpy = np.rad2deg(pin.rpy.matrixToRpy(local.rotation))
-    declared = FrameConfig(f"{side}_sole", link, round3(local.translation), round3(rpy))
-    return Sole(declared.name, declared, link, foot, x, y, from_geometry)
-
-
 def knee_of(model: pin.Model, data: pin.Data, leg: list[int], forward: FloatArray) -> int:
     """The knee: of the leg joints farthest from both its ends, the one whose axis is most lateral."""
     hip, ankle = data.oMi[leg[0]].translation, data.oMi[leg[-1]].translation
@@ -351,27 +290,3 @@ def _reach(model: pin.Model, q: FloatArray, leg: list[int], target: pin.SE3) -> 
         return False
     q[rows] = fit.x
     return True
-
-
-def sole_pose(model: pin.Model, data: pin.Data, sole: Sole) -> pin.SE3:
-    """A sole frame's world pose in ``data`` (the robot's frame, or the one to declare)."""
-    if sole.declared is None:
-        return data.oMf[model.getFrameId(sole.frame)].copy()
-    frame = sole.declared
-    local = pin.SE3(pin.rpy.rpyToMatrix(*np.deg2rad(frame.rpy_deg)), np.array(frame.xyz_m))
-    return data.oMf[model.getFrameId(frame.parent)] * local
-
-
-def floor_height(model: pin.Model, data: pin.Data, soles: list[Sole]) -> float:
-    """The lowest sole's height (m) in ``data``: the floor."""
-    return min(float(sole_pose(model, data, s).translation[2]) for s in soles)
-
-
-def foot_box(model: pin.Model, data: pin.Data, sole: Sole) -> Box:
-    """A box over a sole's footprint, FOOT_BOX_M thick, in the foot link's frame."""
-    pose = sole_pose(model, data, sole)
-    centre = np.array([sum(sole.x_m) / 2, sum(sole.y_m) / 2, FOOT_BOX_M / 2])
-    local = data.oMf[model.getFrameId(sole.foot_link)].actInv(pose)
-    size = (round(sole.x_m[1] - sole.x_m[0], 3), round(sole.y_m[1] - sole.y_m[0], 3), FOOT_BOX_M)
-    rpy = round3(np.rad2deg(pin.rpy.matrixToRpy(local.rotation)))
-    return Box(sole.foot_link, round3(local.act(centre)), size, rpy)

@@ -108,11 +108,12 @@ def render_draft(draft: Draft, seed: int, command: str = "") -> str:
 def _shapes_text(draft: Draft) -> list[str]:
     lines = ["    shapes:                          # CHECK: links without collision geometry, or with wrong geometry"]
     for link in dict.fromkeys(shape.link for shape in draft.shapes):
-        why = (
-            f"its collision geometry: {draft.misplaced[link]}"
-            if link in draft.misplaced
-            else f"no collision geometry: {draft.covered.get(link, '')}"
-        )
+        if link in draft.misplaced:
+            why = f"its collision geometry: {draft.misplaced[link]}"
+        elif link in draft.left_out:
+            why = f"its collision shapes: {draft.left_out[link]}"
+        else:
+            why = f"no collision geometry: {draft.covered.get(link, '')}"
         lines.append(f"      {link}:                    # {why}")
         for shape in draft.shapes:
             if shape.link != link:
@@ -169,6 +170,11 @@ def _chains_text(draft: Draft) -> list[str]:
                 f"    fingertip_frames: {_flow([f.name for f in contact.frames])}   # CHECK: {contact.how}",
                 "    fingertip_length_m: 0.0",
             ]
+            if contact.touching:
+                lines.append(
+                    f"    touching_links: {_flow(list(contact.touching))}   # the links fixed to the hand whose "
+                    "geometry makes the face"
+                )
         else:
             lines += [
                 "    fingertip_frames: []",

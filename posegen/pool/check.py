@@ -75,7 +75,9 @@ def _measure(state: tuple[Scene, CollisionChecker], postures: Sequence[Posture])
             f"{scene.route.contact_force_n:g} N",
             Invariant.TORQUE: torque_detail(scene, found),
         }
-        hits = meshes.colliding_pairs(scene.configuration(joints), posture.chain, margin)
+        q = scene.configuration(joints)
+        # the bounding spheres screen first (as the route check): coal only on the pairs they cannot clear
+        hits = meshes.colliding_pairs(q, posture.chain, margin) if meshes.collides(q, posture.chain, margin) else []
         if hits:
             excess[Invariant.COLLISION] = margin - hits[0].distance_m
             details[Invariant.COLLISION] = f"{hits[0].pair[0]} - {hits[0].pair[1]} at {hits[0].distance_m:.4f} m"

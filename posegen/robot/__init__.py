@@ -58,9 +58,14 @@ from posegen.robot.contact_kinds import (
     registered_kinds,
 )
 from posegen.robot.coverage import (
+    COVER_TOL_M,
+    BareLink,  # for the draft (robot init)
     GeometryCoverage,
+    bare_links,  # for the draft
     geometry_coverage,
-    has_extent,  # for the draft (robot init)
+    has_extent,  # for the draft
+    left_out_m,  # for the draft
+    link_masses,  # for the draft
 )
 from posegen.robot.description import (  # for the draft (robot init)
     RobotFiles,
@@ -123,6 +128,7 @@ from posegen.robot.verification import (
 )
 
 __all__ = [
+    "COVER_TOL_M",
     "DEFAULT_KIND",
     "EXAMPLES",
     "FLUSH",
@@ -134,6 +140,7 @@ __all__ = [
     "TABLE",
     "Assessment",
     "Balance",
+    "BareLink",
     "Box",
     "CalibrationConfig",
     "CandidateConfig",
@@ -176,6 +183,7 @@ __all__ = [
     "WorstSoFar",
     "add_self_pairs",
     "assess",
+    "bare_links",
     "centres_of_pressure",
     "check_for_planning",
     "contact_in_table",
@@ -189,7 +197,9 @@ __all__ = [
     "holding_torques",
     "kind_named",
     "kinematic_urdf",
+    "left_out_m",
     "linear_torques",
+    "link_masses",
     "load_config",
     "offset_derivatives",
     "offset_matrix",

@@ -63,20 +63,46 @@ def robot_geometry(
 def _add_visual_hulls(
     model: pin.Model, geom: pin.GeometryModel, visual: pin.GeometryModel, link: str, name: str
 ) -> None:
-    """Add the convex hull of each of a link's visual meshes to ``geom``.
+    """Add the convex hull of each of a link's visual meshes, and its visual primitives as they are, to ``geom``.
 
     Raises:
-        ConfigError: The link has no visual mesh (``robot.collision.shapes``).
+        ConfigError: The link has no visual geometry (``robot.collision.shapes``).
 
     """
     parent = model.getFrameId(link, pin.FrameType.BODY)
-    found = [o for o in visual.geometryObjects if o.parentFrame == parent and isinstance(o.geometry, coal.BVHModelBase)]
+    found = [
+        o
+        for o in visual.geometryObjects
+        if o.parentFrame == parent and not isinstance(o.geometry, coal.Plane | coal.Halfspace)
+    ]
     if not found:
-        raise ConfigError(f"robot.collision.shapes.{link}: visual_hull, but the link has no visual mesh")
+        raise ConfigError(f"robot.collision.shapes.{link}: visual_hull, but the link has no visual geometry")
     for k, obj in enumerate(found):
-        obj.geometry.buildConvexHull(True, "Qt")
-        hull = obj.geometry.convex
-        geom.addGeometryObject(pin.GeometryObject(f"{name}_{k}", obj.parentJoint, parent, obj.placement, hull))
+        shape, placement = _visual_hull(obj.geometry)
+        placed = obj.placement * placement
+        geom.addGeometryObject(pin.GeometryObject(f"{name}_{k}", obj.parentJoint, parent, placed, shape))
+
+
+FLAT = 1e-6  # a mesh whose thinnest principal extent is below this share of its largest is flat
+THIN_M = 0.001  # a flat mesh's box is this thick
+
+
+def _visual_hull(shape: coal.CollisionGeometry) -> tuple[coal.CollisionGeometry, pin.SE3]:
+    """A visual shape as collision geometry, and its placement in the shape's frame.
+
+    A mesh becomes its convex hull (qhull), a flat mesh its box THIN_M thick (qhull would
+    fail on it, and coal then crashes), a primitive stays as it is.
+    """
+    if not isinstance(shape, coal.BVHModelBase):
+        return shape, pin.SE3.Identity()
+    points = np.asarray(shape.vertices(), dtype=float).reshape(-1, 3)  # (k, 3)
+    spread = np.linalg.svd(points - points.mean(axis=0), compute_uv=False) if len(points) >= 4 else np.zeros(3)
+    if len(spread) == 3 and spread[2] > FLAT * spread[0]:
+        shape.buildConvexHull(True, "Qt")
+        return shape.convex, pin.SE3.Identity()
+    low, high = points.min(axis=0), points.max(axis=0)
+    size = np.maximum(high - low, THIN_M)
+    return coal.Box(*size), pin.SE3(np.eye(3), (low + high) / 2)
 
 
 def _primitive(shape: Shape) -> tuple[coal.CollisionGeometry, pin.SE3]:

@@ -6,6 +6,11 @@ relative paths). ``up`` picks the model's up axis: "z" (REP 103) or "y" (x forwa
 to the right, as biomechanics models are). ``waist`` roots the model at the torso instead
 of the pelvis, with that many waist joints (1: yaw; 2: yaw then pitch) from the torso down
 to the pelvis carrying the legs (the same body: the torso where it was, the pelvis below).
+
+Three variants give geometry a draft must not trust as it is: ``palms`` fixes a 14 cm palm
+below each hand with a visual mesh only; ``rod_feet`` puts two thin collision rods (2 cm,
+4 cm across) under each 10 cm wide sole mesh; ``disc_torso`` gives the torso a 39 cm tall
+visual mesh over a 6 cm collision disc.
 """
 
 from __future__ import annotations
@@ -17,6 +22,10 @@ import trimesh
 
 FOOT = (0.22, 0.10, 0.04)  # m, x (forward), lateral, vertical
 HAND = (0.08, 0.06, 0.02)  # flat palm: its lowest face is flat
+PALM = (0.08, 0.03, 0.14)  # the palm variant's: below the hand, 14 cm long
+TORSO = (0.2, 0.26, 0.39)  # the disc variant's torso mesh (its collision: a disc of DISC_M across)
+DISC_M = 0.06
+ROD_RADIUS_M = 0.01  # the rod variant's two rods, 2 cm thick, 4 cm across together
 
 
 def _axes(up: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -31,25 +40,37 @@ def _v(x: np.ndarray) -> str:
     return " ".join(f"{float(c):.6g}" for c in x)
 
 
-def humanoid_urdf(folder: Path, up: str = "z", legs: int = 2, meshes: bool = True, waist: int = 0) -> Path:
+def humanoid_urdf(
+    folder: Path,
+    up: str = "z",
+    legs: int = 2,
+    meshes: bool = True,
+    waist: int = 0,
+    palms: bool = False,
+    rod_feet: bool = False,
+    disc_torso: bool = False,
+) -> Path:
     """Write the URDF (and its meshes under ``folder/meshes``); its path (``waist`` > 0: rooted at the torso)."""
     forward, left, upward = _axes(up)
     down = -upward
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
-    sizes = {"foot": FOOT, "hand": HAND}
+    sizes = {"foot": FOOT, "hand": HAND, "palm": PALM, "torso": TORSO}
     for name, (fx, fl, fu) in sizes.items():
         extents = np.abs(forward * fx + left * fl + upward * fu)  # the box's size along the model's axes
         trimesh.creation.box(extents=extents).export(folder / "meshes" / f"{name}.stl")
     links: list[str] = []
     joints: list[str] = []
 
-    def link(name: str, mass: float, com: np.ndarray, mesh: str = "", offset: np.ndarray | None = None) -> None:
+    def link(
+        name: str, mass: float, com: np.ndarray, mesh: str = "", at: np.ndarray | None = None, collision: str = "mesh"
+    ) -> None:
+        """A link; ``mesh`` its visual (at ``at``), and its collision too unless ``collision`` gives other XML."""
         geometry = ""
         if mesh and meshes:
-            at = _v(np.zeros(3) if offset is None else offset)
-            geometry = (
-                f'<visual><origin xyz="{at}"/><geometry><mesh filename="meshes/{mesh}.stl"/></geometry></visual>'
-                f'<collision><origin xyz="{at}"/><geometry><mesh filename="meshes/{mesh}.stl"/></geometry></collision>'
+            origin = _v(np.zeros(3) if at is None else at)
+            shape = f'<origin xyz="{origin}"/><geometry><mesh filename="meshes/{mesh}.stl"/></geometry>'
+            geometry = f"<visual>{shape}</visual>" + (
+                f"<collision>{shape}</collision>" if collision == "mesh" else collision
             )
         links.append(
             f'<link name="{name}"><inertial><origin xyz="{_v(com)}"/><mass value="{mass}"/>'
@@ -75,9 +96,13 @@ def humanoid_urdf(folder: Path, up: str = "z", legs: int = 2, meshes: bool = Tru
         joint(f"{side}_knee", f"{side}_thigh", f"{side}_shank", 0.4 * down, left, 0.0, 2.0)
         link(f"{side}_ankle", 0.5, np.zeros(3))
         joint(f"{side}_ankle_pitch", f"{side}_shank", f"{side}_ankle", 0.4 * down, left, -1.0, 1.0)
-        link(f"{side}_foot", 1.0, 0.05 * down, "foot", 0.03 * forward + 0.06 * down)
+        sole = 0.03 * forward + 0.06 * down  # the foot mesh's centre
+        link(f"{side}_foot", 1.0, 0.05 * down, "foot", sole, _rods(sole, forward, left, down) if rod_feet else "mesh")
         joint(f"{side}_ankle_roll", f"{side}_ankle", f"{side}_foot", np.zeros(3), forward, -0.5, 0.5)
-    link("torso", 15.0, 0.2 * upward)
+    if disc_torso:
+        link("torso", 15.0, 0.2 * upward, "torso", 0.2 * upward, _cylinder(0.2 * upward, DISC_M / 2, 0.01, "0 0 0"))
+    else:
+        link("torso", 15.0, 0.2 * upward)
     if waist == 0:
         joint("waist", "pelvis", "torso", 0.1 * upward, upward, -1.0, 1.0)
     elif waist == 1:
@@ -116,6 +141,28 @@ def humanoid_urdf(folder: Path, up: str = "z", legs: int = 2, meshes: bool = Tru
         joint(f"{side}_elbow", f"{side}_upper_arm", f"{side}_forearm", 0.25 * down, left, -2.0, 0.0)
         link(f"{side}_hand", 0.5, 0.04 * down, "hand", 0.06 * down)
         joint(f"{side}_wrist", f"{side}_forearm", f"{side}_hand", 0.25 * down, left, -1.0, 1.0)
+        if palms:  # fixed below the hand, its mesh a visual only
+            link(f"{side}_palm", 0.14, PALM[2] / 2 * down, "palm", PALM[2] / 2 * down, collision="")
+            joints.append(
+                f'<joint name="{side}_palm_fixed" type="fixed"><parent link="{side}_hand"/><child link="{side}_palm"/>'
+                f'<origin xyz="{_v((0.06 + HAND[2] / 2) * down)}"/></joint>'
+            )
     path = folder / "robot.urdf"
     path.write_text('<?xml version="1.0"?>\n<robot name="synthetic">\n' + "\n".join(links + joints) + "\n</robot>\n")
     return path
+
+
+def _cylinder(centre: np.ndarray, radius: float, length: float, rpy: str) -> str:
+    return (
+        f'<collision><origin xyz="{_v(centre)}" rpy="{rpy}"/>'
+        f'<geometry><cylinder radius="{radius}" length="{length}"/></geometry></collision>'
+    )
+
+
+def _rods(sole: np.ndarray, forward: np.ndarray, left: np.ndarray, down: np.ndarray) -> str:
+    """Two collision rods along the foot, their bottoms on the sole mesh's, 4 cm across together."""
+    rpy = "0 1.5707963267948966 0"  # the cylinder's axis (z) along forward (x, in both up conventions)
+    low = sole + (FOOT[2] / 2 - ROD_RADIUS_M) * down
+    return "".join(
+        _cylinder(low + side * ROD_RADIUS_M * left, ROD_RADIUS_M, FOOT[0] - 0.02, rpy) for side in (-1.0, 1.0)
+    )

@@ -24,8 +24,9 @@ from posegen.draft.body import (
 )
 from posegen.draft.geometry import load_geometry
 from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD
+from posegen.draft.soles import sole_pose
 from posegen.draft.source import load_draft_source
-from posegen.draft.stance import reaching_branches, sole_pose, upper_branches
+from posegen.draft.stance import reaching_branches, upper_branches
 from posegen.errors import ConfigError
 from tests.draft.humanoid_urdf import humanoid_urdf
 

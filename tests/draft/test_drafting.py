@@ -6,10 +6,11 @@ import pytest
 
 from posegen.draft import write_draft
 from posegen.draft.body import study_body
-from posegen.draft.drafting import collision_additions, draft_robot, find_hands, table_for
+from posegen.draft.covering import collision_additions
+from posegen.draft.drafting import draft_robot, find_hands, table_for
 from posegen.draft.geometry import Geometry, vertices
+from posegen.draft.soles import floor_height
 from posegen.draft.source import load_draft_source
-from posegen.draft.stance import floor_height
 from posegen.robot import Scene, load_config
 from posegen.robot.additions import Box, Capsule, CollisionConfig
 from posegen.robot.collision_geometry import robot_geometry
@@ -72,7 +73,7 @@ def synthetic(tmp_path_factory):
 
 def test_collision_additions_cover_every_moving_link_and_box_bare_feet(synthetic):
     for meshes, (src, body, data) in synthetic.items():
-        added, checks = collision_additions(src.model, data, body)
+        added, checks = collision_additions(src.model, data, body, src.text)
         assert checks[0].startswith(f"{len(added.covered)} moving links have no collision geometry")
         assert {"l_thigh", "r_shank", "torso"} <= set(added.covered)
         assert ("l_foot" in added.covered) != meshes and ("l_hand" in added.covered) != meshes
@@ -96,7 +97,7 @@ def test_find_hands_gives_each_arm_its_hand_without_the_torso(synthetic):
 
 def test_table_for_puts_the_table_within_reach_and_clear_of_the_body(synthetic):
     src, body, data = synthetic[True]
-    added, _ = collision_additions(src.model, data, body)  # the torso's capsule stands above the table's top
+    added, _ = collision_additions(src.model, data, body, src.text)  # the torso's capsule stands above the table's top
     shapes = CollisionConfig(shapes=added.shapes)
     geometry = Geometry(robot_geometry(src.model, src.text, (), shapes, convex=False), body.geometry.visual)
     chains, _ = find_hands(src.model, data, geometry, body)

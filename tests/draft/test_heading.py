@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 from posegen.draft import write_draft
-from posegen.draft.geometry import skeleton
+from posegen.draft.covering import skeleton
 from posegen.draft.heading import TURNED
 from posegen.robot import Scene, load_config
 from tests.draft.humanoid_urdf import humanoid_urdf

@@ -46,6 +46,9 @@ def test_robot_init_writes_a_draft_and_its_urdf_and_the_draft_runs(tmp_path, cap
     argv = ["pool", "--n", "3", "--seed", "1", "--workers", "1", "--config", str(output), "-q", "-o", str(pool)]
     assert main(argv) == 0
     assert len(load_pool(pool).postures) == 3
+    capsys.readouterr()
+    assert main(["check", str(pool), "-q"]) == 0
+    assert re.search(r"\(\d+ primitives; pinocchio", capsys.readouterr().out)  # no mesh: no "meshes" said
     assert _init(mjcf, output) == 0  # a re-run: the same URDF is there already, kept
 
 
