@@ -36,7 +36,7 @@ class NativeOutput:
             >>> with native_output() as printed:  # doctest: +SKIP
             ...     pin.buildModelFromXML(text)
             >>> printed.cause()  # doctest: +SKIP
-            'Error: Failed to build tree: parent link [nothing] of joint [l_knee] not found.'
+            'Error: Failed to build tree: parent link [nothing] of joint [j2] not found.'
 
         """
         lines = [" ".join(line.split()) for line in self.text.splitlines() if line.strip()]

@@ -77,8 +77,9 @@ def check_writable(path: str | Path, kind: OutputKind = OutputKind.FILE) -> None
     """
     path = Path(path)
     if kind is OutputKind.FILE and path.suffix.lower() == SIDECAR_SUFFIX:
+        kept = "not overwriting it" if path.exists() else "not writing it"
         raise OutputError(
-            f"{path}: a {SIDECAR_SUFFIX} name is kept for the arrays posegen writes beside a header; "
+            f"{path}: a {SIDECAR_SUFFIX} name is kept for the arrays posegen writes beside a header: {kept}; "
             "give another name (e.g. .yaml)"
         )
     if path.exists():
