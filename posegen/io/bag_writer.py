@@ -69,7 +69,8 @@ def check_bag_destination(path: str | Path) -> None:
     """Check, before any work, that a bag may be written at ``path``: nothing, an empty folder, or posegen's bag.
 
     A bag posegen wrote has its provenance in ``metadata.yaml`` (``custom_data``) and
-    holds nothing but that file, the storage files it lists and :data:`BAG_FILES`; a
+    holds nothing but that file, the storage files it lists and :data:`BAG_FILES` (files,
+    not folders or links); a
     recording (no posegen provenance) or a folder holding anything else (a user's notes)
     is never replaced.
 
@@ -89,10 +90,15 @@ def check_bag_destination(path: str | Path) -> None:
     if meta.provenance is None:
         raise InputError(f"{path} is a rosbag2 directory posegen did not write (a recording?): not replacing it")
     ours = {METADATA_FILE, *(f.name for f in meta.files), *BAG_FILES}
-    others = sorted(p.name for p in path.iterdir() if p.name not in ours)
+    others = sorted(p.name for p in path.iterdir() if not _written(p, ours))
     if others:
         shown = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
         raise InputError(f"{path} holds files posegen did not write ({shown}): not replacing it; give another folder")
+
+
+def _written(entry: Path, names: set[str]) -> bool:
+    """Whether a bag folder's entry may be what posegen wrote: a file (not a folder, not a link) of ``names``."""
+    return entry.name in names and entry.is_file() and not entry.is_symlink()
 
 
 @contextmanager

@@ -120,7 +120,7 @@ def _without_provenance(bag):
     meta.write_text(yaml.safe_dump(info))
 
 
-@pytest.mark.parametrize("kind", ["recording", "notes", "bad_metadata"])
+@pytest.mark.parametrize("kind", ["recording", "notes", "bad_metadata", "storage_folder"])
 def test_a_recording_or_a_bag_holding_other_files_is_never_replaced(kind, tmp_path):
     times, arrays, segments = route()
     target = tmp_path / "bag"
@@ -129,10 +129,19 @@ def test_a_recording_or_a_bag_holding_other_files_is_never_replaced(kind, tmp_pa
         _without_provenance(target)
     elif kind == "notes":
         (target / "notes.txt").write_text("mine")
+    elif kind == "storage_folder":  # a folder where the storage file was: not posegen's
+        storage = next(target.glob("*.mcap"))
+        storage.unlink()
+        storage.mkdir()
+        (storage / "mine.txt").write_text("mine")
     else:
         (target / "metadata.yaml").write_text("rosbag2_bagfile_information: 3\n")
-    before = {p.name: p.read_bytes() for p in target.iterdir()}
-    message = {"recording": "posegen did not write", "notes": r"files posegen did not write \(notes\.txt\)"}
+    before = {str(p): p.read_bytes() for p in target.rglob("*") if p.is_file()}
+    message = {
+        "recording": "posegen did not write",
+        "notes": r"files posegen did not write \(notes\.txt\)",
+        "storage_folder": r"files posegen did not write \(bag\.mcap\)",
+    }
     with pytest.raises(InputError, match=message.get(kind, "not a rosbag2 bag")):
         write_trajectory_bag(target, NAMES, times, arrays, segments[:1], TRAJECTORY_TOPIC, "/s", {})
-    assert {p.name: p.read_bytes() for p in target.iterdir()} == before
+    assert {str(p): p.read_bytes() for p in target.rglob("*") if p.is_file()} == before

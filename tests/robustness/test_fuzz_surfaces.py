@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from posegen.calibrate import JointOffset, apply_offsets, compensate, read_compliance, read_offsets, uncompensate
@@ -246,6 +246,7 @@ def edit_folder(bag: Path, edit: str, data: st.DataObject) -> None:
 
 @settings(max_examples=SLOW, suppress_health_check=FIXTURES)
 @given(edit=FOLDER_EDITS, command=st.sampled_from(["export", "simulate"]), data=st.data())
+@example(edit="storage_dir", command="export", data=None)  # corpus: a folder named as its storage was replaced
 def test_bags_over_existing_folders(posegen_bag, route_file, edit, command, data, capfd):
     with tempfile.TemporaryDirectory() as scratch:
         bag = Path(scratch) / "bag"
