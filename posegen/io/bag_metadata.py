@@ -58,6 +58,9 @@ def read_bag_metadata(path: str | Path) -> BagMetadata:
         provenance = json.loads(written) if isinstance(written, str) else None
     except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:  # JSON too
         raise InputError(f"{path}: not a rosbag2 bag ({METADATA_FILE}: {reason(exc)})") from exc
+    bad = next((f.name for f in files if not f.name or f.name in (".", "..") or len(f.name.encode()) > 255), None)
+    if bad is not None:
+        raise InputError(f"{path}: not a rosbag2 bag ({METADATA_FILE}: storage file name {bad[:40]!r} is no file's)")
     if provenance is not None and not isinstance(provenance, dict):
         provenance = None
     return BagMetadata(storage, files, start_ns, compression, provenance)
