@@ -62,9 +62,12 @@ test: lint browser
 kill-matrix: $(STAMP)
 	POSEGEN_KILL_MATRIX=full $(PY) -m pytest -q tests/robustness/test_kill_matrix.py
 
-# The fuzz suite with new random draws and many examples (~25 min; make test runs a few, fixed).
+# The fuzz suite with new random draws and many examples (~10 min; make test runs a few, fixed):
+# the old surfaces, robot init, the session index, the deliverables, bags over folders, kills of session add.
+FUZZ_TESTS := tests/robustness/test_fuzz.py tests/robustness/test_readers.py \
+	tests/robustness/test_fuzz_surfaces.py tests/session/test_journal.py
 fuzz: $(STAMP)
-	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q tests/robustness/test_fuzz.py tests/robustness/test_readers.py
+	HYPOTHESIS_PROFILE=fuzz $(PY) -m pytest -q $(FUZZ_TESTS)
 
 # The documentation site (Sphinx: docs/*.md and the API from the docstrings); warnings are errors.
 docs: $(STAMP)

@@ -405,7 +405,7 @@ TREE_PARAMETERS = ("dict[str, Any]", "Mapping[str, Any]")  # a parameter that is
 # removes its entries, and the test then fails here until they are gone from this list.
 DICT_READERS = {
     "posegen.io.artefact": "reader: read_yaml checks every artefact's format and version",
-    "posegen.io.recorded_bag": "reader: a rosbag2 folder's metadata.yaml",
+    "posegen.io.bag_metadata": "reader: a rosbag2 folder's metadata.yaml",
     "posegen.pool.checkpoint": "reader: the pool checkpoint's lines",
     "posegen.io.pool_file": "reader: the pool and selection formats (Pool)",
     "posegen.io.route_file": "reader: the route format (Route)",
@@ -416,7 +416,7 @@ DICT_READERS = {
     "posegen.calibrate.summary": "reader: calibration.yaml (CalibrationSummary)",
     "posegen.select.selection_file": "reader: the selection format (Selection)",
     "posegen.calibrate.offsets": "reader: offsets.yaml",
-    "posegen.session.index": "reader: session.yaml (SessionIndex)",
+    "posegen.session.index_reader": "reader: session.yaml (SessionIndex)",
     "posegen.physics.physics_file": "reader: physics.yaml (PhysicsReport)",
     "posegen.parallel.cluster": "not an artefact: a worker plugin's pickled state (__setstate__)",
     "posegen.robot.scene": "Provenance: an artefact's provenance as a dict (scene_for, check_made_for)",

@@ -108,6 +108,7 @@ def _route(route_path: str, scene: Scene | None, config_path: str | None = None)
     scene = scene or scene_for(route.provenance, config_path)
     scene.check_made_for(route.provenance, route_path)
     route.joint_columns(scene.joint_names, route_path)  # the robot's joints, each once, in any order (as check)
+    route.check_chains([c.name for c in scene.config.chains], route_path)  # its contacts' arms (as check)
     return route_motion(route).in_order(scene.joint_names), scene
 
 

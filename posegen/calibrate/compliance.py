@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from posegen.errors import InputError
+from posegen.errors import InputError, reason
 from posegen.io import dump_yaml, read_yaml, write_atomic
 from posegen.robot import FloatArray, Scene, gravity_torques
 
@@ -43,6 +43,7 @@ TORQUE_MODEL = (
 )
 INVERSE_ITERATIONS = 50  # fixed-point steps of :func:`uncompensate` at most
 INVERSE_TOLERANCE_RAD = 1e-13
+MAX_COMPLIANCE_RAD_PER_NM = 1.0  # a joint turned a radian by a newton metre holds no robot up (real ones: ~1e-4)
 
 
 @dataclass(frozen=True)
@@ -77,9 +78,16 @@ class Compliance:
         """Per group, the indices of its joints in ``joint_names``.
 
         Raises:
-            InputError: Joints of the compliance that ``joint_names`` lacks (all of them named).
+            InputError: A group whose compliance is not a finite number from 0, or joints of
+                the compliance that ``joint_names`` lacks (all of them named).
 
         """
+        for group in self.groups:
+            if not isinstance(group, ComplianceGroup) or not _compliance(group.compliance_rad_per_nm):
+                raise InputError(
+                    f"compliance group {getattr(group, 'name', group)!r}: compliance_rad_per_nm must be a finite "
+                    f"number from 0 to {MAX_COMPLIANCE_RAD_PER_NM:g} (a joint that gives way under load)"
+                )
         missing = sorted({j for g in self.groups for j in g.joints if j not in joint_names})
         if missing:
             raise InputError(f"the compliance names joints the robot does not have: {', '.join(missing)}")
@@ -91,14 +99,32 @@ def _torques(scene: Scene, joints: FloatArray, torques: FloatArray | None) -> Fl
     """The holding torques (n, nj) N m: given (checked), or from the URDF's masses at ``joints``."""
     if torques is None:
         return gravity_torques(scene, joints)
-    given = np.array(torques, dtype=float, ndmin=2)
+    given = _real_array(torques, "torques")
     if given.shape != joints.shape or not np.all(np.isfinite(given)):
         raise InputError(f"torques: expected finite values of shape {joints.shape}, got {given.shape}")
     return given
 
 
+def _real_array(values: Any, name: str) -> FloatArray:
+    """``values`` as a float array of at least 2 dimensions (a copy), if they are real numbers.
+
+    Raises:
+        InputError: Text, complex numbers, booleans or anything else that is not a real number.
+
+    """
+    try:
+        raw = np.asarray(values)
+    except (TypeError, ValueError) as exc:  # ragged nested lists
+        raise InputError(f"{name}: expected an array of numbers ({reason(exc)})") from exc
+    if raw.dtype.kind not in "fiu":
+        raise InputError(f"{name}: expected real numbers (rad or N m), got an array of {raw.dtype}")
+    return np.array(raw, dtype=float, ndmin=2)
+
+
 def _joints(scene: Scene, joints: FloatArray, name: str) -> FloatArray:
-    array = np.array(joints, dtype=float, ndmin=2)  # a copy: the caller's array is never changed
+    if not isinstance(scene, Scene):
+        raise InputError(f"scene: expected a posegen Scene (posegen.load_scene), not {type(scene).__name__}")
+    array = _real_array(joints, name)  # a copy: the caller's array is never changed
     if array.ndim != 2 or array.shape[1] != len(scene.joint_names) or not np.all(np.isfinite(array)):
         raise InputError(
             f"{name}: expected finite joint angles of shape (n, {len(scene.joint_names)}) in the scene's joint "
@@ -138,8 +164,8 @@ def compensate(
         >>> true_joints = compensate(scene, encoder_joints, read_compliance("with_compliance/compliance.yaml"))
 
     """
-    indices = compliance.indices(scene.joint_names)
     q = _joints(scene, joints, "joints")
+    indices = _checked(compliance).indices(scene.joint_names)
     return np.asarray(q - _deflection(compliance, indices, _torques(scene, q, torques)))
 
 
@@ -166,8 +192,8 @@ def uncompensate(
         >>> command = uncompensate(scene, wanted_joints, compliance)  # what to send to the joint drivers
 
     """
-    indices = compliance.indices(scene.joint_names)
     target = _joints(scene, joints, "joints")
+    indices = _checked(compliance).indices(scene.joint_names)
     if torques is not None:
         return np.asarray(target + _deflection(compliance, indices, _torques(scene, target, torques)))
     encoder = target.copy()
@@ -213,7 +239,7 @@ def read_compliance(path: str | Path) -> Compliance:
 
     Raises:
         InputError: Not a compliance file, or a group without joints or with a compliance
-            that is not a finite number.
+            (or its standard deviation) that is not a finite number from 0.
 
     Example:
         >>> compliance = read_compliance("plans/calibration/with_compliance/compliance.yaml")
@@ -231,11 +257,25 @@ def read_compliance(path: str | Path) -> Compliance:
         std = group.get("std_rad_per_knm", 0.0) if isinstance(group, dict) else None
         if not isinstance(joints, list) or not joints or not all(isinstance(j, str) for j in joints):
             raise InputError(f"{path}: groups.{name}.joints: expected a non-empty list of joint names")
-        if not _finite(value) or not _finite(std):
-            raise InputError(f"{path}: groups.{name}: compliance_rad_per_nm and std_rad_per_knm must be finite numbers")
+        if not _compliance(value) or not _finite(std) or std < 0:  # type: ignore[operator]
+            raise InputError(
+                f"{path}: groups.{name}: compliance_rad_per_nm must be a finite number from 0 to "
+                f"{MAX_COMPLIANCE_RAD_PER_NM:g} and std_rad_per_knm a finite one from 0 (got {value!r}, {std!r})"
+            )
         groups.append(ComplianceGroup(str(name), tuple(joints), float(value), float(std) * 1e-3))  # type: ignore[arg-type]
     return Compliance(tuple(groups), tuple(soles))
 
 
 def _finite(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and bool(np.isfinite(value))
+
+
+def _compliance(value: object) -> bool:
+    """Whether ``value`` is a compliance: a number from 0 (a negative one would push back) to the largest plausible."""
+    return _finite(value) and 0.0 <= float(value) <= MAX_COMPLIANCE_RAD_PER_NM  # type: ignore[arg-type]
+
+
+def _checked(compliance: Compliance) -> Compliance:
+    if not isinstance(compliance, Compliance):
+        raise InputError(f"compliance: expected a Compliance (read_compliance), not {type(compliance).__name__}")
+    return compliance

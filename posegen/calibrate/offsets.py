@@ -43,6 +43,8 @@ CONVENTION = (
     "listed are unchanged"
 )
 PLACEMENT_FIELDS = ("x_m", "y_m", "z_m", "roll_rad", "pitch_rad", "yaw_rad")
+MAX_LENGTH_M = 10.0  # largest |x|, |y|, |z| of a placement change (a calibration moves joints by mm)
+MAX_ANGLE_RAD = 2.0 * np.pi  # largest |angle| of an offset or a placement change
 
 
 @dataclass(frozen=True)
@@ -55,30 +57,60 @@ class JointOffset:
     inserted: tuple[str, str] | None = None  # a fixed joint the calibration adds: (new empty parent link, child link)
 
 
+def _numbers(joint: ET.Element, element: str, key: str, default: str) -> FloatArray:
+    """Three finite numbers of a joint's ``<element key="...">`` (``default`` if absent).
+
+    Raises:
+        InputError: Not three finite numbers (the joint and the attribute named).
+
+    """
+    found = joint.find(element)
+    text = default if found is None else found.get(key, default)
+    try:
+        values = np.array([float(v) for v in text.split()])
+    except ValueError:
+        values = np.array([])
+    if values.shape != (3,) or not np.all(np.isfinite(values)):
+        raise InputError(f'joint {joint.get("name")}: <{element} {key}="{text}">: expected three finite numbers')
+    return values
+
+
 def _origin(joint: ET.Element) -> FloatArray:
     """The joint's origin as a (4, 4) transform."""
-    origin = joint.find("origin")
-    xyz = np.zeros(3) if origin is None else np.array([float(v) for v in origin.get("xyz", "0 0 0").split()])
-    rpy = np.zeros(3) if origin is None else np.array([float(v) for v in origin.get("rpy", "0 0 0").split()])
     out = np.eye(4)
-    out[:3, :3] = pin.rpy.rpyToMatrix(rpy)
-    out[:3, 3] = xyz
+    out[:3, :3] = pin.rpy.rpyToMatrix(_numbers(joint, "origin", "rpy", "0 0 0"))
+    out[:3, 3] = _numbers(joint, "origin", "xyz", "0 0 0")
     return out
 
 
 def _axis(joint: ET.Element) -> FloatArray:
-    axis = joint.find("axis")
-    text = "1 0 0" if axis is None else axis.get("xyz", "1 0 0")
-    vector = np.array([float(v) for v in text.split()])
-    return np.asarray(vector / np.linalg.norm(vector))
+    vector = _numbers(joint, "axis", "xyz", "1 0 0")
+    norm = float(np.linalg.norm(vector))
+    if not norm > 0.0:
+        raise InputError(f"joint {joint.get('name')}: its axis is 0 0 0 (a joint turns about a direction)")
+    return np.asarray(vector / norm)
 
 
-def _joints(urdf_text: str, name: str) -> dict[str, ET.Element]:
+def _root(urdf_text: str, name: str) -> ET.Element:
+    """The root element of a URDF's text.
+
+    Raises:
+        InputError: Not text, not XML, or not a ``<robot>``.
+
+    """
+    if not isinstance(urdf_text, str):
+        raise InputError(f"{name}: expected the URDF's text, not {type(urdf_text).__name__}")
     try:
         root = ET.fromstring(urdf_text)
     except ET.ParseError as exc:
-        raise InputError(f"{name}: not a URDF ({exc})") from None
-    return {str(j.get("name")): j for j in root.findall("joint")}
+        raise InputError(f"{name}: not a URDF (not valid XML: {exc})") from None
+    if root.tag != "robot":
+        raise InputError(f"{name}: not a URDF (its root element is <{root.tag}>, not <robot>)")
+    return root
+
+
+def _joints(urdf_text: str, name: str) -> dict[str, ET.Element]:
+    return {str(j.get("name")): j for j in _root(urdf_text, name).findall("joint")}
 
 
 def _twist(rotation: FloatArray, axis: FloatArray) -> float:
@@ -156,13 +188,20 @@ def apply_offsets(nominal_urdf: str, offsets: list[JointOffset]) -> str:
     """The nominal URDF with every placement change applied (the angle offsets stay with the encoders).
 
     Raises:
-        InputError: An offset names a joint the URDF does not have, or an angle offset a joint that does not rotate.
+        InputError: ``nominal_urdf`` is not a URDF (its joints' origins and axes finite), an
+            offset is not a :class:`JointOffset` within :data:`MAX_LENGTH_M` and
+            :data:`MAX_ANGLE_RAD`, names a joint the URDF does not have, or gives an angle
+            offset to a joint that does not rotate.
 
     Example:
         >>> text = apply_offsets(Path("robot.urdf").read_text(), read_offsets("offsets.yaml"))
 
     """
-    root = ET.fromstring(nominal_urdf)
+    root = _root(nominal_urdf, "nominal_urdf")
+    if not isinstance(offsets, (list, tuple)):
+        raise InputError(f"offsets: expected a list of JointOffset (read_offsets), not {type(offsets).__name__}")
+    for offset in offsets:
+        _check_offset(offset)
     for offset in offsets:
         if offset.inserted is not None:
             _insert(root, offset)
@@ -178,12 +217,39 @@ def apply_offsets(nominal_urdf: str, offsets: list[JointOffset]) -> str:
         change[:3, :3] = pin.rpy.rpyToMatrix(np.array(offset.placement[3:]))
         change[:3, 3] = offset.placement[:3]
         moved = _origin(joint) @ change
+        if not np.all(np.isfinite(moved)) or np.abs(moved[:3, 3]).max() > MAX_LENGTH_M:
+            raise InputError(f"joint {offset.joint}: its calibrated origin {moved[:3, 3]} m is not a placement")
         origin = joint.find("origin")
         if origin is None:
             origin = ET.SubElement(joint, "origin")
         origin.set("xyz", " ".join(f"{v:.17g}" for v in moved[:3, 3]))
         origin.set("rpy", " ".join(f"{v:.17g}" for v in pin.rpy.matrixToRpy(moved[:3, :3])))
     return ET.tostring(root, encoding="unicode", xml_declaration=True)
+
+
+def _check_offset(offset: JointOffset) -> None:
+    """An offset's numbers: finite, lengths within :data:`MAX_LENGTH_M`, angles within :data:`MAX_ANGLE_RAD`.
+
+    Raises:
+        InputError: Not a :class:`JointOffset`, or a number out of range (the joint named).
+
+    """
+    if not isinstance(offset, JointOffset):
+        raise InputError(f"offsets: expected JointOffset entries (read_offsets), not {type(offset).__name__}")
+    problem = _offset_problem(offset.angle_offset_rad, offset.placement)
+    if problem:
+        raise InputError(f"offsets: joint {offset.joint}: {problem}")
+
+
+def _offset_problem(angle: object, placement: object) -> str:
+    """What is wrong with an offset's numbers ("" if nothing)."""
+    values = list(placement) if isinstance(placement, (tuple, list)) else []
+    if len(values) != len(PLACEMENT_FIELDS) or not all(_finite(v) for v in [angle, *values]):
+        return f"angle_offset_rad and placement ({', '.join(PLACEMENT_FIELDS)}) must be finite numbers"
+    lengths, angles = values[:3], [angle, *values[3:]]
+    if max(abs(v) for v in lengths) > MAX_LENGTH_M or max(abs(v) for v in angles) > MAX_ANGLE_RAD:
+        return f"lengths must be within {MAX_LENGTH_M:g} m and angles within {MAX_ANGLE_RAD:.4g} rad"
+    return ""
 
 
 def offsets_data(offsets: list[JointOffset], urdf: str, nominal: str, provenance: dict[str, Any]) -> dict[str, Any]:
@@ -215,8 +281,9 @@ def read_offsets(path: str | Path, joint_names: tuple[str, ...] | None = None) -
     """Read and check an ``offsets.yaml``; with ``joint_names`` (the URDF's joints), every joint must be one of them.
 
     Raises:
-        InputError: Not an offsets file, a value that is not a finite number, or joints
-            that ``joint_names`` lacks (all of them named).
+        InputError: Not an offsets file, a value that is not a finite number (or a length
+            past :data:`MAX_LENGTH_M`, an angle past :data:`MAX_ANGLE_RAD`), or joints that
+            ``joint_names`` lacks (all of them named).
 
     Example:
         >>> offsets = read_offsets("plans/calibration/offsets.yaml")
@@ -231,11 +298,9 @@ def read_offsets(path: str | Path, joint_names: tuple[str, ...] | None = None) -
         placement = entry.get("placement") if isinstance(entry, dict) else None
         angle = entry.get("angle_offset_rad") if isinstance(entry, dict) else None
         values = [placement.get(f) for f in PLACEMENT_FIELDS] if isinstance(placement, dict) else [None]
-        if not all(_finite(v) for v in [angle, *values]):
-            raise InputError(
-                f"{path}: joints.{name}: angle_offset_rad and placement ({', '.join(PLACEMENT_FIELDS)}) "
-                "must be finite numbers"
-            )
+        problem = _offset_problem(angle, values)
+        if problem:
+            raise InputError(f"{path}: joints.{name}: {problem}")
         inserted = entry.get("inserted")
         links = (inserted.get("parent"), inserted.get("child")) if isinstance(inserted, dict) else None
         if inserted is not None and (links is None or not all(isinstance(v, str) and v for v in links)):

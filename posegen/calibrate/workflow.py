@@ -117,6 +117,7 @@ def simulate_postures_file(
     check_compliance(scene, compliance_rad_per_knm)
     scene.check_made_for(chosen.provenance, postures_path)
     chosen.check_joints(scene.joint_names, postures_path)
+    chosen.check_names([c.name for c in scene.config.chains], [s.name for s in scene.spots], postures_path)
     chosen.check_limits(scene.joint_names, scene.lower, scene.upper, postures_path)
     chains = tuple(p.chain for p in chosen.postures)
     spots = tuple(p.spot for p in chosen.postures)
@@ -270,6 +271,8 @@ def calibrate_files(
     check_writable(out_dir, OutputKind.FOLDER)
     files = [measurement_item(item)[0] for item in [*measurements, *held_out]]
     check_apart([out_dir], [config_path, *files])
+    _check_given_once(files[: len(measurements)], "measurements")
+    _check_given_once(files[len(measurements) :], "held_out")
     _check_held_out_apart(files[: len(measurements)], files[len(measurements) :])
     check_replaceable(out_dir, CALIBRATION_FILE)
     scene = Scene(load_config(config_path)) if config_path else _saved_scene([*measurements, *held_out])
@@ -288,6 +291,29 @@ def calibrate_files(
     return Calibrated(summary=summary, training_contacts=len(train))
 
 
+def _same_file(first: str, second: str) -> bool:
+    """Whether two paths name one file (by path, symlink or hard link)."""
+    if Path(first).resolve() == Path(second).resolve():
+        return True
+    return Path(first).exists() and Path(second).exists() and os.path.samefile(first, second)
+
+
+def _check_given_once(files: Sequence[str], parameter: str) -> None:
+    """No measurement file is given twice (its rows would count twice, under any session name).
+
+    Raises:
+        InputError: A file given twice (by path, link or name).
+
+    """
+    for i, later in enumerate(files):
+        for earlier in files[:i]:
+            if _same_file(earlier, later):
+                raise InputError(
+                    f"{later} is given twice ({parameter}): its contacts would count twice; give it once",
+                    parameter=parameter,
+                )
+
+
 def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> None:
     """No file is both fitted and held out (its contacts would judge the fit they made).
 
@@ -297,9 +323,7 @@ def _check_held_out_apart(training: Sequence[str], held_out: Sequence[str]) -> N
     """
     for kept in held_out:
         for fitted in training:
-            if Path(kept).resolve() == Path(fitted).resolve() or (
-                Path(kept).exists() and Path(fitted).exists() and os.path.samefile(kept, fitted)
-            ):
+            if _same_file(kept, fitted):
                 raise InputError(
                     f"{kept} is a training file and a held-out one (held_out): give it once", parameter="held_out"
                 )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -110,10 +111,12 @@ def run(args: argparse.Namespace) -> int:
             index = start_session(args.pool, args.output, settings, backend)
             _planned(args.output, index.batches[-1])
             return 0
+        report, missing = _report_writer()
         if args.step == "add":
             from posegen.session import add_bag
 
-            _added(args.session, add_bag(args.session, args.bag, backend, args.new_table))
+            _added(args.session, add_bag(args.session, args.bag, backend, args.new_table, report))
+            _say_missing(missing)
             return 0
         noise = {"contact_noise_mm": args.contact_noise_mm, "contact_noise_deg": args.contact_noise_deg}
         robot = Robot(
@@ -121,13 +124,36 @@ def run(args: argparse.Namespace) -> int:
             compliance_rad_per_knm=args.compliance,
             **{k: v for k, v in noise.items() if v is not None},  # None: the real recordings' figures
         )
-        added = rehearse_session(args.session, robot, backend, args.max_batches, lambda a: _added(args.session, a))
+        added = rehearse_session(
+            args.session, robot, backend, args.max_batches, lambda a: _added(args.session, a), report
+        )
+    _say_missing(missing)
     if not added:
         verdict = "is done" if read_index(Path(args.session)).done else "stopped at the floor"
         print(f"session: {args.session} {verdict} already: nothing to rehearse")
     elif not added[-1].index.ended:
         print(f"session: not done after {len(added)} rehearsed batches (--max-batches {args.max_batches})")
     return 0
+
+
+def _report_writer() -> tuple[Any, Exception | None]:
+    """What writes each calibration's report.html into its staging folder; None and why without ``[view]``."""
+    from posegen.errors import ExtraError
+
+    try:
+        from posegen.view import write_report_into
+    except ExtraError as exc:  # the calibration needs no viewer: only its HTML report does
+        return None, exc
+
+    def report(staging: Path, destination: Path) -> object:
+        return write_report_into(staging, None, shown_as=destination)
+
+    return report, None
+
+
+def _say_missing(missing: Exception | None) -> None:
+    if missing is not None:
+        print(f"posegen: report.html not written: {missing}", file=sys.stderr)
 
 
 def _planned(session: str, batch: Any) -> None:
@@ -140,7 +166,6 @@ def _planned(session: str, batch: Any) -> None:
 def _added(session: str, added: Any) -> None:
     """Print a batch's verdict and what comes next."""
     from posegen.calibrate import file_lines, read_summary
-    from posegen.view import write_report
 
     batch, index = added.batch, added.index
     recording, assessment = batch.recording, batch.assessment
@@ -162,7 +187,6 @@ def _added(session: str, added: Any) -> None:
         for chain, error in assessment.predicted_z_mm.items():
             verdict = "ok" if error <= target else "above"
             print(f"    {chain}: {error:.2f} mm ({verdict} the target {target:g} mm)")
-        write_report(folder, None)
         for chain, before, after in index.stalled:
             print(
                 f"  {chain}: no gain from the last batch ({before:.2f} -> {after:.2f} mm): the "

@@ -14,6 +14,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from posegen.errors import ConfigError
+from posegen.io import native_output
 from posegen.robot import FloatArray, FrameConfig
 
 FLAT_TOL_M = 0.002  # vertices this close to a face's plane lie on it
@@ -42,12 +44,25 @@ class HandContact:
 
 
 def load_geometry(model: pin.Model, urdf_xml: str, package_dirs: tuple[str, ...]) -> Geometry:
-    """Both geometry models of a URDF."""
+    """Both geometry models of a URDF.
+
+    Raises:
+        ConfigError: A mesh that cannot be loaded (not a mesh, or damaged): the loader's cause.
+
+    """
     dirs = list(package_dirs)
-    return Geometry(
-        collision=pin.buildGeomFromUrdfString(model, urdf_xml, pin.COLLISION, package_dirs=dirs),
-        visual=pin.buildGeomFromUrdfString(model, urdf_xml, pin.VISUAL, package_dirs=dirs),
-    )
+    try:
+        with native_output():  # the mesh loader's own lines, kept off the terminal
+            return Geometry(
+                collision=pin.buildGeomFromUrdfString(model, urdf_xml, pin.COLLISION, package_dirs=dirs),
+                visual=pin.buildGeomFromUrdfString(model, urdf_xml, pin.VISUAL, package_dirs=dirs),
+            )
+    except (RuntimeError, ValueError) as exc:
+        lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+        said = next((line for line in lines if line.startswith("message:")), lines[0] if lines else "")
+        more = next((line for line in lines if line.startswith("Failed")), "")
+        cause = " ".join(f"{said.removeprefix('message:').strip()} ({more})".split()) if more else said
+        raise ConfigError(f"a mesh of the robot cannot be loaded: {cause}") from exc
 
 
 def vertices(model: pin.Model, data: pin.Data, geom: pin.GeometryModel, joints: set[int], frame: pin.SE3) -> FloatArray:

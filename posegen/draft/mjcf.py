@@ -37,6 +37,7 @@ import pinocchio as pin
 
 from posegen.draft.mjcf_text import flattened_mjcf
 from posegen.errors import ConfigError
+from posegen.io import native_output
 
 MJCF_ROOT = "mujoco"
 _IDENTITY_TOL = 1e-12
@@ -78,7 +79,8 @@ def convert_mjcf(path: str | Path) -> MjcfUrdf:
         The URDF, and what it could not carry.
 
     Raises:
-        ConfigError: The file is not XML, pinocchio cannot load it, an include or mesh is missing,
+        ConfigError: The file is not XML, a number of it is not finite, pinocchio cannot load it, an include or
+            mesh is missing,
             its root has no free joint, or it has a ball joint or a second body in
             ``<worldbody>`` (the file and the element named).
 
@@ -90,6 +92,7 @@ def convert_mjcf(path: str | Path) -> MjcfUrdf:
     path = Path(path).resolve()
     root = flattened_mjcf(path)
     _check_elements(root, path)
+    _check_numbers(root, path)
     model, collision, visual = _load(root, path)
     _check_tree(model, path)
     writer = _UrdfWriter(model, _body_joint_names(root), path)
@@ -104,14 +107,46 @@ def _load(root: ET.Element, path: Path) -> tuple[pin.Model, pin.GeometryModel, p
         flat = str(Path(folder) / path.name)
         ET.ElementTree(root).write(flat, encoding="unicode")
         try:
-            model = pin.buildModelFromMJCF(flat)
-            collision = pin.buildGeomFromMJCF(model, flat, pin.GeometryType.COLLISION)
-            visual = pin.buildGeomFromMJCF(model, flat, pin.GeometryType.VISUAL)
+            with native_output():  # the parser's own lines, kept off the terminal
+                model = pin.buildModelFromMJCF(flat)
+                collision = pin.buildGeomFromMJCF(model, flat, pin.GeometryType.COLLISION)
+                visual = pin.buildGeomFromMJCF(model, flat, pin.GeometryType.VISUAL)
         except (RuntimeError, ValueError, IndexError) as exc:
             lines = str(exc).strip().splitlines()
             first = lines[0] if lines else type(exc).__name__
             raise ConfigError(f"{path}: pinocchio cannot load the MJCF: {first}") from exc
     return model, collision, visual
+
+
+_NUMBERS = (  # attributes that hold numbers, on any element of the model
+    "pos", "quat", "axisangle", "euler", "xyaxes", "zaxis", "axis", "fromto", "size", "mass", "diaginertia",
+    "fullinertia", "range", "ref", "scale", "density",
+)  # fmt: skip
+
+
+def _check_numbers(root: ET.Element, path: Path) -> None:
+    """Every number of the model finite, no mass negative (pinocchio reads both, and carries them into the URDF)."""
+    for element in root.iter():
+        if element.get("mass") is not None and _float(element.get("mass")) < 0.0:
+            raise ConfigError(f'{path}: <{element.tag}> mass="{element.get("mass")}": a negative mass (kg)')
+        for key in _NUMBERS:
+            text = element.get(key)
+            if text is None:
+                continue
+            try:
+                values = [float(v) for v in text.split()]
+            except ValueError:
+                values = []
+            if not values or not np.isfinite(values).all():
+                name = element.get("name") or element.get("mesh") or "(unnamed)"
+                raise ConfigError(f'{path}: <{element.tag} name="{name}"> {key}="{text}": expected finite numbers')
+
+
+def _float(text: str | None) -> float:
+    try:
+        return float(str(text))
+    except ValueError:
+        return float("nan")
 
 
 def _check_elements(root: ET.Element, path: Path) -> None:

@@ -12,11 +12,13 @@ the error names the MJCF file rather than that URDF.
 from __future__ import annotations
 
 import contextlib
+import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 from posegen.draft.mjcf import convert_mjcf, is_mjcf
+from posegen.draft.mjcf_text import MAX_INCLUDE_DEPTH, flattened_mjcf, parse_xml
 from posegen.errors import ConfigError, OutputError
 from posegen.io import write_atomic
 
@@ -40,6 +42,37 @@ def mjcf_source(robot: str) -> Path | None:
     """
     path = Path(robot)
     return path if path.is_file() and is_mjcf(path) else None
+
+
+def mjcf_files(mjcf: Path) -> tuple[Path, ...]:
+    """The files a conversion of ``mjcf`` reads: the model, its includes and its mesh files (those that exist).
+
+    A model that cannot be read yields the file alone (its conversion says what is wrong).
+
+    Example:
+        >>> mjcf_files(Path("humanoid.xml"))  # doctest: +SKIP
+        (PosixPath('humanoid.xml'), PosixPath('/models/materials.xml'))
+
+    """
+    found = [mjcf]
+    try:
+        found += _includes(mjcf, parse_xml(mjcf), 0)
+        root = flattened_mjcf(mjcf)
+    except ConfigError:
+        return tuple(found)
+    meshdir = Path(next((c.get("meshdir", "") for c in root.findall("compiler") if c.get("meshdir")), "."))
+    found += [meshdir / str(m.get("file")) for m in root.iter("mesh") if (meshdir / str(m.get("file", ""))).is_file()]
+    return tuple(dict.fromkeys(found))
+
+
+def _includes(path: Path, root: ET.Element, depth: int) -> list[Path]:
+    """The files ``<include>``d from ``root`` (read from the main file's folder, as MuJoCo does), recursively."""
+    found = []
+    for element in root.iter("include"):
+        included = path.parent / element.get("file", "")
+        if included.is_file() and depth < MAX_INCLUDE_DEPTH:
+            found += [included, *_includes(path, parse_xml(included), depth + 1)]
+    return found
 
 
 def urdf_beside(output: str | Path) -> Path:

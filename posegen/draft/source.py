@@ -3,7 +3,9 @@
 (An MJCF model is converted to a URDF first, by :mod:`posegen.draft.mjcf_source`.)
 
 Whatever is wrong with it is said in one line naming the file and the element: a file
-that is missing or not XML, a URDF pinocchio cannot load, a mesh that cannot be found
+that is missing or not XML, a folder, a malformed URDF (:mod:`posegen.draft.urdf_check`:
+not one tree, numbers that are not finite, no mass), a URDF pinocchio cannot load (what
+its parser printed kept off the terminal, its cause in the message), a mesh that cannot be found
 (relative paths are read from the URDF's folder, ``package://`` ones from the package
 dirs and from the folders above the URDF named like the package).
 """
@@ -18,7 +20,9 @@ from pathlib import Path
 import pinocchio as pin
 
 from posegen.draft.mjcf import MJCF_ROOT
+from posegen.draft.urdf_check import check_urdf
 from posegen.errors import ConfigError
+from posegen.io import native_output
 from posegen.robot import PACKAGE_URI, RobotFiles, RobotSource, package_uri, resolve_path, resolve_source
 
 
@@ -46,6 +50,8 @@ def load_draft_source(name: str, srdf: str | None = None, package_dirs: tuple[st
 
     """
     path = resolve_path(name, package_dirs) if name.startswith(PACKAGE_URI) else Path(name)
+    if path.is_dir():
+        raise ConfigError(f"{name}: a folder; give a URDF or MJCF file (or an example-robot-data name)")
     if path.suffix.lower() in (".urdf", ".xml", ".mjcf") or path.is_file():
         if not path.is_file():
             raise ConfigError(f"{name}: file not found")
@@ -64,12 +70,56 @@ def load_draft_source(name: str, srdf: str | None = None, package_dirs: tuple[st
         source = RobotSource(example_robot_data=name, srdf=srdf, package_dirs=package_dirs)
     files = resolve_source(source)
     text = files.urdf_text()
+    check_urdf(text, files.urdf)
     check_meshes(files.urdf, text, files.package_dirs)
-    try:
-        model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    except (RuntimeError, ValueError) as exc:
-        raise ConfigError(f"{files.urdf}: pinocchio cannot load it: {_first_line(exc)}") from exc
+    with native_output() as printed:  # urdfdom's own lines, kept: the message says the cause
+        try:
+            model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+        except (RuntimeError, ValueError) as exc:
+            error: Exception | None = exc
+        else:
+            error = None
+    if error is not None:
+        said = printed.cause()
+        raise ConfigError(
+            f"{files.urdf}: pinocchio cannot load it: {_first_line(error)}" + (f" ({said})" if said else "")
+        ) from error
     return DraftSource(source, files, text, model)
+
+
+def source_files(name: str, srdf: str | None = None, package_dirs: tuple[str, ...] = ()) -> tuple[Path, ...]:
+    """The files a draft of ``name`` reads: its URDF, SRDF and every mesh they name (those that exist).
+
+    None of them may be an output of ``robot init``. A description that cannot be read
+    yields what was found so far (its loading says what is wrong with it, in order).
+
+    Example:
+        >>> source_files("robot.urdf")  # doctest: +SKIP
+        (PosixPath('/robots/robot.urdf'), PosixPath('/robots/meshes/foot.stl'))
+
+    """
+    path = resolve_path(name, package_dirs) if name.startswith(PACKAGE_URI) else Path(name)
+    local = path.is_file()
+    source = (
+        RobotSource(urdf=str(path.resolve()), srdf=srdf, package_dirs=package_dirs)
+        if local
+        else RobotSource(example_robot_data=name, srdf=srdf, package_dirs=package_dirs)
+    )
+    found = [path] if local else []
+    try:
+        files = resolve_source(source)
+        found += [files.urdf, *([files.srdf] if files.srdf else [])]
+        root = ET.fromstring(files.urdf_text())
+    except (ConfigError, ET.ParseError):
+        return tuple(found)
+    for mesh in root.iter("mesh"):
+        filename = str(mesh.get("filename", ""))
+        if filename.startswith(PACKAGE_URI):
+            relative = filename[len(PACKAGE_URI) :].lstrip("/")
+            found += [Path(d) / relative for d in files.package_dirs if (Path(d) / relative).is_file()]
+        elif os.path.isfile(filename.removeprefix("file://")):
+            found.append(Path(filename.removeprefix("file://")))
+    return tuple(dict.fromkeys(found))
 
 
 def _xml_root(path: Path) -> ET.Element:

@@ -10,7 +10,8 @@ from typing import Any
 import yaml
 
 from posegen.draft.drafting import Draft, draft_robot
-from posegen.draft.mjcf_source import converted_urdf, mjcf_source, urdf_beside
+from posegen.draft.mjcf_source import converted_urdf, mjcf_files, mjcf_source, urdf_beside
+from posegen.draft.source import source_files
 from posegen.errors import ConfigError, InfeasibleError
 from posegen.io import check_apart, claim_output, write_atomic
 from posegen.model import pool_size
@@ -211,13 +212,15 @@ def write_draft(
     Raises:
         ConfigError: Unknown robot, a description that does not load, or a structure that
             is not two legs and two arms.
-        OutputError: ``output`` cannot be written, or another posegen is writing it; the
-            converted URDF's place holds another file.
+        OutputError: ``output`` cannot be written, or another posegen is writing it; it (or
+            the converted URDF) is a file the draft reads (the description, its SRDF, a
+            mesh); the converted URDF's place holds another file.
 
     """
     mjcf = mjcf_source(robot)
     urdf = urdf_beside(output) if mjcf else None
-    check_apart([output, urdf], [srdf, mjcf])  # never over the SRDF or the MJCF it reads
+    read = mjcf_files(mjcf) if mjcf else source_files(robot, srdf, package_dirs)
+    check_apart([output, urdf], [srdf, *read])  # never over the description, its SRDF or a mesh it reads
     with claim_output(output, beside=[urdf] if urdf else []), contextlib.ExitStack() as stack:
         if mjcf is None:
             draft = draft_robot(robot, srdf, samples, seed, package_dirs)

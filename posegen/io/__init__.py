@@ -24,6 +24,7 @@ from posegen.io.artefact import dump_yaml, load_yaml_file, provenance, read_text
 from posegen.io.atomic import atomic_folder, atomic_path, crash_point, staging_folder, swap_folder, write_atomic
 from posegen.io.bag_writer import check_bag_destination
 from posegen.io.companion import companion_of, companion_path, companions_of, write_with_companions
+from posegen.io.native_output import NativeOutput, native_output
 from posegen.io.output import (
     OutputKind,
     OutputLock,
@@ -50,6 +51,7 @@ from posegen.io.pool_file import (
 from posegen.io.recorded_bag import JOINT_STATE, WRENCH_STAMPED, JointStates, RecordedBag, Wrenches, write_recording
 from posegen.io.route_file import (
     MAX_DURATION_S,
+    MAX_POINT_VALUE,
     MIN_STEP_S,
     POSITION_DTYPE,
     ROUTE_ARRAYS,
@@ -78,6 +80,7 @@ __all__ = [
     "ACCELERATION_STEP",
     "JOINT_STATE",
     "MAX_DURATION_S",
+    "MAX_POINT_VALUE",
     "MIN_STEP_S",
     "POOL_FORMAT",
     "POOL_VERSION",
@@ -93,6 +96,7 @@ __all__ = [
     "VELOCITY_STEP",
     "WRENCH_STAMPED",
     "JointStates",
+    "NativeOutput",
     "OutputKind",
     "OutputLock",
     "Pool",
@@ -121,6 +125,7 @@ __all__ = [
     "load_postures",
     "load_yaml_file",
     "lock_path",
+    "native_output",
     "points_problem",
     "pool_from_dict",
     "posture_entries",

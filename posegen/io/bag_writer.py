@@ -23,8 +23,9 @@ from numpy.typing import NDArray
 from posegen.errors import InputError
 from posegen.extras import Extra, require
 from posegen.io.atomic import staging_folder, swap_folder, write_atomic
+from posegen.io.bag_metadata import METADATA_FILE, PROVENANCE_KEY, read_bag_metadata
 
-PROVENANCE_KEY = "posegen"
+BAG_FILES = ("truth.yaml",)  # what posegen writes into a bag beside its storage: a simulated session's truth
 
 
 class BagWriter:
@@ -65,15 +66,39 @@ class BagWriter:
 
 
 def check_bag_destination(path: str | Path) -> None:
-    """Check, before any work, that a bag may be written at ``path`` (nothing there, or a bag it replaces).
+    """Check, before any work, that a bag may be written at ``path``: nothing, an empty folder, or posegen's bag.
+
+    A bag posegen wrote has its provenance in ``metadata.yaml`` (``custom_data``) and
+    holds nothing but that file, the storage files it lists and :data:`BAG_FILES` (files,
+    not folders or links); a
+    recording (no posegen provenance) or a folder holding anything else (a user's notes)
+    is never replaced.
 
     Raises:
-        InputError: ``path`` exists and is not a rosbag2 directory (it is never deleted).
+        InputError: ``path`` exists and is not such a folder (it is never deleted).
 
     """
     path = Path(path)
-    if path.exists() and not (path.is_dir() and (path / "metadata.yaml").is_file()):
+    if not path.exists() or (path.is_dir() and not path.is_symlink() and not any(path.iterdir())):
+        return
+    if not path.is_dir() or not (path / METADATA_FILE).is_file():
         raise InputError(f"{path} exists and is not a rosbag2 directory: not overwriting it")
+    try:
+        meta = read_bag_metadata(path)
+    except InputError as exc:
+        raise InputError(f"{exc}: not replacing it") from exc
+    if meta.provenance is None:
+        raise InputError(f"{path} is a rosbag2 directory posegen did not write (a recording?): not replacing it")
+    ours = {METADATA_FILE, *(f.name for f in meta.files), *BAG_FILES}
+    others = sorted(p.name for p in path.iterdir() if not _written(p, ours))
+    if others:
+        shown = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3 else "")
+        raise InputError(f"{path} holds files posegen did not write ({shown}): not replacing it; give another folder")
+
+
+def _written(entry: Path, names: set[str]) -> bool:
+    """Whether a bag folder's entry may be what posegen wrote: a file (not a folder, not a link) of ``names``."""
+    return entry.name in names and entry.is_file() and not entry.is_symlink()
 
 
 @contextmanager
@@ -83,12 +108,12 @@ def writing_bag(
     """Write a rosbag2 directory at ``path``, all or nothing.
 
     Args:
-        path: The bag directory (a bag there is replaced whole).
+        path: The bag directory (a bag posegen wrote there is replaced whole: :func:`check_bag_destination`).
         provenance: Recorded in ``metadata.yaml``.
         extra: Text files to write into the bag directory with it, by file name.
 
     Raises:
-        InputError: ``path`` exists and is not a rosbag2 directory (it is never deleted).
+        InputError: ``path`` exists and is not an empty folder or a bag posegen wrote (it is never deleted).
 
     """
     require(Extra.ROS, "writing rosbag2 bags")

@@ -25,6 +25,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from posegen.errors import OutputError
+from posegen.io.arrays import SIDECAR_SUFFIX
 from posegen.io.atomic import leftover_temporaries
 
 LOG = logging.getLogger(__name__)
@@ -70,10 +71,17 @@ def check_writable(path: str | Path, kind: OutputKind = OutputKind.FILE) -> None
 
     Raises:
         OutputError: The path is a folder where a file is expected (or the reverse), an
-            existing special file, or in a place where no file can be created.
+            existing special file, a file named like an arrays sidecar (``.npz``), or in a
+            place where no file can be created.
 
     """
     path = Path(path)
+    if kind is OutputKind.FILE and path.suffix.lower() == SIDECAR_SUFFIX:
+        kept = "not overwriting it" if path.exists() else "not writing it"
+        raise OutputError(
+            f"{path}: a {SIDECAR_SUFFIX} name is kept for the arrays posegen writes beside a header: {kept}; "
+            "give another name (e.g. .yaml)"
+        )
     if path.exists():
         if kind is OutputKind.FILE and path.is_dir():
             raise OutputError(f"{path} is a folder; give a file name")

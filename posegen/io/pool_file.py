@@ -29,6 +29,7 @@ Version 1 (read, and written for small artefacts and selections) has the posture
 from __future__ import annotations
 
 import collections
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from posegen.errors import InputError, reason
+from posegen.errors import InputError, reason, unknown_name
 from posegen.io.arrays import read_arrays, write_with_arrays
 from posegen.io.artefact import read_yaml
 from posegen.numeric import FloatArray
@@ -112,6 +113,18 @@ class Pool:
         """
         if self.joint_names != joint_names:
             raise InputError(f"{where}: joint names differ from the robot model's")
+
+    def check_names(self, chains: Sequence[str], spots: Sequence[str], where: str) -> None:
+        """Check that every posture's chain and spot are the config's (``chains``, ``spots``).
+
+        Raises:
+            InputError: The first posture naming another chain or spot, with the valid names.
+
+        """
+        for k, posture in enumerate(self.postures):
+            for kind, name, valid in (("chain", posture.chain, chains), ("spot", posture.spot, spots)):
+                if name not in valid:
+                    raise InputError(f"{where}: posture {k}: {unknown_name(kind, name, valid)} (of the config)")
 
     def check_limits(self, names: tuple[str, ...], lower: FloatArray, upper: FloatArray, where: str) -> None:
         """Check that every posture lies within the joint limits (rad, shape (nj,) each), to 1e-6 rad.

@@ -18,7 +18,6 @@ left out, and said (a warning with their number).
 from __future__ import annotations
 
 import hashlib
-import json
 import logging
 import threading
 from collections.abc import Iterator, Mapping, Sequence
@@ -27,13 +26,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from posegen.errors import InputError, reason
 from posegen.extras import Extra, require
 from posegen.io import cdr, mcap_index
-from posegen.io.bag_writer import PROVENANCE_KEY, writing_bag
+from posegen.io.bag_metadata import read_bag_metadata
+from posegen.io.bag_writer import writing_bag
 from posegen.io.cdr import FloatArray
 
 LOG = logging.getLogger(__name__)
@@ -190,20 +189,10 @@ class RecordedBag:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        meta = self.path / "metadata.yaml"
-        if not self.path.is_dir() or not meta.is_file():
-            raise InputError(f"{self.path}: not a rosbag2 directory (no metadata.yaml)")
-        try:
-            info = yaml.safe_load(meta.read_text())["rosbag2_bagfile_information"]
-            self.storage = str(info["storage_identifier"])
-            self.files = tuple(self.path / Path(str(f)).name for f in info["relative_file_paths"])
-            self.start_ns = int(info["starting_time"]["nanoseconds_since_epoch"])
-            compression = str(info.get("compression_mode") or "").lower()
-            custom = info.get("custom_data") or {}
-            written = custom.get(PROVENANCE_KEY) if isinstance(custom, dict) else None
-            self.provenance: dict[str, Any] | None = json.loads(written) if isinstance(written, str) else None
-        except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError, ValueError) as exc:  # JSON too
-            raise InputError(f"{self.path}: not a rosbag2 bag (metadata.yaml: {reason(exc)})") from exc
+        meta = read_bag_metadata(self.path)
+        self.storage, self.files, self.start_ns = meta.storage, meta.files, meta.start_ns
+        self.provenance: dict[str, Any] | None = meta.provenance
+        compression = meta.compression
         if self.storage not in STORAGES:
             raise InputError(f"{self.path}: unknown storage plugin {self.storage!r}; valid: {', '.join(STORAGES)}")
         missing = [f.name for f in self.files if not f.is_file()]

@@ -51,6 +51,7 @@ from posegen.errors import InputError, reason
 from posegen.io.arrays import read_arrays
 from posegen.io.artefact import read_text_file, read_yaml
 from posegen.io.cdr import FloatArray
+from posegen.io.route_fields import index_field, inline_arrays, is_number, joint_name_list, shown
 
 ROUTE_FORMAT = "posegen-route"
 ROUTE_VERSION = 2
@@ -60,6 +61,7 @@ POSITION_DTYPE = np.float32  # positions, velocities and accelerations in the si
 TIME_DTYPE = np.float64
 MIN_STEP_S = 1e-6  # smallest time step a reader accepts (posegen check's --min-dt is the controller's, 1 ms)
 MAX_DURATION_S = 1e6  # longest route a reader accepts (11.6 days): times fit a rosbag2 clock in ns
+MAX_POINT_VALUE = 1e6  # largest |position| (rad), |velocity| (rad/s), |acceleration| (rad/s^2) a reader accepts
 
 
 class SegmentType(str, enum.Enum):
@@ -173,34 +175,34 @@ def read_route(path: str | Path) -> Route:
     """
     path = Path(path)
     data = _header(path)
+    version = data.get("format_version", 1)
+    if version not in READ_VERSIONS or isinstance(version, bool):
+        raise InputError(f"{path}: format_version {version!r}: this posegen reads versions 1 and 2")
     try:
-        version = data.get("format_version", 1)
-        if version not in READ_VERSIONS or isinstance(version, bool):
-            raise InputError(f"{path}: format_version {version!r}: this posegen reads versions 1 and 2")
         provenance = data.get("provenance") or {}
         if not isinstance(provenance, dict):
-            raise TypeError("provenance must be a mapping")
-        trajectory = data["trajectory"]
-        names = tuple(trajectory["joint_names"])
-        if not all(isinstance(name, str) for name in names):
-            raise TypeError("joint_names must be a list of names")
-        twice = sorted({n for n in names if names.count(n) > 1})
-        if twice:
-            raise ValueError(f"joint {twice[0]!r} is named twice")
-        rows = [_segment_row(seg) for seg in data["segments"]]
+            raise TypeError(f"provenance must be a mapping, not {shown(provenance)}")
+        trajectory = data.get("trajectory")
+        if not isinstance(trajectory, dict):
+            raise TypeError(f"trajectory must be a mapping with joint_names and points, not {shown(trajectory)}")
+        names = joint_name_list(trajectory.get("joint_names"))
+        segments = data.get("segments")
+        if not isinstance(segments, list):
+            raise TypeError(f"segments must be a list of segments, not {shown(segments)}")
+        rows = [_segment_row(seg, i) for i, seg in enumerate(segments)]
+        points = trajectory.get("points")
         if version == 2:
-            points = trajectory["points"]
             if not isinstance(points, int) or isinstance(points, bool) or points < 0:
-                raise ValueError(f"trajectory.points must be a count, not {points!r}")
+                raise ValueError(f"trajectory.points must be the number of points, not {shown(points)}")
             arrays = read_arrays(path, data.get("arrays"), ROUTE_ARRAYS, rows=points)
         else:
-            arrays = _inline_arrays(trajectory["points"])
+            arrays = inline_arrays(points, ROUTE_ARRAYS[1:])
         extras = {key: tuple(_mappings(data, key)) for key in ("postures", "skipped", "substitutions")}
         summary = data.get("summary")
         if summary is not None and not isinstance(summary, dict):
-            raise TypeError("summary must be a mapping")
-    except (KeyError, TypeError, ValueError, IndexError, OverflowError, AttributeError) as exc:
-        raise InputError(f"{path}: malformed route ({reason(exc)})") from exc
+            raise TypeError(f"summary must be a mapping, not {shown(summary)}")
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"{path}: malformed route: {exc}") from exc
     times, positions, velocities, accelerations = _point_arrays(arrays, len(names), str(path))
     problem = points_problem(times, (positions, velocities, accelerations), [(r[4], r[5]) for r in rows])
     if problem:
@@ -236,36 +238,31 @@ def _header(path: Path) -> dict[str, Any]:
     return data
 
 
-def _segment_row(seg: Any) -> tuple[SegmentType, str | None, int | None, int | None, int, int]:
-    """One segment of the header, its fields typed (its times are checked finite, then taken from the points).
+def _segment_row(seg: Any, i: int) -> tuple[SegmentType, str | None, int | None, int | None, int, int]:
+    """Segment ``i`` of the header, its fields typed (its times are checked finite, then taken from the points).
 
     Raises:
-        KeyError, TypeError, ValueError: A field missing or of the wrong type.
+        TypeError, ValueError: A field missing or of the wrong type (the segment and the field named).
 
     """
-    kind = SegmentType(seg["type"])
+    where = f"segments[{i}]"
+    if not isinstance(seg, dict):
+        raise TypeError(f"{where} must be a mapping, not {shown(seg)}")
+    kinds = [k.value for k in SegmentType]
+    if seg.get("type") not in kinds:
+        raise ValueError(f"{where}.type must be one of {', '.join(kinds)}, not {shown(seg.get('type'))}")
     chain = seg.get("chain")
     if chain is not None and not isinstance(chain, str):
-        raise TypeError(f"a segment's chain must be a name, not {chain!r}")
-    if not all(np.isfinite(float(seg[k])) for k in ("start_s", "end_s")):
-        raise ValueError(f"segment times must be finite numbers, not {seg['start_s']}, {seg['end_s']}")
-    return (
-        kind,
-        chain,
-        _count(seg.get("posture")),
-        _count(seg.get("pool_id")),
-        int(seg["first_point"]),
-        int(seg["last_point"]),
-    )
-
-
-def _count(value: Any) -> int | None:
-    """An index or None (a bool or a fraction is not an index)."""
-    if value is None:
-        return None
-    if isinstance(value, bool) or int(value) != value:
-        raise TypeError(f"an index must be a whole number, not {value!r}")
-    return int(value)
+        raise TypeError(f"{where}.chain must be a name, not {shown(chain)}")
+    for key in ("start_s", "end_s"):
+        value: Any = seg.get(key)
+        if not is_number(value) or not np.isfinite(float(value)):
+            raise ValueError(f"{where}.{key}: segment times must be finite numbers, not {shown(value)}")
+    first, last = (index_field(seg.get(k), f"{where}.{k}") for k in ("first_point", "last_point"))
+    if first is None or last is None:
+        raise ValueError(f"{where}: first_point and last_point must be point indexes")
+    posture, pool_id = (index_field(seg.get(k), f"{where}.{k}") for k in ("posture", "pool_id"))
+    return SegmentType(seg["type"]), chain, posture, pool_id, first, last
 
 
 def _mappings(data: dict[str, Any], key: str) -> list[dict[str, Any]]:
@@ -276,40 +273,36 @@ def _mappings(data: dict[str, Any], key: str) -> list[dict[str, Any]]:
     return values
 
 
-def _inline_arrays(points: list[dict[str, Any]]) -> dict[str, np.ndarray]:
-    """Arrays of a version-1 route's inline points (rows of unequal length are an error)."""
-    times = [p["time_from_start"]["sec"] + p["time_from_start"]["nanosec"] * 1e-9 for p in points]
-    return {
-        "time_from_start": np.array(times, dtype=float),
-        "positions": np.array([p["positions"] for p in points], dtype=float),
-        "velocities": np.array([p["velocities"] for p in points], dtype=float),
-        "accelerations": np.array([p["accelerations"] for p in points], dtype=float),
-    }
-
-
 def _point_arrays(arrays: dict[str, np.ndarray], nj: int, where: str) -> tuple[FloatArray, ...]:
     """Times (m,), positions, velocities and accelerations (m, nj), as C-ordered float64 copies.
 
     Raises:
-        InputError: Values that are not numbers, or shapes that disagree with each other or the joint names.
+        InputError: Arrays that are not of real floating-point numbers (integers, booleans,
+            complex numbers or text), or shapes that disagree with each other or the joint names.
 
     """
-    try:
-        times, positions, velocities, accelerations = (
-            np.array(arrays[name], dtype=float, order="C") for name in ROUTE_ARRAYS
-        )
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise InputError(f"{where}: point arrays that are not numbers ({reason(exc)})") from exc
-    shape = (len(times) if times.ndim == 1 else -1, nj)
-    if times.ndim != 1 or any(a.shape != shape for a in (positions, velocities, accelerations)):
-        raise InputError(f"{where}: point arrays of inconsistent shapes (expected {shape[0]} points of {nj})")
+    for name in ROUTE_ARRAYS:
+        dtype = np.asarray(arrays[name]).dtype
+        if not np.issubdtype(dtype, np.floating):
+            raise InputError(f"{where}: {name} holds {dtype} values; a route's points are floating-point numbers")
+    times, positions, velocities, accelerations = (
+        np.array(arrays[name], dtype=float, order="C") for name in ROUTE_ARRAYS
+    )
+    if times.ndim != 1:
+        raise InputError(f"{where}: time_from_start is an array of shape {times.shape}; expected one time per point")
+    for name, values in zip(ROUTE_ARRAYS[1:], (positions, velocities, accelerations), strict=True):
+        if values.shape != (len(times), nj):
+            raise InputError(
+                f"{where}: {name} is an array of shape {values.shape}; expected {len(times)} points of {nj} joints"
+            )
     return times, positions, velocities, accelerations
 
 
 def points_problem(times: FloatArray, arrays: tuple[FloatArray, ...], segments: Sequence[tuple[int, int]]) -> str:
     """What makes a route's points unusable by any reader ("" if nothing): the readers' rules.
 
-    Every value finite; times from 0, strictly increasing by at least :data:`MIN_STEP_S`,
+    Every value finite, positions, velocities and accelerations within :data:`MAX_POINT_VALUE`
+    in magnitude; times from 0, strictly increasing by at least :data:`MIN_STEP_S`,
     within :data:`MAX_DURATION_S`; a segment table that covers the points from first to
     last, each segment starting where the previous one ends.
 
@@ -326,6 +319,11 @@ def points_problem(times: FloatArray, arrays: tuple[FloatArray, ...], segments: 
         bad = np.flatnonzero(~np.isfinite(values).reshape(m, -1).all(axis=1))
         if len(bad):
             return f"{name} at point {bad[0]} is not a finite number"
+        if name != "time_from_start" and values.size and np.abs(values).max() > MAX_POINT_VALUE:
+            k = int(np.argmax(np.abs(values).max(axis=1)))
+            return (
+                f"{name} at point {k} holds {np.abs(values[k]).max():.3g}: beyond {MAX_POINT_VALUE:g}, no joint runs it"
+            )
     steps = np.diff(times)
     if times[0] != 0.0 or (len(steps) and steps.min() < MIN_STEP_S) or times[-1] > MAX_DURATION_S:
         k = int(np.argmin(steps)) + 1 if len(steps) and steps.min() < MIN_STEP_S else (0 if times[0] else m - 1)

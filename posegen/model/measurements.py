@@ -51,7 +51,11 @@ def _check_angles(scene: Scene, names: Sequence[str], values: np.ndarray, where:
     idx = [scene.joint_index(n) for n in names]
     low = scene.lower[idx] - tolerance
     high = scene.upper[idx] + tolerance
-    bad = np.flatnonzero((values < low) | (values > high) | ~np.isfinite(values))
+    missing = np.flatnonzero(~np.isfinite(values))
+    if len(missing):
+        k = int(missing[0])
+        raise InputError(f"{where}: {names[k]} = {values[k]} is not a finite number (a joint angle, rad)")
+    bad = np.flatnonzero((values < low) | (values > high))
     if len(bad):
         k = int(bad[0])
         raise InputError(

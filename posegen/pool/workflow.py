@@ -92,6 +92,7 @@ def check_pool_file(
     scene = scene_for(pool.provenance, config_path)
     scene.check_made_for(pool.provenance, path)
     pool.check_joints(scene.joint_names, path)
+    pool.check_names([c.name for c in scene.config.chains], [s.name for s in scene.spots], path)
     progress(Progress(0, len(pool.postures), "posture"))
     result = verify_postures(scene, pool.postures, progress, workers)
     return dataclasses.replace(result, geometry=geometry_coverage(scene))

@@ -356,5 +356,6 @@ def scene_for_postures(postures: Pool, path: str, config_path: str | None) -> Sc
     scene = scene_for(postures.provenance, config_path)
     scene.check_made_for(postures.provenance, path)
     postures.check_joints(scene.joint_names, path)
+    postures.check_names([c.name for c in scene.config.chains], [s.name for s in scene.spots], path)
     postures.check_limits(scene.joint_names, scene.lower, scene.upper, path)
     return scene

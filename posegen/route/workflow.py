@@ -218,23 +218,35 @@ class Exported:
     points: int
 
 
-def export_route_bag(route_path: str, bag: str, topic: str, segments_topic: str) -> Exported:
+def export_route_bag(
+    route_path: str, bag: str, topic: str, segments_topic: str, config_path: str | None = None
+) -> Exported:
     """Write a route file as a rosbag2 (MCAP): its trajectory per segment and whole, and its segment table.
 
     Args:
         route_path: Route file.
-        bag: Bag directory to write (a bag already there is replaced; anything else is kept).
+        bag: Bag directory to write (a bag posegen wrote there is replaced; a recording, or a
+            folder holding anything else, is refused and kept).
         topic: ``trajectory_msgs/JointTrajectory`` topic (a trajectory controller's command topic).
         segments_topic: ``diagnostic_msgs/DiagnosticArray`` topic of the segment table.
+        config_path: Scene config; None: the one saved in the route.
+
+    The route is read as ``check`` reads it: its joints are the robot model's (each once, in
+    any order) and every contact segment names one of the config's chains.
 
     Raises:
-        PosegenError: Not a route, or the destination is not a bag.
+        PosegenError: Not a route, one of another robot or of names the robot lacks, or a
+            destination that is not posegen's bag.
 
     """
     check_writable(bag, OutputKind.FOLDER)
-    check_apart([bag], [route_path])
+    check_apart([bag], [route_path, config_path])
     check_bag_destination(bag)
     route = read_route(route_path)
+    scene = scene_for(route.provenance, config_path)
+    scene.check_made_for(route.provenance, route_path)
+    route.joint_columns(scene.joint_names, route_path)
+    route.check_chains([c.name for c in scene.config.chains], route_path)
     provenance = dict(route.provenance)
     provenance.update({"route": route_path, "route_sha256": hashlib.sha256(Path(route_path).read_bytes()).hexdigest()})
     arrays = (route.positions, route.velocities, route.accelerations)

@@ -23,12 +23,12 @@ from posegen.session.index import (
     Recording,
     SessionIndex,
     SessionSettings,
-    read_index,
     write_index,
 )
+from posegen.session.index_reader import read_index
 from posegen.session.rehearsal import REHEARSAL_BAG, Robot, rehearse_session
 from posegen.session.status import STATUS_PLOT, Status, session_status
-from posegen.session.workflow import Added, add_bag, open_session, start_session
+from posegen.session.workflow import Added, Report, add_bag, open_session, start_session
 
 __all__ = [
     "INDEX_FILE",
@@ -42,6 +42,7 @@ __all__ = [
     "BatchState",
     "Deliverable",
     "Recording",
+    "Report",
     "Robot",
     "SessionIndex",
     "SessionSettings",

@@ -40,12 +40,11 @@ from posegen.select import (
     select_pool_file,
     write_selection,
 )
-from posegen.session.index import Batch, SessionSettings, batch_folder, sha256_of
+from posegen.session.index import ROUTE_BAG, Batch, SessionSettings, batch_folder, sha256_of
 
 SELECTION_FILE = "selection.yaml"
 FOLLOW_UP_FILE = "followup.yaml"
 ROUTE_FILE = "route.yaml"
-ROUTE_BAG = "route_bag"
 MEASUREMENTS_FILE = "measurements.yaml"
 CALIBRATION_FOLDER = "calibration"
 _POOL_ROW = re.compile(r"\(pool (\d+)\)")
@@ -176,7 +175,11 @@ def route_batch(session: Path, number: int, pool_path: str, settings: SessionSet
         bad = next(w for w in verdict.worst if w.checked and w.violations)
         raise InfeasibleError(f"{route}: the route fails its check ({bad.invariant.value}: {bad.detail})")
     export_route_bag(str(route), str(folder / ROUTE_BAG), settings.trajectory_topic, settings.segments_topic)
-    files = [folder / SELECTION_FILE, *routed.written]
+    files = [
+        folder / SELECTION_FILE,
+        *routed.written,
+        *sorted(p for p in (folder / ROUTE_BAG).iterdir() if p.is_file()),
+    ]
     return Batch(
         number=number,
         pool_rows=route_pool_rows(str(route)),

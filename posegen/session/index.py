@@ -17,13 +17,14 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from posegen.arguments import check_count
-from posegen.errors import ArgumentError, InputError, reason
-from posegen.io import read_yaml, write_yaml
+from posegen.arguments import check_count, check_seed, check_size
+from posegen.errors import InputError
+from posegen.io import write_yaml
 
 SESSION_FORMAT = "posegen-session"
 SESSION_VERSION = 1
 INDEX_FILE = "session.yaml"
+ROUTE_BAG = "route_bag"  # each batch's route as a rosbag2, to play
 
 
 class Deliverable(str, enum.Enum):
@@ -191,6 +192,24 @@ class SessionIndex:
         return replace(self, batches=tuple(sorted((*kept, batch), key=lambda b: b.number)))
 
 
+def check_settings(settings: SessionSettings) -> None:
+    """Check a session's numbers (at ``start``, and whenever its index is read).
+
+    Raises:
+        ArgumentError: A target, margin, seed or count out of range.
+
+    """
+    check_size(settings.target_mm, "target_mm", positive=True)
+    check_size(settings.margin, "margin")
+    check_seed(settings.seed, "seed")
+    check_count(settings.batch_postures, "batch_postures")
+    if settings.fold_seeds is not None:
+        check_count(settings.fold_seeds, "fold_seeds")
+    if settings.prior_scale is not None:
+        check_size(settings.prior_scale, "prior_scale", positive=True)
+    check_count(settings.patience, "patience", minimum=0)
+
+
 def batch_folder(number: int) -> str:
     """The subfolder of batch ``number``: ``batch_001``."""
     return f"batch_{number:03d}"
@@ -245,79 +264,18 @@ def write_index(folder: Path, index: SessionIndex) -> None:
     write_yaml(folder / INDEX_FILE, index_to_dict(index))
 
 
-def read_index(folder: Path) -> SessionIndex:
-    """Read a session's index.
-
-    Raises:
-        InputError: No session there, another format or version, or a malformed index.
-
-    """
-    path = folder / INDEX_FILE
-    if not path.is_file():
-        raise InputError(f"{folder}: not a posegen session (no {INDEX_FILE}; start one with posegen session start)")
-    data = read_yaml(path, SESSION_FORMAT)
-    version = data.get("format_version")
-    if version != SESSION_VERSION:
-        raise InputError(f"{path}: session format version {version!r}; this posegen reads version {SESSION_VERSION}")
-    try:
-        raw = dict(data["settings"])
-        settings = SessionSettings(
-            **{
-                **raw,
-                "deliverable": Deliverable(raw["deliverable"]),
-                "candidates": tuple(str(c) for c in raw["candidates"]),
-                "target_mm": float(raw["target_mm"]),
-                "patience": check_count(raw.get("patience", SessionSettings.patience), "patience", minimum=0),
-            }
-        )
-        batches = tuple(_batch(entry) for entry in data["batches"])
-        index = SessionIndex(dict(data["provenance"]), str(data["pool"]), str(data["pool_sha256"]), settings, batches)
-    except (KeyError, TypeError, ValueError, AttributeError, ArgumentError) as exc:
-        raise InputError(f"{path}: not a valid session index ({reason(exc)}); was it edited by hand?") from exc
-    if [b.number for b in batches] != list(range(1, len(batches) + 1)):
-        raise InputError(f"{path}: batches are not numbered 1, 2, ...; was it edited by hand?")
-    return index
-
-
-def _batch(entry: dict[str, Any]) -> Batch:
-    recording = entry["recording"]
-    assessment = entry["assessment"]
-    return Batch(
-        number=int(entry["number"]),
-        pool_rows=tuple(int(r) for r in entry["pool_rows"]),
-        planned_s=float(entry["planned_s"]),
-        files={str(k): str(v) for k, v in dict(entry["files"]).items()},
-        recording=None
-        if recording is None
-        else Recording(
-            bag=str(recording["bag"]),
-            bag_sha256=str(recording["bag_sha256"]),
-            table=str(recording["table"]),
-            contacts=int(recording["contacts"]),
-            duration_s=float(recording["duration_s"]),
-            missing=tuple(int(r) for r in recording["missing"]),
-        ),
-        assessment=None
-        if assessment is None
-        else Assessment(
-            contacts=int(assessment["contacts"]),
-            deliverable=str(assessment["deliverable"]),
-            candidate=str(assessment["candidate"]),
-            predicted_z_mm={str(c): float(v) for c, v in dict(assessment["predicted_z_mm"]).items()},
-            done=bool(assessment["done"]),
-            error=str(assessment.get("error", "")),
-        ),
-    )
-
-
 def check_files(folder: Path, index: SessionIndex) -> None:
-    """Check that every file the index vouches for is there, with its bytes.
+    """Check that every file the index vouches for is there, with its bytes, and every batch's rosbag2 to play.
 
     Raises:
-        InputError: A file missing or changed since the session wrote it.
+        InputError: A file missing or changed since the session wrote it, or a batch's
+            ``route_bag`` folder gone.
 
     """
     for batch in index.batches:
+        bag = folder / batch.folder / ROUTE_BAG
+        if not (bag / "metadata.yaml").is_file():
+            raise InputError(f"{bag} is missing: the session's files were moved or deleted by hand")
         for name, digest in batch.files.items():
             path = folder / name
             if not path.is_file():

@@ -11,15 +11,15 @@ deliverable the session was started for.
 from __future__ import annotations
 
 import shutil
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from posegen.arguments import check_count, check_seed, check_size
 from posegen.calibrate import DeliverableKind, Settings, calibrate_files, measure_bag
-from posegen.errors import ArgumentError, InfeasibleError, InputError, unknown_name
+from posegen.errors import ArgumentError, InfeasibleError, InputError, OutputError, unknown_name
 from posegen.io import OutputKind, RecordedBag, check_writable, claim_output, load_pool, write_yaml
 from posegen.parallel import Backend
-from posegen.robot import scene_for_postures
+from posegen.robot import load_config, scene_for_postures
 from posegen.session.batch import (
     CALIBRATION_FOLDER,
     MEASUREMENTS_FILE,
@@ -41,13 +41,15 @@ from posegen.session.index import (
     SessionSettings,
     batch_folder,
     check_files,
-    read_index,
+    check_settings,
     sha256_of,
     table_name,
     write_index,
 )
+from posegen.session.index_reader import read_index
 
 CONFIG_FILE = "config.yaml"
+Report = Callable[[Path, Path], object]  # writes a calibration's report into its staging folder (staging, destination)
 
 
 @dataclass(frozen=True)
@@ -57,24 +59,6 @@ class Added:
     batch: Batch  # the batch the bag was added to (recorded and assessed)
     next_batch: Batch | None  # planned to play next; None when done
     index: SessionIndex
-
-
-def check_settings(settings: SessionSettings) -> None:
-    """Check a session's numbers before any file is read.
-
-    Raises:
-        ArgumentError: A target, margin or count out of range.
-
-    """
-    check_size(settings.target_mm, "target_mm", positive=True)
-    check_size(settings.margin, "margin")
-    check_seed(settings.seed, "seed")
-    check_count(settings.batch_postures, "batch_postures")
-    if settings.fold_seeds is not None:
-        check_count(settings.fold_seeds, "fold_seeds")
-    if settings.prior_scale is not None:
-        check_size(settings.prior_scale, "prior_scale", positive=True)
-    check_count(settings.patience, "patience", minimum=0)
 
 
 def start_session(pool_path: str, output: str, settings: SessionSettings, backend: Backend) -> SessionIndex:
@@ -93,6 +77,7 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
             f"{folder} already holds a session: add bags with posegen session add, or choose another output",
             parameter="output",
         )
+    _check_empty(folder)
     pool = load_pool(pool_path)
     scene = scene_for_postures(pool, pool_path, None)
     if not pool.postures:
@@ -117,11 +102,30 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
     return index
 
 
+def _check_empty(folder: Path) -> None:
+    """A new session's folder holds nothing but what a killed ``start`` left (its config and first batch).
+
+    Raises:
+        OutputError: It holds anything else: never written into.
+
+    """
+    left = {CONFIG_FILE, batch_folder(1)}
+    if folder.is_dir():
+        others = sorted(p.name for p in folder.iterdir() if p.name not in left and not p.name.startswith("."))
+        if others:
+            raise OutputError(
+                f"{folder} holds files posegen did not write ({', '.join(others[:3])}): not writing a session "
+                "into it; give a new folder",
+                parameter="output",
+            )
+
+
 def open_session(folder: Path) -> SessionIndex:
     """Read a session's index and check its files and its pool.
 
     Raises:
-        InputError: Not a session, or a file of it (or its pool) changed or missing.
+        InputError: Not a session, a malformed index, a file of it (or its pool) changed or
+            missing, or candidate models its config lacks.
 
     """
     index = read_index(folder)
@@ -129,6 +133,12 @@ def open_session(folder: Path) -> SessionIndex:
     pool = Path(index.pool)
     if not pool.is_file() or sha256_of(pool) != index.pool_sha256:
         raise InputError(f"{pool}: the session's pool is missing or changed since the session started (sha256)")
+    names = [c.name for c in load_config(folder / CONFIG_FILE).calibration.candidates]
+    for name in index.settings.candidates:
+        if name not in names:
+            raise InputError(
+                f"{folder / INDEX_FILE}: settings.candidates: {unknown_name('candidate model', name, names)}"
+            )
     return index
 
 
@@ -169,14 +179,22 @@ def _check_bag(index: SessionIndex, folder: Path, recorded: RecordedBag, digest:
     return last
 
 
-def add_bag(session: str, bag: str, backend: Backend, new_table: bool = False) -> Added:
+def add_bag(session: str, bag: str, backend: Backend, new_table: bool = False, report: Report | None = None) -> Added:
     """Measure a recorded batch, calibrate on every contact so far, and plan the next batch unless done.
+
+    A journal: each step writes its files, then the index (under the session's lock). The
+    calibration folder lands whole, with ``report`` written into it before it is swapped
+    in. Killed anywhere, the session is the one before a step, and the same command
+    resumes it; everything it reads (the index, the files it vouches for, the bag) is
+    checked before any step writes.
 
     Args:
         session: Session folder.
         bag: The rosbag2 the robot recorded while playing the last batch.
         backend: Where routing, checking and cross-validation run.
         new_table: The table was moved (or is another one): the bag's contacts get their own plane.
+        report: Writes the calibration's report into its staging folder, given that folder
+            and the calibration's destination (``posegen session add``: ``report.html``).
 
     Raises:
         PosegenError: Not a session, a file edited by hand, a bag of another session,
@@ -188,21 +206,28 @@ def add_bag(session: str, bag: str, backend: Backend, new_table: bool = False) -
     recorded = RecordedBag(bag)
     digest = recorded.sha256()
     with claim_output(folder, OutputKind.FOLDER):
-        index = open_session(folder)  # under the lock: another add may have just finished
-        batch = _check_bag(index, folder, recorded, digest)
-        if batch.state is BatchState.PLANNED:
-            batch = _record(folder, index, batch, bag, digest, new_table)
-            index = index.with_batch(batch)
-            write_index(folder, index)
-        if batch.state is BatchState.RECORDED:
-            batch = _assess(folder, index, batch, backend)
-            index = index.with_batch(batch)
-            write_index(folder, index)
-        if index.ended:
-            return Added(batch, None, index)
-        next_batch = _plan_next(folder, index, batch, backend)
-        index = index.with_batch(next_batch)
+        return add_recorded(folder, recorded, digest, backend, new_table, report)
+
+
+def add_recorded(
+    folder: Path, recorded: RecordedBag, digest: str, backend: Backend, new_table: bool, report: Report | None
+) -> Added:
+    """:func:`add_bag`'s steps, by a caller that holds the session's lock."""
+    index = open_session(folder)  # under the lock: another add may have just finished
+    batch = _check_bag(index, folder, recorded, digest)
+    if batch.state is BatchState.PLANNED:
+        batch = _record(folder, index, batch, str(recorded.path), digest, new_table)
+        index = index.with_batch(batch)
         write_index(folder, index)
+    if batch.state is BatchState.RECORDED:
+        batch = _assess(folder, index, batch, backend, report)
+        index = index.with_batch(batch)
+        write_index(folder, index)
+    if index.ended:
+        return Added(batch, None, index)
+    next_batch = _plan_next(folder, index, batch, backend)
+    index = index.with_batch(next_batch)
+    write_index(folder, index)
     return Added(batch, next_batch, index)
 
 
@@ -236,7 +261,7 @@ def _measurement_files(folder: Path, index: SessionIndex) -> list[str]:
     return [str(folder / b.folder / MEASUREMENTS_FILE) for b in index.batches if b.recording is not None]
 
 
-def _assess(folder: Path, index: SessionIndex, batch: Batch, backend: Backend) -> Batch:
+def _assess(folder: Path, index: SessionIndex, batch: Batch, backend: Backend, report: Report | None) -> Batch:
     """Calibrate on every contact so far; the deliverable's predicted error against the target (-> ASSESSED)."""
     settings = index.settings
     calibration = Settings(
@@ -247,8 +272,11 @@ def _assess(folder: Path, index: SessionIndex, batch: Batch, backend: Backend) -
     )
     output = folder / batch.folder / CALIBRATION_FOLDER
     given = _measurement_files(folder, index)
+    finish = None if report is None else (lambda staging: report(staging, output))
     try:
-        calibrated = calibrate_files(given, [], str(output), calibration, str(folder / CONFIG_FILE), backend=backend)
+        calibrated = calibrate_files(
+            given, [], str(output), calibration, str(folder / CONFIG_FILE), backend=backend, finish=finish
+        )
     except InputError as exc:  # too few usable contacts yet (a batch played in part): plan the missing ones
         contacts = sum(b.recording.contacts for b in index.batches if b.recording is not None)
         return replace(batch, assessment=Assessment(contacts, "", "", {}, False, error=str(exc)))
@@ -258,11 +286,8 @@ def _assess(folder: Path, index: SessionIndex, batch: Batch, backend: Backend) -
     predicted = {c: e.mean_abs.z_mm for c, e in sorted(entry.predicted_error.items())}
     done = all(v <= settings.target_mm for v in predicted.values())
     assessment = Assessment(calibrated.training_contacts, entry.kind.value, entry.candidate, predicted, done)
-    files = {
-        **batch.files,
-        f"{batch.folder}/{CALIBRATION_FOLDER}/calibration.yaml": sha256_of(output / "calibration.yaml"),
-    }
-    return replace(batch, assessment=assessment, files=files)
+    made = {str(p.relative_to(folder)): sha256_of(p) for p in sorted(output.rglob("*")) if p.is_file()}
+    return replace(batch, assessment=assessment, files={**batch.files, **made})  # the whole folder, its report too
 
 
 def _plan_next(folder: Path, index: SessionIndex, batch: Batch, backend: Backend) -> Batch:

@@ -103,10 +103,7 @@ def _postures(path: Path, data: dict[str, Any], config_path: str | None) -> Post
     scene = scene_for(chosen.provenance, config_path)
     scene.check_made_for(chosen.provenance, str(path))
     chosen.check_joints(scene.joint_names, str(path))
-    chains = sorted(c.name for c in scene.config.chains)
-    for k, posture in enumerate(chosen.postures):
-        if posture.chain not in chains:
-            raise InputError(f"{path}: posture {k} names chain '{posture.chain}'; valid chains: {', '.join(chains)}")
+    chosen.check_names([c.name for c in scene.config.chains], [s.name for s in scene.spots], str(path))
     selection = data["format"] == SELECTION_FORMAT
     pool = None
     if selection:

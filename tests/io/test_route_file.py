@@ -72,3 +72,57 @@ def test_joint_columns_put_the_robot_order_and_name_what_is_wrong(route_file):
     route.check_chains(chains)
     with pytest.raises(InputError, match=rf"names chain '{chains[0]}'; valid: \['nowhere'\]"):
         route.check_chains(["nowhere"])
+
+
+def _with_sidecar_arrays(route_file, folder, change):
+    """A copy of the route whose sidecar's arrays are ``change(arrays)``, its header naming the new sidecar's hash."""
+    header = yaml.safe_load(route_file.read_text())
+    arrays = dict(np.load(route_file.parent / header["arrays"]["file"]))
+    change(arrays)
+    sidecar = folder / "route.npz"
+    np.savez(sidecar, **arrays)
+    header["arrays"] = {"file": sidecar.name, "sha256": hashlib.sha256(sidecar.read_bytes()).hexdigest()}
+    path = folder / "route.yaml"
+    path.write_text(yaml.safe_dump(header, sort_keys=False))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda a: a.update(positions=a["positions"].astype(complex)), "positions holds complex128 values"),
+        (lambda a: a.update(velocities=a["velocities"].astype(str)), "velocities holds <U"),
+        (lambda a: a.update(positions=np.round(a["positions"]).astype(np.int64)), "positions holds int64 values"),
+        (lambda a: a.update(accelerations=a["accelerations"] != 0), "accelerations holds bool values"),
+        (lambda a: a["positions"].__setitem__((3, 2), 1e30), "positions at point 3 holds 1e\\+30: beyond"),
+        (lambda a: a["velocities"].__setitem__((4, 1), -1e30), "velocities at point 4 holds 1e\\+30: beyond"),
+        (lambda a: a.update(positions=a["positions"].astype(float)) or a["positions"].__setitem__((5, 0), 1e39),
+         "positions at point 5 holds 1e\\+39"),
+    ],
+)  # fmt: skip
+def test_sidecar_arrays_of_other_kinds_or_no_joint_s_values_are_refused(change, message, route_file, tmp_path):
+    path = _with_sidecar_arrays(route_file, tmp_path, change)
+    with pytest.raises(InputError, match=message):
+        read_route(path)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda h: h["segments"][0].update(first_point=[1]), r"segments\[0\]\.first_point must be an index"),
+        (lambda h: h["trajectory"].update(joint_names=5), r"trajectory\.joint_names must be a list of joint names"),
+        (lambda h: h.update(segments={"a": 1}), r"segments must be a list of segments"),
+        (lambda h: h["trajectory"].update(points=-1), r"trajectory\.points must be the number of points, not -1"),
+        (lambda h: h["segments"][2].update(type="fly"), r"segments\[2\]\.type must be one of free, "),
+    ],
+)
+def test_a_malformed_header_names_the_field_and_what_it_expects(edit, message, route_file, tmp_path):
+    header = yaml.safe_load(route_file.read_text())
+    edit(header)
+    path = tmp_path / "route.yaml"
+    path.write_text(yaml.safe_dump(header, sort_keys=False))
+    for sidecar in sidecars_of(route_file):
+        (tmp_path / sidecar.name).write_bytes(sidecar.read_bytes())
+    with pytest.raises(InputError, match=message) as error:
+        read_route(path)
+    assert "TypeError" not in str(error.value) and "expected -1" not in str(error.value)

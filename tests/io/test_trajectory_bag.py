@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import yaml
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
@@ -110,3 +111,37 @@ def test_a_bag_is_replaced_whole_and_anything_else_is_kept(exported, tmp_path):
     with pytest.raises(InputError, match="not a rosbag2 directory"):
         write_trajectory_bag(keep, NAMES, times, arrays, segments, TRAJECTORY_TOPIC, "/s", {})
     assert (keep / "a.txt").read_text() == "mine"
+
+
+def _without_provenance(bag):
+    meta = bag / "metadata.yaml"
+    info = yaml.safe_load(meta.read_text())
+    info["rosbag2_bagfile_information"].pop("custom_data", None)
+    meta.write_text(yaml.safe_dump(info))
+
+
+@pytest.mark.parametrize("kind", ["recording", "notes", "bad_metadata", "storage_folder"])
+def test_a_recording_or_a_bag_holding_other_files_is_never_replaced(kind, tmp_path):
+    times, arrays, segments = route()
+    target = tmp_path / "bag"
+    write_trajectory_bag(target, NAMES, times, arrays, segments, TRAJECTORY_TOPIC, "/s", {"posegen_version": "x"})
+    if kind == "recording":  # a real recording: no posegen provenance in its metadata
+        _without_provenance(target)
+    elif kind == "notes":
+        (target / "notes.txt").write_text("mine")
+    elif kind == "storage_folder":  # a folder where the storage file was: not posegen's
+        storage = next(target.glob("*.mcap"))
+        storage.unlink()
+        storage.mkdir()
+        (storage / "mine.txt").write_text("mine")
+    else:
+        (target / "metadata.yaml").write_text("rosbag2_bagfile_information: 3\n")
+    before = {str(p): p.read_bytes() for p in target.rglob("*") if p.is_file()}
+    message = {
+        "recording": "posegen did not write",
+        "notes": r"files posegen did not write \(notes\.txt\)",
+        "storage_folder": r"files posegen did not write \(bag\.mcap\)",
+    }
+    with pytest.raises(InputError, match=message.get(kind, "not a rosbag2 bag")):
+        write_trajectory_bag(target, NAMES, times, arrays, segments[:1], TRAJECTORY_TOPIC, "/s", {})
+    assert {str(p): p.read_bytes() for p in target.rglob("*") if p.is_file()} == before

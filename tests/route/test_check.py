@@ -111,10 +111,10 @@ def test_arrays_larger_than_declared_are_refused_before_they_are_read(route_file
     [
         (lambda h: h.update(format_version=3), "format_version 3: this posegen reads versions 1 and 2"),
         (lambda h: h["segments"][1].update(start_s=float("nan")), "segment times must be finite"),
-        (lambda h: h["trajectory"].update(points=-1), "must be a count"),
+        (lambda h: h["trajectory"].update(points=-1), "trajectory.points must be the number of points, not -1"),
         (lambda h: h["trajectory"]["joint_names"].__setitem__(1, h["trajectory"]["joint_names"][0]), "named twice"),
-        (lambda h: h["segments"][1].update(type="crawl"), "'crawl' is not a valid SegmentType"),
-        (lambda h: h["segments"][1].update(pool_id="17"), "an index must be a whole number"),
+        (lambda h: h["segments"][1].update(type="crawl"), r"segments\[1\]\.type must be one of free, .*, not 'crawl'"),
+        (lambda h: h["segments"][1].update(pool_id="17"), r"segments\[1\]\.pool_id must be an index \(a whole number"),
         (lambda h: h.update(skipped={"posture": 1}), "skipped must be a list of mappings"),
     ],
     ids=[

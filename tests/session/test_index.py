@@ -1,6 +1,7 @@
 """The session index: written and read back to the same dataclass; malformed or edited indexes refused."""
 
 import dataclasses
+import shutil
 
 import pytest
 import yaml
@@ -22,7 +23,9 @@ from posegen.session.index import check_files, sha256_of
 
 
 def an_index(tmp_path):
-    (tmp_path / "batch_001").mkdir()
+    for number in (1, 2):  # each batch's rosbag2 to play
+        (tmp_path / f"batch_00{number}" / "route_bag").mkdir(parents=True, exist_ok=True)
+        (tmp_path / f"batch_00{number}" / "route_bag" / "metadata.yaml").write_text("bag\n")
     made = tmp_path / "batch_001" / "route.yaml"
     made.write_text("route\n")
     recording = Recording("/bags/one", "ab" * 32, "table_1", 27, 130.5, (4, 9))
@@ -55,6 +58,14 @@ def test_a_file_edited_by_hand_is_refused(tmp_path):
         check_files(tmp_path, index)
 
 
+def test_a_batch_whose_bag_to_play_was_removed_is_refused(tmp_path):
+    index = an_index(tmp_path)
+    check_files(tmp_path, index)
+    shutil.rmtree(tmp_path / "batch_002" / "route_bag")
+    with pytest.raises(InputError, match="batch_002/route_bag is missing"):
+        check_files(tmp_path, index)
+
+
 @pytest.mark.parametrize(
     ("edit", "message"),
     [
@@ -65,6 +76,24 @@ def test_a_file_edited_by_hand_is_refused(tmp_path):
         (lambda d: d["settings"].update(patience=-2), "not a valid session index"),
         (lambda d: d["batches"][1].update(number=5), "numbered"),
         (lambda d: d.update(format="posegen-pool"), "posegen-pool"),
+        # issue 33: every field typed and in its range, the field named (no raw KeyError, no silent accept)
+        (lambda d: d.update(batches=[]), r"batches: expected the list of batches"),
+        (lambda d: d["settings"].update(batch_postures="ten"), r"settings\.batch_postures must be an integer"),
+        (lambda d: d["settings"].update(target_mm=-1.0), r"settings\.target_mm must be > 0"),
+        (lambda d: d["settings"].update(margin=-0.5), r"settings\.margin must be >= 0"),
+        (lambda d: d["settings"].update(seed="four"), r"settings\.seed must be an integer"),
+        (lambda d: d["settings"].pop("joint_topic"), r"settings\.joint_topic: missing"),
+        (lambda d: d.pop("settings"), r"settings: missing"),
+        (lambda d: d["batches"][0].update(state=None), r"batches\[0\]\.state: expected a non-empty name"),
+        (lambda d: d["batches"][0].update(state="planned"), r"batches\[0\]\.state: planned, but the batch is"),
+        (lambda d: d["batches"][0].update(planned_s=float("nan")), r"batches\[0\]\.planned_s: expected a finite"),
+        (lambda d: d["batches"][0]["recording"].update(duration_s=float("nan")), r"recording\.duration_s"),
+        (lambda d: d["batches"][0]["recording"].update(contacts="27"), r"recording\.contacts: expected a whole"),
+        (lambda d: d.pop("done"), r"done: missing"),
+        (lambda d: d.update(done=True), r"done: true, but the batches say false"),
+        (lambda d: d["batches"][0]["files"].update({"../../etc/passwd": "ab" * 32}), r"not a file of the session"),
+        (lambda d: d["batches"][0].update(recording=None), r"batches\[0\]\.assessment: a batch assessed but not"),
+        (lambda d: d["batches"][0]["assessment"]["predicted_z_mm"].update(left=float("nan")), r"predicted_z_mm\.left"),
     ],
 )
 def test_a_malformed_index_is_one_clear_error(tmp_path, edit, message):

@@ -31,47 +31,21 @@ from posegen.session import (
     INDEX_FILE,
     REHEARSAL_BAG,
     BatchState,
-    Robot,
-    SessionSettings,
     add_bag,
     read_index,
-    rehearse_session,
     session_status,
     start_session,
     write_index,
 )
 from posegen.session.batch import ROUTE_FILE, BatchSources, route_batch, select_next, standing_posture
 from tests.cli.test_cli import assert_one_line_error
-from tests.conftest import EXAMPLE_POOL
-
-CHAIN = "left"
-SETTINGS = SessionSettings(
-    target_mm=1.0, seed=0, margin=0.0, batch_postures=3, candidates=("offsets", "offsets_hip_pitch"), fold_seeds=1
-)
-ROBOT = Robot(seed=3, compliance_rad_per_knm=0.3)
+from tests.session.conftest import CHAIN, SETTINGS
 
 
 @pytest.fixture(scope="module")
 def backend():
     with open_backend(2) as opened:
         yield opened
-
-
-@pytest.fixture(scope="module")
-def started(tmp_path_factory, backend):
-    folder = tmp_path_factory.mktemp("session")
-    data = load_pool(EXAMPLE_POOL).to_dict()
-    data["postures"] = [p for p in data["postures"] if p["chain"] == CHAIN]
-    write_yaml(folder / "pool.yaml", data)
-    start_session(str(folder / "pool.yaml"), str(folder / "started"), SETTINGS, backend)
-    return folder / "started"
-
-
-@pytest.fixture(scope="module")
-def rehearsed(started, backend, tmp_path_factory):
-    copy = tmp_path_factory.mktemp("rehearsed") / "session"
-    shutil.copytree(started, copy)
-    return copy, rehearse_session(str(copy), ROBOT, backend, max_batches=2)
 
 
 def copy_of(folder, tmp_path):

@@ -1,0 +1,112 @@
+"""``robot init`` on descriptions a new user gets wrong (issue 33): one line naming the file and the real cause.
+
+Every case exits 2 with one line and nothing else on the terminal (the native parsers'
+own output is kept off it, at the file-descriptor level), writes no draft, and never
+overwrites what the draft reads: the URDF, the MJCF or a mesh.
+"""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from posegen.cli.main import main
+from posegen.draft.mjcf import convert_mjcf
+from posegen.errors import ConfigError
+from tests.draft.humanoid_mjcf import humanoid_mjcf
+from tests.draft.humanoid_urdf import humanoid_urdf
+
+
+def _init(argv: list[str], capfd: pytest.CaptureFixture[str]) -> str:
+    """Run ``robot init``; check it fails with one line (and nothing printed by native code); that line."""
+    assert main(["robot", "init", *argv, "--samples", "2"]) == 2
+    out, err = capfd.readouterr()
+    lines = [line for line in (out + err).splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("posegen: error: "), out + err
+    return lines[0]
+
+
+def _first(pattern: str, replacement: str, text: str) -> str:
+    edited = re.sub(pattern, replacement, text, count=1)
+    assert edited != text
+    return edited
+
+
+URDF_CASES = [
+    (lambda t: re.sub(r'<mass value="[^"]*"', '<mass value="0"', t), r"every link has zero mass"),
+    (lambda t: _first(r'<axis xyz="[^"]*"', '<axis xyz="0 0 0"', t), r"joint 'l_hip_yaw': its axis is 0 0 0"),
+    (lambda t: _first(r'<origin xyz="[^"]*"', '<origin xyz="0 nan 0"', t), r"xyz=\"0 nan 0\">: expected 3 finite"),
+    (lambda t: t.replace('<parent link="pelvis"/>', '<parent link="nothing"/>', 1), r"parent link 'nothing' is not"),
+    (lambda t: t.replace('<child link="l_thigh"/>', '<child link="pelvis"/>', 1), r"loop through link"),
+    (lambda t: _first(r"<limit [^>]*/>", "", t), r"pinocchio cannot load it: .*does not specify limits"),
+]
+
+
+@pytest.mark.parametrize(("edit", "message"), URDF_CASES)
+def test_a_malformed_urdf_is_one_line_naming_the_real_cause(edit, message, tmp_path, capfd):
+    path = humanoid_urdf(tmp_path)
+    path.write_text(edit(path.read_text()))
+    line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert str(path.name) in line and re.search(message, line), line
+    assert not (tmp_path / "config.yaml").exists()
+
+
+def test_a_mesh_file_that_is_not_a_mesh_is_named(tmp_path, capfd):
+    path = humanoid_urdf(tmp_path)
+    (tmp_path / "meshes" / "foot.stl").write_text("not a mesh\n")
+    line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert "a mesh of the robot cannot be loaded" in line and "foot.stl" in line, line
+
+
+def test_a_folder_is_not_taken_for_a_robot_name(tmp_path, capfd):
+    humanoid_urdf(tmp_path)
+    line = _init([str(tmp_path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert "a folder; give a URDF or MJCF file" in line, line
+
+
+@pytest.mark.parametrize("output", ["robot.urdf", "meshes/foot.stl"])
+def test_the_draft_never_overwrites_the_urdf_or_a_mesh_it_reads(output, tmp_path, capfd):
+    path = humanoid_urdf(tmp_path)
+    before = {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+    line = _init([str(path), "-o", str(tmp_path / output)], capfd)
+    assert "is an input of this command" in line, line
+    assert {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()} == before
+
+
+def test_the_draft_never_overwrites_the_mjcf_it_reads(tmp_path, capfd):
+    path = humanoid_mjcf(tmp_path)
+    before = path.read_bytes()
+    line = _init([str(path), "-o", str(path)], capfd)
+    assert "is an input of this command" in line, line
+    assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda t: _first(r'pos="[^"]*"', 'pos="0 nan 0.1"', t), r"pos=\"0 nan 0\.1\": expected finite numbers"),
+        (lambda t: _first(r'mass="[^"]*"', 'mass="-1"', t), r"mass=\"-1\": a negative mass"),
+    ],
+)
+def test_an_mjcf_with_numbers_no_body_has_is_refused(edit, message, tmp_path):
+    path = humanoid_mjcf(tmp_path)
+    path.write_text(edit(path.read_text()))
+    with pytest.raises(ConfigError, match=message):
+        convert_mjcf(path)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda t: _first(r'pos="[^"]*"', 'pos="0 nan 0.1"', t), r"pos=\"0 nan 0\.1\": expected finite numbers"),
+        (lambda t: re.sub(r'mass="[^"]*"', 'mass="0"', t), r"every link has zero mass"),
+        (lambda t: _first(r'axis="[^"]*"', 'axis="0 0 0"', t), r"its axis is 0 0 0"),
+    ],
+)
+def test_an_mjcf_refused_at_init_names_the_mjcf(edit, message, tmp_path, capfd):
+    path = humanoid_mjcf(tmp_path)
+    path.write_text(edit(path.read_text()))
+    line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert path.name in line and re.search(message, line), line
+    assert not (tmp_path / "config.yaml").exists() and not (tmp_path / "config.urdf").exists()
