@@ -36,6 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.draft.mjcf_text import flattened_mjcf
+from posegen.draft.urdf_check import number, numbers
 from posegen.errors import ConfigError
 from posegen.io import native_output
 
@@ -127,26 +128,16 @@ _NUMBERS = (  # attributes that hold numbers, on any element of the model
 def _check_numbers(root: ET.Element, path: Path) -> None:
     """Every number of the model finite, no mass negative (pinocchio reads both, and carries them into the URDF)."""
     for element in root.iter():
-        if element.get("mass") is not None and _float(element.get("mass")) < 0.0:
+        if element.get("mass") is not None and number(element.get("mass")) < 0.0:
             raise ConfigError(f'{path}: <{element.tag}> mass="{element.get("mass")}": a negative mass (kg)')
         for key in _NUMBERS:
             text = element.get(key)
             if text is None:
                 continue
-            try:
-                values = [float(v) for v in text.split()]
-            except ValueError:
-                values = []
+            values = numbers(text)
             if not values or not np.isfinite(values).all():
                 name = element.get("name") or element.get("mesh") or "(unnamed)"
                 raise ConfigError(f'{path}: <{element.tag} name="{name}"> {key}="{text}": expected finite numbers')
-
-
-def _float(text: str | None) -> float:
-    try:
-        return float(str(text))
-    except ValueError:
-        return float("nan")
 
 
 def _check_elements(root: ET.Element, path: Path) -> None:

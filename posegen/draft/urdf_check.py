@@ -99,10 +99,23 @@ def _label(element: ET.Element) -> str:
 
 
 def _number(element: ET.Element, key: str) -> float:
+    return number(element.get(key, "0"))
+
+
+def number(text: str | None) -> float:
+    """An XML attribute's number; nan when it is none (the URDF and MJCF checks' reading)."""
     try:
-        return float(element.get(key, "0"))
+        return float(str(text))
     except ValueError:
         return math.nan
+
+
+def numbers(text: str) -> list[float]:
+    """An XML attribute's list of numbers; empty when one is not a number."""
+    try:
+        return [float(v) for v in text.split()]
+    except ValueError:
+        return []
 
 
 def _check_numbers(element: ET.Element, where: str | Path) -> None:
@@ -112,10 +125,7 @@ def _check_numbers(element: ET.Element, where: str | Path) -> None:
             text = found.get(key)
             if text is None:
                 continue
-            try:
-                values = [float(v) for v in text.split()]
-            except ValueError:
-                values = []
+            values = numbers(text)
             if len(values) != count or not all(math.isfinite(v) for v in values):
                 raise ConfigError(
                     f'{where}: {_label(element)}: <{path} {key}="{text}">: expected {count} finite numbers'

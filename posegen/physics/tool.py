@@ -53,6 +53,12 @@ def _origin(element: ET.Element | None) -> FloatArray:
     return pose
 
 
+def _axis(joint: ET.Element) -> FloatArray:
+    """A URDF joint's axis (3,) in its frame (URDF's default 1 0 0 when absent)."""
+    found = joint.find("axis")
+    return np.array([float(v) for v in (found.get("xyz", "1 0 0") if found is not None else "1 0 0").split()])
+
+
 def _tree(urdf_xml: str) -> _Tree:
     root = ET.fromstring(urdf_xml)
     parent: dict[str, tuple[str, str]] = {}
@@ -79,18 +85,12 @@ def _subtree_mass(tree: _Tree, link: str, pose: FloatArray, angles: dict[str, fl
     for child, joint in tree.children.get(link, []):
         step = _origin(joint.find("origin"))
         if joint.get("type") in ("revolute", "continuous"):
-            axis_text = joint.find("axis")
-            axis = np.array(
-                [float(v) for v in (axis_text.get("xyz", "1 0 0") if axis_text is not None else "1 0 0").split()]
-            )
+            axis = _axis(joint)
             turn = np.eye(4)
             turn[:3, :3] = pin.exp3(axis * angles.get(str(joint.get("name")), 0.0))
             step = step @ turn
         elif joint.get("type") == "prismatic":
-            axis_text = joint.find("axis")
-            axis = np.array(
-                [float(v) for v in (axis_text.get("xyz", "1 0 0") if axis_text is not None else "1 0 0").split()]
-            )
+            axis = _axis(joint)
             step = step @ np.block(
                 [[np.eye(3), (axis * angles.get(str(joint.get("name")), 0.0))[:, None]], [0, 0, 0, 1]]
             )
