@@ -67,8 +67,7 @@ def draw(scene: Scene, seed: int, index: int) -> Draw:
     arm held out at random costs balance, torque and collisions, here and on the route.
     """
     rng = np.random.default_rng([seed, index])
-    margin = scene.margins.joint_limit_rad
-    joints = rng.uniform(scene.lower + margin, scene.upper - margin)
+    joints = rng.uniform(*scene.planning_limits())
     chains = scene.chains
     chain = chains[int(rng.integers(len(chains)))].name
     spots = [s for s in scene.spots if chain in s.chains]

@@ -159,6 +159,10 @@ class Config:
             del stance["reference_joints"]  # only what a config says: older artefacts stay identical
         if stance["root_rpy_deg"] is None:
             del stance["root_rpy_deg"]
+        margins = dataclasses.asdict(self.margins)
+        for key, unset in (("joint_limit_rad_by_joint", {}), ("com_uncertainty_m", 0.0)):
+            if margins[key] == unset:
+                del margins[key]  # only what a config says: older artefacts stay identical
         robot = {"source": source, "locked_joints": dict(self.locked_joints)}
         robot.update(additions_to_dict(self.frames, self.velocity_limits, self.collision))
         data = {
@@ -166,7 +170,7 @@ class Config:
             "stance": stance,
             "chains": chains,
             "table": dataclasses.asdict(self.table),
-            "margins": dataclasses.asdict(self.margins),
+            "margins": margins,
             "sampling": dataclasses.asdict(self.sampling),
             "route": dataclasses.asdict(self.route),
             "recording": dataclasses.asdict(self.recording),

@@ -5,7 +5,7 @@ Read and validated by :func:`posegen.robot.config.parse_config` (which re-export
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from posegen.errors import ConfigError
 from posegen.robot.chain_config import ChainConfig
@@ -33,6 +33,8 @@ class MarginConfig:
     joint_limit_rad: float  # distance kept from every joint limit
     effort_ratio: float = 0.9  # planned static torques within this fraction of the URDF effort limits
     zmp_m: float = 0.01  # the ZMP at the planned timing inside the support polygon by at least this
+    com_uncertainty_m: float = 0.0  # the true CoM may lie this far from the model's (x and y): torques hold either way
+    joint_limit_rad_by_joint: dict[str, float] = field(default_factory=dict)  # joint -> a larger margin, rad
 
 
 @dataclass(frozen=True)
@@ -73,15 +75,41 @@ def read_table(tb: Reader, chains: tuple[ChainConfig, ...]) -> TableConfig:
     return table
 
 
+MARGIN_KEYS = (
+    "com_m",
+    "collision_m",
+    "joint_limit_rad",
+    "joint_limit_rad_by_joint",
+    "effort_ratio",
+    "zmp_m",
+    "com_uncertainty_m",
+)  # the ``margins`` section's keys
+
+
 def read_margins(mg: Reader) -> MarginConfig:
     """The ``margins`` section (every margin >= 0)."""
+    mg.keys_within(MARGIN_KEYS)
     return MarginConfig(
         com_m=mg.number("com_m", minimum=0.0),
         collision_m=mg.number("collision_m", minimum=0.0),
         joint_limit_rad=mg.number("joint_limit_rad", minimum=0.0),
         effort_ratio=_fraction(mg, "effort_ratio", 0.9),
         zmp_m=mg.number("zmp_m", 0.01, minimum=0.0),
+        com_uncertainty_m=mg.number("com_uncertainty_m", 0.0, minimum=0.0),
+        joint_limit_rad_by_joint=_larger_margins(mg, mg.number("joint_limit_rad", minimum=0.0)),
     )
+
+
+def _larger_margins(mg: Reader, margin_rad: float) -> dict[str, float]:
+    """``margins.joint_limit_rad_by_joint``: joint -> rad, each at least ``joint_limit_rad``."""
+    larger = mg.angles("joint_limit_rad_by_joint")
+    for joint, value in larger.items():
+        if value < margin_rad:
+            raise ConfigError(
+                f"margins.joint_limit_rad_by_joint.{joint}: {value} rad is below margins.joint_limit_rad "
+                f"({margin_rad} rad); a joint's own margin can only be larger"
+            )
+    return larger
 
 
 def _fraction(reader: Reader, key: str, default: float) -> float:

@@ -109,10 +109,10 @@ class Projector:
     def __init__(self, scene: Scene) -> None:
         self.scene = scene
         self.robot = placo.RobotWrapper("", placo.Flags.ignore_collisions, kinematic_urdf(scene.urdf_xml))
-        margin = scene.margins.joint_limit_rad + LIMIT_BUFFER_RAD
+        lower, upper = scene.planning_limits(LIMIT_BUFFER_RAD)  # (nj,) rad
         for i, name in enumerate(scene.joint_names):
             if not scene.locked[i]:
-                self.robot.set_joint_limits(name, scene.lower[i] + margin, scene.upper[i] - margin)
+                self.robot.set_joint_limits(name, lower[i], upper[i])
         self._problems = {c.name: _ChainProblem(self.robot, scene, c.name) for c in scene.chains}
         self._soles = [(frame, pose[:3, 3].tolist(), pose[:3, :3].tolist()) for frame, pose in scene.sole_poses.items()]
         self._normal = scene.table_pose[:3, 2].tolist()
@@ -220,16 +220,18 @@ class Projector:
         robot: 30 N on the hand changes it little) is computed when a joint first comes
         near its limit and refreshed every ``TORQUE_REFRESH`` iterations. The rows hold
         ``torque(q) + D (q' - q) <= allowed``: whatever ``D``, a fixed point keeps the limit.
+        ``allowed`` is the effort margin less the torque's spread over the CoM's uncertainty.
         """
         if not hard:
             self._derivative = None
             problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
             return
         joints = self._joints()
-        allowed = self._allowed
+        pair = self._statics.torque_pair(joints, chain, self.scene.route.contact_force_n)
+        allowed = self._allowed - self._statics.com_spread(joints)  # (nj,) N m, room for the CoM's uncertainty
         rows: list[FloatArray] = []
         bounds: list[float] = []
-        for torques in self._statics.torque_pair(joints, chain, self.scene.route.contact_force_n):
+        for torques in pair:
             with np.errstate(invalid="ignore"):
                 active = np.flatnonzero(np.abs(torques) > TORQUE_ACTIVE * allowed)  # nan: never
             if not len(active):

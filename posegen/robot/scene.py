@@ -84,6 +84,7 @@ class Scene:
         self._q_index, self._v_index = joints.q_index, joints.v_index
         self.lower, self.upper, self.velocity_limit = joints.lower, joints.upper, joints.velocity_limit
         self.effort_limit = joints.effort_limit  # (nj,) N m, nan where the URDF gives none
+        self.limit_margins = joints.limit_margin  # (nj,) rad kept from each limit (margins.joint_limit_rad or larger)
         self.locked, self.locked_values = joints.locked, joints.locked_values  # (nj,) held during sampling, rad
         self._data = self.model.createData()  # scratch space of configuration()
         self._closing: tuple[int, list[int], np.ndarray] | None = None  # see close_stance
@@ -204,7 +205,11 @@ class Scene:
         return np.array(q[self._q_index], dtype=float)
 
     def limit_margin(self, joints: FloatArray) -> FloatArray:
-        """Smallest distance (rad) of the free (not locked) joints to their limits.
+        """Smallest distance (rad) of the free joints to their limits (against ``margins.joint_limit_rad``).
+
+        A joint with a larger margin of its own (``margins.joint_limit_rad_by_joint``) counts
+        its distance less the extra: the result is below ``margins.joint_limit_rad`` when any
+        joint is closer to a limit than its margin.
 
         Args:
             joints: (nj,) or (m, nj) joint angles.
@@ -213,8 +218,24 @@ class Scene:
             A scalar array, or (m,); negative when a limit is exceeded.
 
         """
-        gap = np.minimum(joints - self.lower, self.upper - joints)
+        extra = self.limit_margins - self.margins.joint_limit_rad  # (nj,) rad, 0 for most joints
+        gap = np.minimum(joints - self.lower, self.upper - joints) - extra
         return np.asarray(gap[..., ~self.locked].min(axis=-1))
+
+    def planning_limits(self, buffer_rad: float = 0.0) -> tuple[FloatArray, FloatArray]:
+        """The joint limits (rad) a plan keeps within: each limit less the joint's margin and ``buffer_rad``.
+
+        Returns:
+            ``(lower, upper)``, each (nj,) rad (new arrays).
+
+        Example:
+            >>> lower, upper = scene.planning_limits()
+            >>> bool(np.all(lower < upper))
+            True
+
+        """
+        inset = self.limit_margins + buffer_rad
+        return self.lower + inset, self.upper - inset
 
     def com_margin(self, q: FloatArray, data: pin.Data) -> float:
         """Signed distance (m) of the CoM ground projection inside the support polygon.

@@ -71,6 +71,7 @@ class Joints:
     locked_values: FloatArray  # (nj,) rad, where locked (0 elsewhere)
     velocity_limit: FloatArray  # (nj,) rad/s
     effort_limit: FloatArray  # (nj,) N m, the URDF's; nan where it gives none (0)
+    limit_margin: FloatArray  # (nj,) rad kept from each limit: margins.joint_limit_rad, or the joint's own
 
     def index(self, name: str, field: str) -> int:
         """Index of joint ``name``.
@@ -175,7 +176,30 @@ def actuated_joints(model: pin.Model, config: Config) -> Joints:
     limit = velocity_limits(model.velocityLimit[v_index], names, locked, config.velocity_limits)
     effort = np.array(model.effortLimit[v_index], dtype=float)
     effort[~(np.isfinite(effort) & (effort > 0))] = np.nan  # a URDF without an effort gives 0
-    return Joints(names, q_index, v_index, lower, upper, locked, locked_values, limit, effort)
+    margin = limit_margins(names, lower, upper, config)
+    return Joints(names, q_index, v_index, lower, upper, locked, locked_values, limit, effort, margin)
+
+
+def limit_margins(names: tuple[str, ...], lower: FloatArray, upper: FloatArray, config: Config) -> FloatArray:
+    """The margin (rad) kept from each joint's limits: ``margins.joint_limit_rad`` or the joint's own. Shape (nj,).
+
+    ``margins.joint_limit_rad_by_joint`` gives a joint a larger margin, e.g. a stance knee
+    kept bent so that its leg can still lengthen on a robot whose legs are not the model's.
+
+    Raises:
+        ConfigError: An unknown joint, or a margin leaving no room between the limits.
+
+    """
+    margin = np.full(len(names), config.margins.joint_limit_rad)
+    field = "margins.joint_limit_rad_by_joint"
+    for name, value in config.margins.joint_limit_rad_by_joint.items():
+        i = _joint_index(names, name, field)
+        if 2.0 * value >= upper[i] - lower[i]:
+            raise ConfigError(
+                f"{field}.{name}: {value} rad from both limits leaves no room in [{lower[i]:.3f}, {upper[i]:.3f}] rad"
+            )
+        margin[i] = value
+    return margin
 
 
 def velocity_limits(

@@ -35,9 +35,9 @@ class StanceSpace:
         self.coordinates = [
             i for i in range(len(scene.joint_names)) if not scene.locked[i] and i not in set(self.closing)
         ]
-        margin = scene.margins.joint_limit_rad
-        self.lower = scene.lower[self.coordinates] + margin
-        self.upper = scene.upper[self.coordinates] - margin
+        lower, upper = scene.planning_limits()  # (nj,) rad
+        self.lower = lower[self.coordinates]
+        self.upper = upper[self.coordinates]
         self._data = scene.model.createData()
         self._statics = Statics(scene)
         self._allowed = scene.margins.effort_ratio * scene.effort_limit  # (nj,) N m; nan: no limit
@@ -59,7 +59,7 @@ class StanceSpace:
         return self.scene.close_stance(joints)
 
     def holds(self, joints: FloatArray, pressing: str | None) -> bool:
-        """Whether every holding torque is within ``margins.effort_ratio`` of its effort limit.
+        """Whether every holding torque, with its spread over the CoM's uncertainty, is within the effort margin.
 
         Args:
             joints: (nj,) rad.
@@ -69,7 +69,8 @@ class StanceSpace:
         if not np.any(self._limited):
             return True
         torques = self._statics.torques(joints, pressing, self.scene.route.contact_force_n)
-        return bool(np.all(np.abs(torques[self._limited]) <= self._allowed[self._limited]))
+        bound = np.abs(torques) + self._statics.com_spread(joints)  # (nj,) N m
+        return bool(np.all(bound[self._limited] <= self._allowed[self._limited]))
 
     def is_valid(self, joints: FloatArray, contact_chain: str | None, collision_margin_m: float | None = None) -> bool:
         """Limits (with margin), CoM inside the polygon with margin, torques, no collision with margin.

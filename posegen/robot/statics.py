@@ -14,6 +14,12 @@ Two loads are modelled:
   table's normal reaction of ``force_n`` newtons on its contact frame (the force the
   force-controlled contact holds, ``route.contact_force_n``): what the actuators must
   hold, checked against the URDF's effort limits (:func:`effort_ratios`).
+
+A robot is not its model: its true centre of mass may lie some millimetres from the
+model's, and the stance legs carry the difference. :meth:`Statics.com_spread` bounds how
+far each holding torque moves when the weight acts up to ``margins.com_uncertainty_m``
+from the model's CoM in any horizontal direction (a moment on the base, split between the
+soles like the weight); the plan keeps ``|torque| + spread`` within the effort margin.
 """
 
 from __future__ import annotations
@@ -57,6 +63,39 @@ class Statics:
         self.hands = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.config.chains}
         self.velocity = scene.velocity_indices()
         self.anchor = scene.frame_id(scene.anchor_sole)
+        weight_n = float(np.linalg.norm(scene.model.gravity.linear)) * sum(i.mass for i in scene.model.inertias)
+        # (3, 2) world moments of the weight moved 1 m along world x and along y (weight along -z)
+        self._moment_per_m = weight_n * np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 0.0]])
+        self._placed: FloatArray | None = None  # (nq,) the configuration whose kinematics are in the workspace
+
+    def com_spread(self, joints: FloatArray) -> FloatArray:
+        """How far each holding torque moves with the CoM misplaced by ``margins.com_uncertainty_m``. Shape (nj,), N m.
+
+        The weight moved by ``(dx, dy)`` (m, world) puts a moment on the base that the soles
+        carry (split at least size, as the weight): the torques change by ``A (dx, dy)``, at
+        most ``u (|A_x| + |A_y|)`` for ``|dx|, |dy| <= u``. Zero when the margin is 0.
+
+        Example:
+            >>> bound = np.abs(statics.torques(joints, None, 0.0)) + statics.com_spread(joints)
+
+        """
+        uncertainty_m = self.scene.margins.com_uncertainty_m
+        if uncertainty_m == 0.0:
+            return np.zeros(len(self.velocity))
+        q = self.scene.configuration(joints)
+        if self._placed is None or not np.array_equal(q, self._placed):
+            self._kinematics(q)
+        return uncertainty_m * np.abs(self._com_sensitivity()).sum(axis=1)
+
+    def _com_sensitivity(self) -> FloatArray:
+        """(nj, 2) d torques / d (CoM x, y), N m per m, at the kinematics in the workspace."""
+        model, data = self.model, self.data
+        load = np.zeros((model.nv, 2))
+        load[3:6] = data.oMi[1].rotation.T @ self._moment_per_m  # the base's local frame
+        contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in self.soles])  # (6 k, nv)
+        split = contact[:, :6].T * self.weight[None, :]
+        soles = _least_size(split, load[:6]) * self.weight[:, None]  # (6 k, 2)
+        return np.asarray((load - contact.T @ soles)[self.velocity])
 
     def torques(self, joints: FloatArray, chain: str | None, force_n: float) -> FloatArray:
         """Holding torques (nj,) N m of one posture (see :func:`holding_torques`)."""
@@ -76,6 +115,7 @@ class Statics:
         gravity = pin.computeGeneralizedGravity(model, data, q).copy()
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
+        self._placed = np.array(q, dtype=float)
         return np.asarray(gravity)
 
     def _wrenches(
@@ -268,7 +308,8 @@ def worst_effort_ratio(
     """The largest effort ratio of one posture, and its joint (index; -1 when no joint has a limit).
 
     A posture in contact (``chain`` given) is held both unloaded (at the approach and
-    release, the hand above the table) and pressing ``route.contact_force_n``: the worse counts.
+    release, the hand above the table) and pressing ``route.contact_force_n``: the worse counts,
+    each torque with its spread over the CoM's uncertainty (:meth:`Statics.com_spread`).
 
     Args:
         scene: Scene.
@@ -283,7 +324,8 @@ def worst_effort_ratio(
     statics = statics or Statics(scene)
     loads = [None] if chain is None else [None, chain]
     torques = np.array([statics.torques(joints, load, scene.route.contact_force_n) for load in loads])
-    ratio = np.nan_to_num(effort_ratios(scene, torques), nan=-1.0).max(axis=0)  # (nj,)
+    bound = np.abs(torques) + statics.com_spread(joints)  # (loads, nj) N m
+    ratio = np.nan_to_num(effort_ratios(scene, bound), nan=-1.0).max(axis=0)  # (nj,)
     if not np.any(ratio >= 0.0):
         return 0.0, -1
     j = int(np.argmax(ratio))

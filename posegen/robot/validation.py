@@ -86,13 +86,14 @@ def check_reference_limits(scene: Scene) -> None:
 
     """
     gap = np.minimum(scene.reference - scene.lower, scene.upper - scene.reference)  # (nj,) rad
-    gap[scene.locked] = np.inf
-    worst = int(np.argmin(gap))
-    if gap[worst] < scene.margins.joint_limit_rad:
+    slack = gap - scene.limit_margins  # (nj,) rad
+    slack[scene.locked] = np.inf
+    worst = int(np.argmin(slack))
+    if slack[worst] < 0.0:
         raise ConfigError(
             f"stance.reference_joints: at {_reference_name(scene)} joint '{scene.joint_names[worst]}' is "
             f"{gap[worst]:.3f} rad from a limit [{scene.lower[worst]:.3f}, {scene.upper[worst]:.3f}], the margin "
-            f"needs {scene.margins.joint_limit_rad} rad (margins.joint_limit_rad): move it inside"
+            f"needs {scene.limit_margins[worst]:g} rad (margins.joint_limit_rad{_own(scene, worst)}): move it inside"
         )
 
 
@@ -142,6 +143,12 @@ def check_reference_collisions(scene: Scene, checker: CollisionChecker) -> None:
             f"{len(hits)} pair(s)); change stance.reference_joints or disable pairs that touch at rest "
             "(posegen robot init)"
         )
+
+
+def _own(scene: Scene, joint: int) -> str:
+    """The config key of a joint's own margin, if it has one."""
+    name = scene.joint_names[joint]
+    return f"_by_joint.{name}" if name in scene.margins.joint_limit_rad_by_joint else ""
 
 
 def _reference_name(scene: Scene) -> str:

@@ -119,17 +119,18 @@ def _times(times: np.ndarray, min_dt: float) -> Worst:
 
 def _limits(scene: Scene, times: np.ndarray, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> list[Worst]:
     names = scene.joint_names
-    margin = scene.margins.joint_limit_rad
+    margin = scene.limit_margins  # (nj,) rad
     free = ~scene.locked
     gap = np.minimum(q - scene.lower, scene.upper - q)  # (m, nj) rad
-    gap[:, ~free] = np.inf
-    limit_excess = margin - LIMIT_TOL_RAD - gap.min(axis=1)
+    slack = gap - margin  # (m, nj) rad, negative inside a joint's margin
+    slack[:, ~free] = np.inf
+    limit_excess = -LIMIT_TOL_RAD - slack.min(axis=1)
 
     def describe_limit(k: int) -> str:
-        j = int(np.argmin(gap[k]))
+        j = int(np.argmin(slack[k]))
         return (
             f"{_at(times, k)} {names[j]} at {q[k, j]:.5f} rad, {gap[k, j]:.5f} rad from its limit "
-            f"[{scene.lower[j]:.4f}, {scene.upper[j]:.4f}]; margin {margin} rad"
+            f"[{scene.lower[j]:.4f}, {scene.upper[j]:.4f}]; margin {margin[j]:g} rad"
         )
 
     dt = np.diff(times)

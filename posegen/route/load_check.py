@@ -5,7 +5,9 @@ Recomputed from the stored angles, velocities and accelerations alone:
 * **torque**: the static torques that hold each point (:mod:`posegen.robot.statics`),
   with the hand unloaded and, in a go-to-contact or hold, also pressing the table with
   ``route.contact_force_n``, within ``margins.effort_ratio`` times the URDF's effort
-  limits. Joints the URDF gives no effort limit are not checked (said when none has one).
+  limits, each with its spread over ``margins.com_uncertainty_m`` (the true CoM off the
+  model's: :meth:`posegen.robot.Statics.com_spread`). Joints the URDF gives no effort
+  limit are not checked (said when none has one).
 * **zmp**: the soles' centre of pressure from the robot's inverse dynamics at the stored
   timing (:mod:`posegen.robot.balance`), and at a hold's points also at rest with the
   hand pressing (the force builds and is released while the robot holds still), inside
@@ -85,11 +87,13 @@ def check_loads(
     force = scene.route.contact_force_n
     statics = Statics(scene)
     ratios = np.zeros((len(times), len(scene.joint_names)))  # (m, nj), the worse of unloaded and pressing
-    torques = np.zeros_like(ratios)
+    torques = np.zeros_like(ratios)  # (m, nj) N m, the model's
+    spreads = np.zeros_like(ratios)  # (m, nj) N m, over the CoM's uncertainty
     for k in range(len(times)):
+        spreads[k] = statics.com_spread(q[k])
         for chain in {None, pressing[k]}:
             tau = statics.torques(q[k], chain, force)
-            ratio = np.nan_to_num(effort_ratios(scene, tau), nan=0.0)
+            ratio = np.nan_to_num(effort_ratios(scene, np.abs(tau) + spreads[k]), nan=0.0)
             worse = ratio > ratios[k]
             ratios[k, worse], torques[k, worse] = ratio[worse], tau[worse]
     balance = Balance(scene)
@@ -100,9 +104,8 @@ def check_loads(
         rest = np.zeros((len(idx), q.shape[1]))
         wrenches = balance.floor_wrenches(q[idx], rest, rest, [holds[k] for k in idx], force)
         zmp[idx] = np.minimum(zmp[idx], zmp_margins(scene.support_polygon, wrenches.static))
-    return [_torque(scene, times, ratios, torques, pressing), _zmp(scene, times, zmp, holds)], _per_joint(
-        scene, ratios, torques
-    )
+    torque = _torque(scene, times, ratios, (torques, spreads), pressing)
+    return [torque, _zmp(scene, times, zmp, holds)], _per_joint(scene, ratios, torques)
 
 
 def _total(wrenches: FloorWrenches) -> FloatArray:
@@ -114,8 +117,14 @@ def _at(times: FloatArray, k: int) -> str:
 
 
 def _torque(
-    scene: Scene, times: FloatArray, ratios: FloatArray, torques: FloatArray, pressing: Sequence[str | None]
+    scene: Scene,
+    times: FloatArray,
+    ratios: FloatArray,
+    loads: tuple[FloatArray, FloatArray],
+    pressing: Sequence[str | None],
 ) -> Worst:
+    """The torque invariant; ``loads``: the model's torques and their spreads (CoM's uncertainty), (m, nj) N m."""
+    torques, spreads = loads
     allowed = scene.margins.effort_ratio
     names = scene.joint_names
     if not np.any(np.isfinite(scene.effort_limit)):
@@ -124,8 +133,9 @@ def _torque(
     def describe(k: int) -> str:
         j = int(np.argmax(ratios[k]))
         load = f"pressing {scene.route.contact_force_n:g} N with {pressing[k]}" if pressing[k] else "hand unloaded"
+        spread = f" + {spreads[k, j]:.2f} N m for the CoM's uncertainty" if spreads[k, j] else ""
         return (
-            f"{_at(times, k)} {names[j]}: {torques[k, j]:.2f} N m = {ratios[k, j]:.3f} x its effort limit "
+            f"{_at(times, k)} {names[j]}: {torques[k, j]:.2f} N m{spread} = {ratios[k, j]:.3f} x its effort limit "
             f"{scene.effort_limit[j]:g} N m ({load}); allowed {allowed}"
         )
 

@@ -135,7 +135,9 @@ def test_a_corrupted_row_is_left_out_and_the_held_out_error_stays(robust):
         name: np.sqrt(np.mean(held_out_residuals(c, test)["training_plane"]["after"][:, 0] ** 2))
         for name, c in calibrations.items()
     }
-    assert error["bad"] <= 1.1 * error["clean"], error
+    # Both are micrometres (0.005 deg of encoder noise): one row fewer may move the cross-validated
+    # choice and the error by ~20 %; a 0.3 rad row kept would put it at millimetres.
+    assert error["bad"] <= 1.25 * error["clean"], error
 
 
 def test_the_compliant_candidate_is_chosen_for_a_compliant_robot(robust):

@@ -65,10 +65,14 @@ def test_valid_rows_never_make_screening_oscillate(scene, real):
 
 
 def test_screening_stops_at_its_limit_and_says_so(lean_scene, example_pool):
-    """A third of the rows corrupted: at most max_left_out of them are left out, the largest, with a warning."""
+    """A third of the rows corrupted: at most max_left_out of them are left out, the largest, with a warning.
+
+    A third is past what a screening can promise: masking may hide most bad rows (the
+    example pool's first 40 postures: 1 found). These 40 show the limit being reached.
+    """
     recorded, _, _ = simulate(
         lean_scene,
-        planned(example_pool, list(range(40))),
+        planned(example_pool, list(range(80, 120))),
         Perturbation(encoder_noise_rad=np.deg2rad(0.005), compliance_rad_per_nm=COMPLIANCE),
         seed=6,
     )

@@ -138,11 +138,12 @@ def test_a_second_leg_that_cannot_close_alone_closes_with_both_legs(scene, examp
     """
     from posegen.calibrate.simulation import perturbed_robot, settle_true
 
-    plan = planned(example_pool, [10, 12, 19])  # second knee 0.44, 0.31, 0.23 rad
-    exact = Perturbation(length_m=0.0, angle_rad=0.0)
-    model, x = perturbed_robot(scene, ("left", "right"), plan.sessions, exact, 1)  # both legs: the floor closes
     second, anchor = scene.leg_joints(scene.second_sole), scene.leg_joints(scene.anchor_sole)
     knee = scene.joint_names[second[2]]
+    rows = [int(i) for i in np.argsort(example_pool.joints()[:20, second[2]])[:3]]  # bent >= the knee's own margin
+    plan = planned(example_pool, rows)
+    exact = Perturbation(length_m=0.0, angle_rad=0.0)
+    model, x = perturbed_robot(scene, ("left", "right"), plan.sessions, exact, 1)  # both legs: the floor closes
     x[model.contact.column(next(p for p in model.contact.parameters if p.owner == knee and p.field == "pz"))] += 0.05
     settled, converged, residual = settle_true(model, x, plan)
     assert np.all(converged) and np.abs(residual).max() < 1e-9

@@ -225,7 +225,7 @@ def test_route_then_check(tmp_path, capsys):
     from tests.conftest import EXAMPLE_POOL
 
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
-    data["postures"] = data["postures"][3:5]
+    data["postures"] = data["postures"][4:6]
     two = tmp_path / "two.yaml"
     write_yaml(two, data)
     out = tmp_path / "route.json"
@@ -316,7 +316,7 @@ def test_route_routes_a_repeated_posture_once_and_says_so(tmp_path, capsys):
     from tests.conftest import EXAMPLE_POOL
 
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
-    data["postures"] = [data["postures"][3], data["postures"][4], data["postures"][3]]
+    data["postures"] = [data["postures"][4], data["postures"][5], data["postures"][4]]
     plan = tmp_path / "twice.yaml"
     write_yaml(plan, data)
     out = tmp_path / "route.yaml"

@@ -15,7 +15,7 @@ from posegen.physics.tool import Tool, wrist_tool
 from posegen.physics.true_robot import TrueRobot, draw_true_robot
 from posegen.robot import Scene
 
-PHYSICS_ROWS = [142, 129]  # one contact per arm, the example pool's lowest torques whose CoM is 4 cm inside
+PHYSICS_ROWS = [92, 0]  # one contact per arm, the example pool's lowest torques whose CoM is 4 cm inside
 
 
 @pytest.fixture(scope="session")

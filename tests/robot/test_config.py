@@ -1,5 +1,6 @@
 import copy
 
+import numpy as np
 import pytest
 import yaml
 
@@ -134,3 +135,49 @@ def test_read_margins_and_sampling_bound_their_numbers():
     assert read_sampling(Reader(data["sampling"], "sampling")).chunk_size == data["sampling"]["chunk_size"]
     with pytest.raises(ConfigError, match=r"^sampling\.chunk_size: expected an integer from 1 to 10000"):
         read_sampling(Reader(dict(data["sampling"], chunk_size=10_001), "sampling"))
+
+
+def test_a_joints_own_limit_margin_is_read_checked_and_kept(config):
+    data = raw()
+    own = data["margins"]["joint_limit_rad_by_joint"]
+    assert own and all(v > data["margins"]["joint_limit_rad"] for v in own.values())  # TALOS keeps its knees bent
+    assert parse_config(config.to_dict()).margins.joint_limit_rad_by_joint == own
+    cases = [
+        ({"leg_left_4_joint": 0.01}, r"margins\.joint_limit_rad_by_joint\.leg_left_4_joint: 0\.01 rad is below"),
+        ({"leg_left_4_joint": "bent"}, r"margins\.joint_limit_rad_by_joint: expected a mapping name -> number"),
+    ]
+    for value, message in cases:
+        with pytest.raises(ConfigError, match=message):
+            parse_config(dict(data, margins=dict(data["margins"], joint_limit_rad_by_joint=value)))
+    with pytest.raises(ConfigError, match=r"^margins: unknown keys \['com_margin'\]"):
+        parse_config(dict(data, margins=dict(data["margins"], com_margin=0.1)))
+    with pytest.raises(ConfigError, match=r"^margins\.com_uncertainty_m: must be >= 0"):
+        parse_config(dict(data, margins=dict(data["margins"], com_uncertainty_m=-0.01)))
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ({"knee": 0.3}, r"unknown joint 'knee'.*margins\.joint_limit_rad_by_joint"),
+        ({"leg_left_4_joint": 2.0}, r"margins\.joint_limit_rad_by_joint\.leg_left_4_joint: 2\.0 rad from both limits"),
+    ],
+)
+def test_a_joints_own_margin_must_name_a_joint_and_leave_room(value, message):
+    data = raw()
+    with pytest.raises(ConfigError, match=message):
+        Scene(parse_config(dict(data, margins=dict(data["margins"], joint_limit_rad_by_joint=value))))
+
+
+def test_a_joints_own_margin_bounds_the_plan(scene):
+    """The planning limits, the limit margin of a posture and the sampling keep each joint's own margin."""
+    knee = scene.joint_index("leg_left_4_joint")
+    own = scene.margins.joint_limit_rad_by_joint["leg_left_4_joint"]
+    lower, upper = scene.planning_limits()
+    assert lower[knee] == pytest.approx(scene.lower[knee] + own)
+    assert upper[knee] == pytest.approx(scene.upper[knee] - own)
+    others = np.ones(len(scene.joint_names), dtype=bool)
+    others[[scene.joint_index(n) for n in scene.margins.joint_limit_rad_by_joint]] = False
+    assert np.allclose((lower - scene.lower)[others], scene.margins.joint_limit_rad)
+    posture = scene.reference.copy()
+    posture[knee] = scene.lower[knee] + own - 0.01  # 0.01 rad inside its own margin, far outside the common one
+    assert float(scene.limit_margin(posture)) == pytest.approx(scene.margins.joint_limit_rad - 0.01)

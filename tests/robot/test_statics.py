@@ -99,10 +99,66 @@ def test_the_table_carries_the_hand_force(scene, postures):
 
 
 def test_effort_ratio_names_the_worst_joint(scene, postures):
-    from posegen.robot.statics import effort_ratios, holding_torques, worst_effort_ratio
+    from posegen.robot.statics import Statics, effort_ratios, holding_torques, worst_effort_ratio
 
     ratio, joint = worst_effort_ratio(scene, postures[0], "left")
+    spread = Statics(scene).com_spread(postures[0])
     loads = [holding_torques(scene, postures[:1], [c], scene.route.contact_force_n)[0] for c in (None, "left")]
-    ratios = np.nanmax([effort_ratios(scene, t) for t in loads], axis=0)
+    ratios = np.nanmax([effort_ratios(scene, np.abs(t) + spread) for t in loads], axis=0)
     assert ratio == pytest.approx(np.nanmax(ratios))
     assert joint == int(np.nanargmax(ratios))
+
+
+def test_com_spread_is_the_weight_moved_on_a_model_whose_base_carries_the_shift(scene, postures):
+    """The base link's CoM moved by (M / m_base) d moves the weight's moment by M g x d: the torques change by A d."""
+    import dataclasses
+
+    from posegen.robot.statics import Statics
+
+    margins = dataclasses.replace(scene.margins, com_uncertainty_m=0.01)
+    statics = Statics(scene)
+    statics.scene = _with_margins(scene, margins)
+    shifted = Statics(scene)
+    shifted.model = scene.model.copy()
+    shifted.data = shifted.model.createData()
+    base = shifted.model.inertias[1]
+    mass, base_lever, inertia = base.mass, base.lever.copy(), base.inertia.copy()  # ``base`` is a view
+    total = pin.computeTotalMass(scene.model)
+    for posture in postures:
+        rotation = _base_rotation(scene, posture)
+        spread = statics.com_spread(posture)
+        bound = np.zeros_like(spread)
+        for d in ([0.01, 0.01, 0.0], [0.01, -0.01, 0.0], [-0.01, 0.01, 0.0], [-0.01, -0.01, 0.0]):
+            lever = base_lever + total / mass * rotation.T @ np.array(d)
+            shifted.model.inertias[1] = pin.Inertia(mass, lever, inertia)
+            change = shifted.torques(posture, None, 0.0) - statics.torques(posture, None, 0.0)
+            bound = np.maximum(bound, np.abs(change))
+        assert spread == pytest.approx(bound, abs=1e-6)  # the worst corner of the square, joint by joint
+        legs = [scene.joint_index(n) for n in ("leg_left_3_joint", "leg_right_3_joint")]
+        assert np.all(spread[legs] > 1.0)  # N m: the stance legs carry it
+        assert spread[scene.joint_index("arm_left_2_joint")] == pytest.approx(0.0, abs=1e-9)  # the arms do not
+
+
+def test_com_spread_is_zero_without_an_uncertainty(scene, postures):
+    import dataclasses
+
+    from posegen.robot.statics import Statics
+
+    statics = Statics(scene)
+    statics.scene = _with_margins(scene, dataclasses.replace(scene.margins, com_uncertainty_m=0.0))
+    assert not np.any(statics.com_spread(postures[0]))
+
+
+def _with_margins(scene, margins):
+    """A shallow stand-in of ``scene`` with other margins (the statics read only its margins and configuration)."""
+    import copy
+
+    other = copy.copy(scene)
+    other.margins = margins
+    return other
+
+
+def _base_rotation(scene, posture):
+    data = scene.model.createData()
+    pin.forwardKinematics(scene.model, data, scene.configuration(posture))
+    return data.oMi[1].rotation

@@ -146,7 +146,7 @@ def plans(tmp_path_factory, route_file) -> dict[str, Path]:
     """Small inputs of the stages after ``pool``: two postures, and 30 simulated contacts."""
     folder = tmp_path_factory.mktemp("plans")
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
-    data["postures"] = data["postures"][3:4]
+    data["postures"] = data["postures"][4:5]
     write_yaml(folder / "one.yaml", data)
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
     data["postures"] = data["postures"][:16]

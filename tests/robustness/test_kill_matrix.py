@@ -55,7 +55,7 @@ def inputs(tmp_path_factory, route_file) -> dict[str, str]:
     """One posture to route, 16 simulated contacts to calibrate from, two sessions to measure, two routes, two plans."""
     folder = tmp_path_factory.mktemp("inputs")
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
-    data["postures"] = data["postures"][3:4]
+    data["postures"] = data["postures"][4:5]
     write_yaml(folder / "one.yaml", data)
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
     data["postures"] = data["postures"][:16]

@@ -23,7 +23,7 @@ from posegen.io import (
 )
 from posegen.route import RouteInvariant, plan_route, route_artefact, verify_route
 
-ROWS = [3, 4]
+ROWS = [4, 5]
 
 
 @pytest.fixture(scope="module")
@@ -254,3 +254,21 @@ def test_a_contact_on_a_chain_the_robot_lacks(scene, route_file, tmp_path):
 
     with pytest.raises(InputError, match=r"segment \d+ \(hold\) names chain 'tail'"):
         verify_route(scene, read_route(corrupted(route_file, tmp_path, edit_header=edit)))
+
+
+def test_a_knee_inside_its_own_margin(config, route_file):
+    """``margins.joint_limit_rad_by_joint``: a joint closer to a limit than its own margin fails, named with it."""
+    import dataclasses
+
+    from posegen.robot import Scene
+
+    route = read_route(route_file)
+    knee = "leg_right_4_joint"
+    closest = float(np.min(route.positions[:, list(route.joint_names).index(knee)]))  # rad, its lower limit is 0
+    margins = dict(config.margins.joint_limit_rad_by_joint, **{knee: closest + 0.05})
+    strict_margins = dataclasses.replace(config.margins, joint_limit_rad_by_joint=margins)
+    strict = Scene(dataclasses.replace(config, margins=strict_margins))
+    result = verify_route(strict, route)
+    limits = {w.invariant: w for w in result.worst}[RouteInvariant.JOINT_LIMITS]
+    assert not result.ok and limits.violations > 0
+    assert knee in limits.detail and f"margin {closest + 0.05:g} rad" in limits.detail

@@ -31,7 +31,7 @@ from posegen.route.planner import _timed_transfer
 def ends(scene, example_pool):
     space = StanceSpace(scene, CollisionChecker(scene, convex=True))
     projector = Projector(scene)
-    postures = [example_pool.postures[i] for i in (0, 3)]  # the straight line and the vias are blocked
+    postures = [example_pool.postures[i] for i in (0, 2)]  # the straight line and the vias are blocked
     verticals = [vertical_paths(space, projector, np.array(p.joints), p.chain) for p in postures]
     return space, verticals
 
@@ -89,7 +89,7 @@ def detour(scene, example_pool):
     """Two stops of the example pool whose straight line is blocked and that have two via paths."""
     planner = Planner(scene, seed=0)
     stops = [
-        plan_stop(planner, (i, tuple(example_pool.postures[i].joints), example_pool.postures[i].chain)) for i in (3, 5)
+        plan_stop(planner, (i, tuple(example_pool.postures[i].joints), example_pool.postures[i].chain)) for i in (0, 11)
     ]
     assert not any(isinstance(s, Unplanned) for s in stops)
     return planner, stops
@@ -183,6 +183,6 @@ def test_a_path_toppra_cannot_time_is_a_planning_failure_not_a_crash(detour, exa
         "no time parameterisation of the planned path: 2 free motions found, none timed: "
         "toppra found no parameterisation of a path of 9 waypoints"
     )
-    posture = example_pool.postures[3]
-    stop = plan_stop(planner, (3, tuple(posture.joints), posture.chain))
+    posture = example_pool.postures[4]  # one with a vertical approach (posture 3 has none)
+    stop = plan_stop(planner, (4, tuple(posture.joints), posture.chain))
     assert isinstance(stop, Unplanned) and stop.cause is UnplannedCause.NO_TIMING

@@ -20,7 +20,7 @@ from posegen.route import (
     verify_route,
 )
 
-ROWS = [0, 1, 3, 4, 5]  # the first postures of the example pool with a vertical approach (2 has none)
+ROWS = [0, 1, 2, 4, 5]  # the first postures of the example pool with a vertical approach (3 has none)
 
 
 def write(route, pool, rows, path):
