@@ -57,6 +57,7 @@ class Estimate:
     noise: Noise
     iterations: int
     std: FloatArray  # (nx,) posterior sigma along each direction, 0 when held
+    rounds: tuple[FloatArray, ...] = ()  # (nx,) x after each fit of :func:`estimate`, when every one converged
 
 
 def levenberg_marquardt(
@@ -327,21 +328,40 @@ def estimate(
     start: FloatArray,
     rounds: int = 2,
     max_iterations: int = 50,
+    warm: Sequence[FloatArray] = (),
 ) -> Estimate:
-    """MAP estimate with the noise re-estimated from its own residuals ``rounds`` times."""
+    """MAP estimate with the noise re-estimated from its own residuals ``rounds`` times.
+
+    ``warm``: for each fit, parameters (nx,) to start its free directions from (the same
+    fit's result on nearly the same rows); the others start from the previous fit (the
+    first from ``start``). Each fit converges to the same optimum from either start.
+    """
     x = start
     delta = model.delta_of(start)
     iterations = 0
-    for _ in range(rounds):
-        delta, used = fit(model, observations, spec, noise, x, max_iterations)
+    points = []
+    converged = True
+    for k in range(rounds + 1):
+        begin = _warm_start(model, spec, x, warm[k]) if k < len(warm) else x
+        delta, used = fit(model, observations, spec, noise, begin, max_iterations)
         iterations += used
+        converged = converged and used < max_iterations
         x = model.x_of(delta)
-        noise = estimate_noise(model, observations, spec, noise, delta)
-    delta, used = fit(model, observations, spec, noise, x, max_iterations)
+        points.append(x)
+        if k < rounds:
+            noise = estimate_noise(model, observations, spec, noise, delta)
     _, _, _, covariance = _hat_terms(model, observations, spec, noise, delta)
     std = np.zeros(model.size)
     std[list(spec.free)] = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
-    return Estimate(model.x_of(delta), delta, noise, iterations + used, std)
+    return Estimate(x, delta, noise, iterations, std, tuple(points) if converged else ())
+
+
+def _warm_start(model: CalibrationModel, spec: Spec, x: FloatArray, warm: FloatArray) -> FloatArray:
+    """``x`` with its free directions taken from ``warm``."""
+    delta = model.delta_of(x)
+    free = list(spec.free)
+    delta[free] = model.delta_of(warm)[free]
+    return model.x_of(delta)
 
 
 def plane_spec(model: CalibrationModel, sessions: set[str] | None = None) -> Spec:
