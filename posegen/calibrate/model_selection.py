@@ -245,10 +245,16 @@ def score_candidate(problem: Problem, candidate: CandidateConfig) -> list[tuple[
     return sorted(up + down, key=lambda pair: pair[0].prior_scale)
 
 
-def _problem_state(payload: bytes) -> Problem:
-    problem = pickle.loads(payload)
-    assert isinstance(problem, Problem)
-    return problem
+def _model_state(payload: bytes) -> CalibrationModel:
+    model = pickle.loads(payload)
+    assert isinstance(model, CalibrationModel)
+    return model
+
+
+def _score_item(model: CalibrationModel, item: tuple[bytes, CandidateConfig]) -> list[tuple[CvResult, Estimate]]:
+    """:func:`score_candidate` in a worker: the model is its state (built once), the rest comes with the item."""
+    inputs, candidate = item
+    return score_candidate(Problem(model, *pickle.loads(inputs)), candidate)
 
 
 def select_model(
@@ -287,13 +293,15 @@ def select_model(
     usable = [c for c in (candidates or settings.candidates) if not (c.floor and model.floor is None)]
     for skipped in set(candidates or settings.candidates) - set(usable):
         LOG.info("candidate %s skipped: the floor equations need a chain from each sole", skipped.name)
-    problem = Problem(model, observations, settings, tuple(folds), noise, search, dict(warm or {}))
-    payload = pickle.dumps(problem)
-    job: Job[Problem, CandidateConfig, list[tuple[CvResult, Estimate]]] = Job(
+    rest = (observations, settings, tuple(folds), noise, search, dict(warm or {}))  # a Problem's, but the model
+    # the workers' state is the model alone: a second selection (other rows) runs on the same workers
+    payload = pickle.dumps(model)
+    job: Job[CalibrationModel, tuple[bytes, CandidateConfig], list[tuple[CvResult, Estimate]]] = Job(
         name=f"calibrate-cv-{hashlib.sha256(payload).hexdigest()[:16]}",
-        setup=partial(_problem_state, payload),
-        run=score_candidate,
+        setup=partial(_model_state, payload),
+        run=_score_item,
     )
+    inputs = pickle.dumps(rest)
     say = Steps(len(usable) + 1, progress)
     items = [*usable, NOMINAL]
     # the costliest first (floor equations, then the most free parameters): no worker waits long for the last
@@ -301,7 +309,7 @@ def select_model(
     order = sorted(range(len(items)), key=lambda i: cost[items[i].name], reverse=True)
     by_item: dict[int, list[tuple[CvResult, Estimate]]] = {}
     runner = as_backend(backend or 1)
-    for i, scored in zip(order, runner.map(job, [items[i] for i in order], len(items)), strict=True):
+    for i, scored in zip(order, runner.map(job, [(inputs, items[i]) for i in order], len(items)), strict=True):
         say(f"cross-validation: {items[i].name}")
         by_item[i] = scored
     *scored_candidates, nominal = [by_item[i] for i in range(len(items))]  # the config's order, whatever ran first
