@@ -229,13 +229,18 @@ def _select_screened(
     seeds = range(settings.seed, settings.seed + config.fold_seeds)
     sessions = set(everything.contacts.subset(screen.kept).sessions)
     noise = Noise(DEFAULT_NOISE, DEFAULT_FLOOR_NOISE)
+    warm: dict[tuple[str, float], tuple[FloatArray, ...]] = {}
     for selection_round in range(1, SELECTIONS + 1):
         check_enough(model, everything.contacts.subset(screen.kept), config, screen.dropped)
         observations = everything.subset(screen.kept)
         folds = repeated_folds(model.contact, observations.contacts, config.folds, seeds)
         selection = select_model(
-            model, observations, config, folds, noise, candidates, progress, backend, settings.search
+            model, observations, config, folds, noise, candidates, progress, backend, settings.search, warm
         )
+        # the next selection's rows lack only the rows flagged now: its fits start from these ones (the
+        # plausible ones: a weak prior's implausible fit ends where its flat valley stops the steps)
+        plausible = {(r.candidate, r.prior_scale) for r in selection.results if r.plausible}
+        warm = {pair: selection.estimates[pair].rounds for pair in plausible if selection.estimates[pair].rounds}
         chosen = next(c for c in candidates if c.name == selection.chosen.candidate)
         spec = spec_for_rows(model, candidate_spec(model, chosen, config.prior, selection.chosen.prior_scale), sessions)
         best = selection.estimates[chosen.name, selection.chosen.prior_scale]

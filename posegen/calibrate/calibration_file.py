@@ -36,7 +36,7 @@ from posegen.calibrate.deliverable_files import (
     write_deliverable,
 )
 from posegen.calibrate.deliverables import DeliverableKind
-from posegen.calibrate.plots import plot_cross_validation, plot_parameters, plot_residuals
+from posegen.calibrate.plots import Plot, draw_all
 from posegen.calibrate.record import CALIBRATION_FILE, CALIBRATION_FORMAT, COMPONENTS, DISPLAY, write_record
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.summary import CALIBRATION_VERSION, CalibrationSummary, summary_from_dict, write_summary
@@ -276,24 +276,40 @@ def write_calibration(
         rejected_rows: Input rows left out as unusable, one message each.
 
     """
+    summary, plots = write_calibration_files(calibration, held_out, out_dir, seed, rejected_rows)
+    draw_all(plots)
+    return summary
+
+
+def write_calibration_files(
+    calibration: Calibration,
+    held_out: Contacts | None,
+    out_dir: Path,
+    seed: int | None,
+    rejected_rows: Sequence[str] = (),
+) -> tuple[CalibrationSummary, list[Plot]]:
+    """:func:`write_calibration` but for its plots: the summary, and the plots still to draw (:func:`drawing`)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     written = [write_deliverable(calibration, d, out_dir, seed) for d in calibration.deliverables.all()]
     judged = judge_all(calibration, written, held_out)
     report = calibration_report(calibration, held_out, seed, rejected_rows, judged)
     summary = summary_from_dict(report, str(out_dir / CALIBRATION_FILE))
-    plot_parameters([r for r in report["parameters"] if r["unit"] in ("mm", "deg")], out_dir / "parameters.png")
+    shown = [r for r in report["parameters"] if r["unit"] in ("mm", "deg")]
     chosen = calibration.selection.chosen
-    plot_cross_validation(
-        report["model_selection"]["curves"], (chosen.candidate, chosen.prior_scale), out_dir / "cross_validation.png"
-    )
+    curves = report["model_selection"]["curves"]
+    plots = [
+        Plot("parameters", (shown,), out_dir / "parameters.png"),
+        Plot("cross_validation", (curves, (chosen.candidate, chosen.prior_scale)), out_dir / "cross_validation.png"),
+    ]
     nominal, urdf = judged.nominal, judged.files[DeliverableKind.URDF]
     if held_out is not None and nominal.held_out is not None and urdf.held_out is not None:
         title = "Held-out residuals (plane from training): nominal URDF and calibrated.urdf"
-        plot_residuals(nominal.held_out, urdf.held_out, title, out_dir / "residuals.png")
+        plots.append(Plot("residuals", (nominal.held_out, urdf.held_out, title), out_dir / "residuals.png"))
     else:
         kept = list(calibration.kept)
         title = "Training residuals: nominal URDF and calibrated.urdf"
-        plot_residuals(nominal.training[kept], urdf.training[kept], title, out_dir / "residuals.png")
+        residuals = (nominal.training[kept], urdf.training[kept], title)
+        plots.append(Plot("residuals", residuals, out_dir / "residuals.png"))
     write_record(calibration, held_out, out_dir, (nominal, urdf))
     write_summary(out_dir / CALIBRATION_FILE, summary)
-    return summary
+    return summary, plots

@@ -57,6 +57,7 @@ class Estimate:
     noise: Noise
     iterations: int
     std: FloatArray  # (nx,) posterior sigma along each direction, 0 when held
+    rounds: tuple[FloatArray, ...] = ()  # (nx,) x after each fit of :func:`estimate`, when every one converged
 
 
 def levenberg_marquardt(
@@ -127,7 +128,7 @@ def _problem(
     sigma_c = np.array(noise.contact)
     sigma_f = np.array(noise.floor)
     root = np.sqrt(weights)[:, None]  # (n, 1)
-    basis = model.basis[:, free]
+    project = projection(model.basis[:, free])
 
     def x_of(values: FloatArray) -> FloatArray:
         delta = fixed.copy()
@@ -147,14 +148,29 @@ def _problem(
 
     def jac(values: FloatArray) -> FloatArray:
         out = model.evaluate(x_of(values), observations, jacobian=True, floor=spec.floor)
-        rows = [((out.contact_jacobian / sigma_c[None, :, None]) * root[:, :, None]).reshape(-1, model.size) @ basis]
+        rows = [project((out.contact_jacobian / sigma_c[None, :, None]) * root[:, :, None]).reshape(-1, len(free))]
         if spec.floor:
             whitened = (out.floor_jacobian / sigma_f[None, :, None]) * root[:, :, None]
-            rows.append(whitened.reshape(-1, model.size) @ basis)
+            rows.append(project(whitened).reshape(-1, len(free)))
         rows.append(np.diag(1.0 / sd)[prior])
         return np.vstack(rows)
 
     return fun, jac
+
+
+def projection(basis: FloatArray) -> Callable[[FloatArray], FloatArray]:
+    """``J -> J @ basis`` for derivatives J (..., nx) along the columns of ``basis`` (nx, f).
+
+    The kind basis is a signed selection (one entry, +-1, per column): then its columns
+    are picked, not multiplied (the same numbers as the product: each sum has one term).
+    """
+    nonzero = basis != 0.0
+    rows = np.argmax(nonzero, axis=0)
+    signs = basis[rows, np.arange(basis.shape[1])]
+    if not (np.all(nonzero.sum(axis=0) == 1) and np.all(np.abs(signs) == 1.0)):
+        return lambda jacobian: np.asarray(jacobian @ basis)
+    # + 0.0: a product's -0 is the sum's +0
+    return lambda jacobian: np.asarray(jacobian[..., rows] * signs + 0.0)
 
 
 def fit(
@@ -194,12 +210,10 @@ def frozen_jacobian(
     """Whitened Jacobian of the free deviations at ``x``: per posture (n, 3 or 9, f), and the prior rows (q, f)."""
     free = list(spec.free)
     out = model.evaluate(x, observations, jacobian=True, floor=spec.floor)
-    basis = model.basis[:, free]
     blocks = [out.contact_jacobian / np.array(noise.contact)[None, :, None]]
     if spec.floor:
         blocks.append(out.floor_jacobian / np.array(noise.floor)[None, :, None])
-    stacked = np.concatenate(blocks, axis=1)  # (n, m, nx)
-    per_posture = (stacked.reshape(-1, stacked.shape[2]) @ basis).reshape(*stacked.shape[:2], basis.shape[1])
+    per_posture = projection(model.basis[:, free])(np.concatenate(blocks, axis=1))  # (n, m, f)
     sd = spec.prior_sd[free]
     prior = np.isfinite(sd)
     return per_posture, np.diag(1.0 / np.where(prior, sd, 1.0))[prior]
@@ -327,21 +341,40 @@ def estimate(
     start: FloatArray,
     rounds: int = 2,
     max_iterations: int = 50,
+    warm: Sequence[FloatArray] = (),
 ) -> Estimate:
-    """MAP estimate with the noise re-estimated from its own residuals ``rounds`` times."""
+    """MAP estimate with the noise re-estimated from its own residuals ``rounds`` times.
+
+    ``warm``: for each fit, parameters (nx,) to start its free directions from (the same
+    fit's result on nearly the same rows); the others start from the previous fit (the
+    first from ``start``). Each fit converges to the same optimum from either start.
+    """
     x = start
     delta = model.delta_of(start)
     iterations = 0
-    for _ in range(rounds):
-        delta, used = fit(model, observations, spec, noise, x, max_iterations)
+    points = []
+    converged = True
+    for k in range(rounds + 1):
+        begin = _warm_start(model, spec, x, warm[k]) if k < len(warm) else x
+        delta, used = fit(model, observations, spec, noise, begin, max_iterations)
         iterations += used
+        converged = converged and used < max_iterations
         x = model.x_of(delta)
-        noise = estimate_noise(model, observations, spec, noise, delta)
-    delta, used = fit(model, observations, spec, noise, x, max_iterations)
+        points.append(x)
+        if k < rounds:
+            noise = estimate_noise(model, observations, spec, noise, delta)
     _, _, _, covariance = _hat_terms(model, observations, spec, noise, delta)
     std = np.zeros(model.size)
     std[list(spec.free)] = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
-    return Estimate(model.x_of(delta), delta, noise, iterations + used, std)
+    return Estimate(x, delta, noise, iterations, std, tuple(points) if converged else ())
+
+
+def _warm_start(model: CalibrationModel, spec: Spec, x: FloatArray, warm: FloatArray) -> FloatArray:
+    """``x`` with its free directions taken from ``warm``."""
+    delta = model.delta_of(x)
+    free = list(spec.free)
+    delta[free] = model.delta_of(warm)[free]
+    return model.x_of(delta)
 
 
 def plane_spec(model: CalibrationModel, sessions: set[str] | None = None) -> Spec:

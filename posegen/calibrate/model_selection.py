@@ -36,7 +36,7 @@ import enum
 import hashlib
 import logging
 import pickle
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 
@@ -100,6 +100,7 @@ class Problem:
     folds: tuple[Fold, ...]
     noise: Noise
     search: ScaleSearch
+    warm: Mapping[tuple[str, float], tuple[FloatArray, ...]]  # (candidate, scale) -> its fits' results, to start from
 
 
 def cross_validate(
@@ -177,7 +178,8 @@ def score_pair(
     model, observations, config = problem.model, problem.observations, problem.config
     sessions = set(observations.contacts.sessions)
     spec = spec_for_rows(model, candidate_spec(model, candidate, config.prior, scale), sessions)
-    full = estimate(model, observations, spec, problem.noise, held_at_urdf(model, spec, start))
+    warm = problem.warm.get((candidate.name, scale), ())
+    full = estimate(model, observations, spec, problem.noise, held_at_urdf(model, spec, start), warm=warm)
     largest = largest_deviations(model, full.delta)
     negative = sorted(g for g, c in model.compliances(full.x).items() if g in candidate.compliance and c < 0.0)
     if largest[0] > config.plausible_mm or largest[1] > config.plausible_deg or negative:
@@ -243,10 +245,16 @@ def score_candidate(problem: Problem, candidate: CandidateConfig) -> list[tuple[
     return sorted(up + down, key=lambda pair: pair[0].prior_scale)
 
 
-def _problem_state(payload: bytes) -> Problem:
-    problem = pickle.loads(payload)
-    assert isinstance(problem, Problem)
-    return problem
+def _model_state(payload: bytes) -> CalibrationModel:
+    model = pickle.loads(payload)
+    assert isinstance(model, CalibrationModel)
+    return model
+
+
+def _score_item(model: CalibrationModel, item: tuple[bytes, CandidateConfig]) -> list[tuple[CvResult, Estimate]]:
+    """:func:`score_candidate` in a worker: the model is its state (built once), the rest comes with the item."""
+    inputs, candidate = item
+    return score_candidate(Problem(model, *pickle.loads(inputs)), candidate)
 
 
 def select_model(
@@ -259,6 +267,7 @@ def select_model(
     progress: ProgressCallback = ignore_progress,
     backend: Backend | None = None,
     search: ScaleSearch = ScaleSearch.VALLEY,
+    warm: Mapping[tuple[str, float], tuple[FloatArray, ...]] | None = None,
 ) -> ModelSelection:
     """Cross-validate every candidate over the prior scales and apply the one-standard-error rule.
 
@@ -273,6 +282,9 @@ def select_model(
         progress: Told when each candidate is done.
         backend: Where the candidates run; None: this process.
         search: Which prior scales are tried.
+        warm: (candidate, scale) -> the results of its fits on nearly the same rows
+            (:attr:`Estimate.rounds` of an earlier selection): each fit of that pair on
+            all rows starts from them, and converges to the same optimum in fewer steps.
 
     Raises:
         InfeasibleError: Every candidate's fit is implausible.
@@ -281,13 +293,15 @@ def select_model(
     usable = [c for c in (candidates or settings.candidates) if not (c.floor and model.floor is None)]
     for skipped in set(candidates or settings.candidates) - set(usable):
         LOG.info("candidate %s skipped: the floor equations need a chain from each sole", skipped.name)
-    problem = Problem(model, observations, settings, tuple(folds), noise, search)
-    payload = pickle.dumps(problem)
-    job: Job[Problem, CandidateConfig, list[tuple[CvResult, Estimate]]] = Job(
+    rest = (observations, settings, tuple(folds), noise, search, dict(warm or {}))  # a Problem's, but the model
+    # the workers' state is the model alone: a second selection (other rows) runs on the same workers
+    payload = pickle.dumps(model)
+    job: Job[CalibrationModel, tuple[bytes, CandidateConfig], list[tuple[CvResult, Estimate]]] = Job(
         name=f"calibrate-cv-{hashlib.sha256(payload).hexdigest()[:16]}",
-        setup=partial(_problem_state, payload),
-        run=score_candidate,
+        setup=partial(_model_state, payload),
+        run=_score_item,
     )
+    inputs = pickle.dumps(rest)
     say = Steps(len(usable) + 1, progress)
     items = [*usable, NOMINAL]
     # the costliest first (floor equations, then the most free parameters): no worker waits long for the last
@@ -295,7 +309,7 @@ def select_model(
     order = sorted(range(len(items)), key=lambda i: cost[items[i].name], reverse=True)
     by_item: dict[int, list[tuple[CvResult, Estimate]]] = {}
     runner = as_backend(backend or 1)
-    for i, scored in zip(order, runner.map(job, [items[i] for i in order], len(items)), strict=True):
+    for i, scored in zip(order, runner.map(job, [(inputs, items[i]) for i in order], len(items)), strict=True):
         say(f"cross-validation: {items[i].name}")
         by_item[i] = scored
     *scored_candidates, nominal = [by_item[i] for i in range(len(items))]  # the config's order, whatever ran first

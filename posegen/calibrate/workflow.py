@@ -12,7 +12,8 @@ import numpy as np
 
 from posegen.arguments import check_seed, check_size
 from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
-from posegen.calibrate.calibration_file import write_calibration
+from posegen.calibrate.calibration_file import write_calibration_files
+from posegen.calibrate.plots import drawing
 from posegen.calibrate.record import CALIBRATION_FILE
 from posegen.calibrate.simulation import Perturbation, simulate
 from posegen.calibrate.summary import CalibrationSummary
@@ -285,9 +286,10 @@ def calibrate_files(
     sessions = list(dict.fromkeys(train.sessions + (validation.sessions if validation else ())))
     with claim_output(out_dir, OutputKind.FOLDER), atomic_folder(out_dir) as staging:
         calibration = calibrate(scene, train, sessions, settings, progress, backend)
-        summary = write_calibration(calibration, validation, staging, settings.seed, rejected)
-        if finish is not None:
-            finish(staging)
+        summary, plots = write_calibration_files(calibration, validation, staging, settings.seed, rejected)
+        with drawing(plots, backend):  # on the idle workers, while this process writes the report
+            if finish is not None:
+                finish(staging)
     return Calibrated(summary=summary, training_contacts=len(train))
 
 

@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
         return write_report_into(folder, args.config, shown_as=args.output)
 
     finish = None if missing else report_html
-    preload = ("posegen.calibrate.model_selection",)  # the workers' imports, while the files are read
+    preload = ("posegen.calibrate.model_selection", "matplotlib.pyplot")  # the workers' imports, meanwhile
     with ProgressBar(args.quiet) as bar, open_backend(args.workers, preload=preload) as backend:
         calibrated = calibrate_files(
             args.measurements, args.validate, args.output, settings, config, bar, backend, finish

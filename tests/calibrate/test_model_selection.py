@@ -70,10 +70,12 @@ def test_the_valley_search_picks_what_the_exhaustive_search_picked(scene, real_d
 
 
 def test_the_same_bytes_for_any_number_of_workers(lean_scene, example_pool, tmp_path):
-    """Candidates cross-validated in this process or over two workers: the same calibration folder."""
+    """Candidates cross-validated, and plots drawn, in this process or over two workers: the same calibration folder."""
     import numpy as np
 
     from posegen.calibrate import Perturbation, Settings, calibrate, simulate, write_calibration
+    from posegen.calibrate.calibration_file import write_calibration_files
+    from posegen.calibrate.plots import drawing
     from posegen.model import Contacts
     from posegen.parallel import ProcessBackend
 
@@ -87,15 +89,20 @@ def test_the_same_bytes_for_any_number_of_workers(lean_scene, example_pool, tmp_
     recorded, _, _ = simulate(lean_scene, plan, Perturbation(compliance_rad_per_nm=3e-4), seed=5)
     folders = []
     for workers in (1, 2):
+        folders.append(tmp_path / f"w{workers}")
         with ProcessBackend(workers) as backend:
             calibration = calibrate(lean_scene, recorded, ["sim"], Settings(fold_seeds=1), backend=backend)
-        folders.append(tmp_path / f"w{workers}")
-        write_calibration(calibration, None, folders[-1], seed=0)
+            if workers == 1:
+                write_calibration(calibration, None, folders[-1], seed=0)
+            else:  # as the command writes it: the plots drawn on the workers
+                _, plots = write_calibration_files(calibration, None, folders[-1], seed=0)
+                with drawing(plots, backend):
+                    assert (folders[-1] / "calibration.yaml").is_file()  # the report can read the folder meanwhile
     names = sorted(str(p.relative_to(folders[0])) for p in folders[0].rglob("*") if p.is_file())
     assert names == sorted(str(p.relative_to(folders[1])) for p in folders[1].rglob("*") if p.is_file())
-    assert {"calibration.yaml", "calibrated.urdf", "offsets.yaml", "residuals.csv"} <= set(names)
+    assert {"calibration.yaml", "calibrated.urdf", "offsets.yaml", "residuals.csv", "parameters.png"} <= set(names)
     for name in names:
-        if name.endswith((".yaml", ".urdf", ".csv")):
+        if name.endswith((".yaml", ".urdf", ".csv", ".png")):
             assert (folders[0] / name).read_bytes() == (folders[1] / name).read_bytes(), name
     assert (
         np.load(folders[0] / "posterior.npz")["covariance"].tobytes()
