@@ -65,6 +65,16 @@ def test_a_folder_is_not_taken_for_a_robot_name(tmp_path, capfd):
     assert "a folder; give a URDF or MJCF file" in line, line
 
 
+def test_a_folder_named_like_the_robot_does_not_hide_its_name(tmp_path, monkeypatch, capfd):
+    """``robot init human -o human/config.yaml``: the output's folder, made first, is not taken for the robot."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["robot", "init", "human", "-o", "human/human_table.yaml", "--samples", "2"]) == 0, capfd.readouterr()
+    assert "example_robot_data: human" in (tmp_path / "human" / "human_table.yaml").read_text()
+    capfd.readouterr()
+    line = _init(["./human", "-o", "other.yaml"], capfd)  # a path to the folder is still a folder
+    assert "a folder; give a URDF or MJCF file" in line, line
+
+
 @pytest.mark.parametrize("output", ["robot.urdf", "meshes/foot.stl"])
 def test_the_draft_never_overwrites_the_urdf_or_a_mesh_it_reads(output, tmp_path, capfd):
     path = humanoid_urdf(tmp_path)
