@@ -50,7 +50,7 @@ def load_draft_source(name: str, srdf: str | None = None, package_dirs: tuple[st
 
     """
     path = resolve_path(name, package_dirs) if name.startswith(PACKAGE_URI) else Path(name)
-    bare = "/" not in name and os.sep not in name and not path.suffix  # "human": a name, whatever folder is here
+    bare = "/" not in name and os.sep not in name and not path.suffix  # example-robot-data's, whatever folder is here
     if path.is_dir() and not bare:
         raise ConfigError(f"{name}: a folder; give a URDF or MJCF file (or an example-robot-data name)")
     if path.suffix.lower() in (".urdf", ".xml", ".mjcf") or path.is_file():
