@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import re
 import subprocess
 import sys
@@ -27,6 +26,8 @@ from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+from run import machine  # benchmarks/run.py, beside this file
 
 ROOT = Path(__file__).resolve().parents[1]
 POSEGEN = [sys.executable, "-m", "posegen.cli"]
@@ -50,18 +51,6 @@ CASES = {
     "jvrc": Case("jvrc", "configs/jvrc_table.yaml", 200, 5, 0, 10),
     "human": Case("human", "configs/human_table.yaml", 200, 5, 0, 10),
 }
-
-
-def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{os.cpu_count()} cores, {cpu}, Python {platform.python_version()}"
 
 
 def posegen(*args: str) -> tuple[float, subprocess.CompletedProcess[str]]:

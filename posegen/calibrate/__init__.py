@@ -38,6 +38,7 @@ from posegen.calibrate.record import (
 )
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
+from posegen.calibrate.simulated_recording import hermite
 from posegen.calibrate.simulation import Perturbation, perturbed_robot, simulate, true_parameters
 from posegen.calibrate.summary import (
     CalibrationSummary,
@@ -146,6 +147,7 @@ __all__ = [
     "format_table",
     "held_out_residuals",
     "held_out_x",
+    "hermite",
     "joint_offsets",
     "judge",
     "levenberg_marquardt",

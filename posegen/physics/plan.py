@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from posegen.calibrate import hermite
 from posegen.io import Route
 from posegen.robot import Balance, FloatArray, Scene, centres_of_pressure
 
@@ -36,20 +37,6 @@ class Plan:
     pelvis_z: FloatArray  # (n,) m, the planned height of the free base
     base_rotation: FloatArray  # (n, 3, 3) the free base's planned orientation
     hands: dict[str, FloatArray]  # chain -> (n, 4, 4) its contact frame's planned world pose
-
-
-def hermite(times: FloatArray, positions: FloatArray, velocities: FloatArray, at: FloatArray) -> FloatArray:
-    """Cubic Hermite positions (n, nj) at ``at`` (n,); constant before and after ``times``."""
-    k = np.clip(np.searchsorted(times, at, side="right") - 1, 0, len(times) - 2)
-    h = (times[k + 1] - times[k])[:, None]
-    s = np.clip((at - times[k])[:, None] / h, 0.0, 1.0)
-    s2, s3 = s * s, s * s * s
-    return np.asarray(
-        (2 * s3 - 3 * s2 + 1) * positions[k]
-        + (s3 - 2 * s2 + s) * h * velocities[k]
-        + (3 * s2 - 2 * s3) * positions[k + 1]
-        + (s3 - s2) * h * velocities[k + 1]
-    )
 
 
 def _hermite_rate(times: FloatArray, positions: FloatArray, velocities: FloatArray, at: FloatArray) -> FloatArray:
