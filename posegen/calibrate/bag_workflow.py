@@ -348,7 +348,7 @@ def _contact_windows(
     if planned_motion is not None:
         planned = [PlannedContact(c.chain, c.label, c.posture[columns]) for c in planned_motion.contacts]
         heights = None if wrenches else _heights(scene, windows, planned_motion, columns, base)
-        windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights)
+        windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights, settings.match_ratio)
     accepted, full = _within_limits(scene, windows, columns, base, rejected)
     rejected.sort(key=lambda r: r.start_s)
     return _Found(tuple(accepted), np.array(full), tuple(rejected), tools)

@@ -140,14 +140,34 @@ def find_windows(
     return windows, rejected
 
 
+def _unambiguous(deviation: FloatArray, ratio: float, chain: str, planned: Sequence[PlannedContact]) -> bool:
+    """Whether the nearest contact (deviations (m,) rad) is at most ``ratio`` as far as the next, on ``chain``."""
+    if ratio <= 0.0 or not chain:
+        return False
+    order = np.argsort(deviation)
+    nearest = int(order[0])
+    if planned[nearest].chain != chain:
+        return False
+    return len(order) == 1 or bool(deviation[nearest] <= ratio * deviation[order[1]])
+
+
 def match_windows(
     windows: Sequence[Window],
     planned: Sequence[PlannedContact],
     tolerance: float,
     rejected: list[Rejection],
     heights: Sequence[float] | None = None,
+    ratio: float = 0.0,
 ) -> list[Window]:
     """Name each window after the route contact whose planned posture it holds, in route order.
+
+    A window holds a contact when every joint is within ``tolerance`` of its planned
+    posture. A stabilized robot holds a contact further from its plan (its legs fitted to
+    the floor, its hand to the table): with wrist forces, a window beyond the tolerance
+    still holds the contact nearest to it (largest joint deviation) when that contact is
+    on the wrist that feels the force and at most ``ratio`` as far as every other contact
+    of the route (the postures a route visits lie far apart, so that the nearest is
+    unambiguous).
 
     Args:
         windows: Candidate windows, in time order.
@@ -159,6 +179,8 @@ def match_windows(
             above it, at its approach posture; they are reported). Windows that hold no
             planned posture are then pauses and not reported. None: with wrenches, several
             windows at one contact are all ambiguous.
+        ratio: With wrenches, the nearest contact's deviation over the next nearest's below
+            which a window beyond the tolerance holds it; 0: the tolerance alone.
 
     Returns:
         The accepted windows, with the arm and the label of their contact.
@@ -170,6 +192,8 @@ def match_windows(
     for k, window in enumerate(windows):
         deviation = np.abs(targets - window.joints).max(axis=1)  # (m,)
         near = np.flatnonzero(deviation <= tolerance).tolist()
+        if not near and heights is None and _unambiguous(deviation, ratio, window.chain, planned):
+            near = [int(np.argmin(deviation))]
         if not near:
             if heights is None:
                 best = int(np.argmin(deviation))

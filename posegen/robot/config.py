@@ -97,6 +97,7 @@ class RecordingConfig:
     max_std_rad: float = 0.001  # a joint varying more than this (std) within a window: too noisy
     max_gap_s: float = 0.02  # shorter interruptions of a window are bridged
     match_tolerance_rad: float = 0.1  # largest joint deviation of a window from the route's planned posture
+    match_ratio: float = 0.5  # beyond it, with wrist force: the nearest contact at most this fraction of the next's
 
 
 @dataclass(frozen=True)
@@ -215,7 +216,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         margins=read_margins(top.sub("margins")),
         sampling=read_sampling(top.sub("sampling")),
         route=_section(top, "route", RouteConfig()),
-        recording=_section(top, "recording", RecordingConfig()),
+        recording=_recording(top),
         calibration=parse_calibration(top.raw("calibration", None)),
         source_path=source_path,
         frames=read_frames(robot),
@@ -294,6 +295,14 @@ def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:
 
 
 _Section = TypeVar("_Section", RouteConfig, RecordingConfig)
+
+
+def _recording(top: Reader) -> RecordingConfig:
+    """The ``recording`` section; ``match_ratio`` is a fraction below 1 (0: the tolerance alone)."""
+    recording = _section(top, "recording", RecordingConfig())
+    if recording.match_ratio >= 1.0:
+        raise ConfigError(f"recording.match_ratio: expected a fraction below 1, got {recording.match_ratio:g}")
+    return recording
 
 
 def _section(top: Reader, key: str, defaults: _Section) -> _Section:

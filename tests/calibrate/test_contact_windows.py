@@ -124,3 +124,36 @@ def test_without_force_the_lowest_window_at_a_contact_is_the_contact():
     accepted = match_windows(windows, planned, SETTINGS.match_tolerance_rad, rejected, heights=[0.73, 0.68, 0.73])
     assert [w.start_s for w in accepted] == [3.0] and accepted[0].chain == "left"
     assert [r.reason for r in rejected] == ["a pause 5.0 cm above the contact window at p0"] * 2
+
+
+def test_a_stabilized_hold_beyond_the_tolerance_holds_its_unambiguous_contact():
+    from posegen.calibrate.contact_windows import Window
+
+    planned = [
+        PlannedContact("left", "p0", np.zeros(3)),
+        PlannedContact("right", "p1", np.array([1.0, 0.0, 0.0])),
+        PlannedContact("left", "p2", np.array([0.0, 1.0, 0.0])),
+    ]
+
+    def held(start, chain, joints):
+        return Window(start, start + 1.0, chain, "", np.array(joints), 500, 1e-4, 30.0)
+
+    windows = [
+        held(1.0, "left", [0.0, 0.0, 0.25]),  # p0, its legs 0.25 rad off: the others are >= 1 rad away
+        held(3.0, "right", [0.75, 0.0, 0.2]),  # p1, 0.25 rad off against p0's 0.75: within the ratio
+        held(5.0, "left", [0.0, 0.45, 0.0]),  # between p0 and p2: ambiguous
+        held(7.0, "right", [0.0, 0.95, 0.2]),  # near p2, but with force on the other wrist
+    ]
+    reasons = [
+        "holds no route contact (nearest: p0, 0.250 rad away)",
+        "holds no route contact (nearest: p1, 0.250 rad away)",
+        "holds no route contact (nearest: p0, 0.450 rad away)",
+        "holds no route contact (nearest: p2, 0.200 rad away)",
+    ]
+    strict: list = []
+    assert match_windows(windows, planned, SETTINGS.match_tolerance_rad, strict, ratio=0.0) == []
+    assert [r.reason for r in strict] == reasons
+    rejected: list = []
+    accepted = match_windows(windows, planned, SETTINGS.match_tolerance_rad, rejected, ratio=SETTINGS.match_ratio)
+    assert [(w.label, w.chain, w.start_s) for w in accepted] == [("p0", "left", 1.0), ("p1", "right", 3.0)]
+    assert [r.reason for r in rejected] == reasons[2:]

@@ -84,6 +84,9 @@ def test_recording_section_and_wrench_topics():
     data["recording"] = {"trim_s": -1.0}
     with pytest.raises(ConfigError, match=r"recording\.trim_s: must be >= 0"):
         parse_config(data)
+    data["recording"] = {"match_ratio": 1.0}
+    with pytest.raises(ConfigError, match=r"recording\.match_ratio: expected a fraction below 1, got 1"):
+        parse_config(data)
 
 
 def test_read_source_makes_paths_absolute_from_the_config_folder(tmp_path):
