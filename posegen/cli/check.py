@@ -46,16 +46,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"  WARN {len(bare)} moving links have no collision geometry (nothing collides with them):", *bare)
     for worst in result.worst:
         if not worst.checked:
-            print(f"  SKIP {worst.invariant.value:<13} {worst.detail}")
+            print(f"  SKIP {worst.invariant.value:<15} {worst.detail}")
             continue
         status = "OK  " if worst.violations == 0 else "FAIL"
         if not is_route:
             print(
-                f"  {status} {worst.invariant.value:<13} violations {worst.violations:>4}  "
+                f"  {status} {worst.invariant.value:<15} violations {worst.violations:>4}  "
                 f"worst: {unit} {worst.posture} ({worst.detail})"
             )
             continue
-        print(f"  {status} {worst.invariant.value:<13} violations {worst.violations:>4}  ({worst.detail})")
+        print(f"  {status} {worst.invariant.value:<15} violations {worst.violations:>4}  ({worst.detail})")
         for example in worst.examples[1:] if worst.examples[:1] == (worst.detail,) else worst.examples:
             print(f"         {example}")
     if result.efforts:

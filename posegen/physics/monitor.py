@@ -16,8 +16,7 @@ import numpy as np
 from posegen.physics.builder import Layout
 from posegen.physics.geometry import ShapeRole
 from posegen.physics.sensors import sensor_wrench
-from posegen.physics.sole_split import cross
-from posegen.robot import FloatArray, convex_hull_clockwise, polygon_margin
+from posegen.robot import FloatArray, convex_hull_clockwise, cross, polygon_margin
 
 _CODES = {role: k for k, role in enumerate(ShapeRole)}
 _TIP, _BODY = _CODES[ShapeRole.TIP], _CODES[ShapeRole.BODY]

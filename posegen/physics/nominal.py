@@ -13,9 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from posegen.physics.sole_split import cross, least_size_map, split_wrench
 from posegen.physics.tool import Tool
-from posegen.robot import FloatArray, Scene
+from posegen.robot import FloatArray, Scene, cross, least_size_map, split_wrench
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world
 SPLIT_EVERY = 25  # updates between two computations of the least-size split's map (the soles barely move)
@@ -54,6 +53,8 @@ class NominalRobot:
         self._foot_half = np.array([(x1 - x0) / 2, (y1 - y0) / 2])
         self._normal_map: FloatArray | None = None  # the least-size split's, renewed every SPLIT_EVERY updates
         self._updates = 0
+        self._gravity: FloatArray | None = None  # (nv,) the generalized gravity at update number _gravity_at
+        self._gravity_at = -1
         self.q = scene.configuration(scene.reference)
 
     def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
@@ -150,6 +151,19 @@ class NominalRobot:
             total[:3] += force
             total[3:] += pose[:3, :3] @ wrench[3:] + cross(pose[:3, 3], force)
         return total
+
+    def sole_torques(self, wrenches: list[FloatArray]) -> FloatArray:
+        """Joint torques (nj,) N m that hold the posture, its weight carried by the soles' wrenches (6,) LOCAL each.
+
+        The hands are unloaded; the generalized gravity is computed once per :meth:`update`.
+        """
+        if self._gravity is None or self._gravity_at != self._updates:
+            self._gravity = np.array(pin.computeGeneralizedGravity(self.model, self.data, self.q))
+            self._gravity_at = self._updates
+        torques = self._gravity.copy()
+        for sole, wrench in zip(self.soles, wrenches, strict=True):
+            torques -= pin.getFrameJacobian(self.model, self.data, sole, pin.LOCAL).T @ wrench
+        return np.asarray(torques[self._velocity])
 
     def static_torques(self, hand: dict[str, FloatArray]) -> FloatArray:
         """Joint torques (nj,) N m that hold the posture: gravity, the hands' wrenches, the soles' shares.

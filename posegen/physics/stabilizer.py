@@ -17,12 +17,20 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
   the CoM toward them (:func:`references`).
 * **Foot admittance** (foot damping control). The desired ZMP's wrench is shared by the
   soles as flat feet share it (:meth:`NominalRobot.sole_split`); each sole moves, relative
-  to the base, at ``v = K (w - w_share)`` in its frame, along its normal and about its
-  horizontal axes (a sole never slides nor turns on the floor; the friction holds it), an
-  excess within ``BAND`` leaving it still (the robot rests near equilibrium, so that a
-  contact is measured with its joints still): a sole
-  on its edge turns flat, a leg the true kinematics makes long shortens, and together
-  they lean the body to move the ZMP.
+  to the base, at ``v = K (w - w_share)`` in its frame, along its normal, about its
+  horizontal axes and along the floor (never about its normal), an excess within
+  ``BAND`` leaving it still (the robot rests near equilibrium, so that a contact is
+  measured with its joints still): a sole on its edge turns flat, a leg the true
+  kinematics makes long shortens, and together they lean the body to move the ZMP. Along
+  the floor the shares are the net force's, so only the force between the feet moves them
+  (``K_FOOT_SHEAR``): the true legs do not close where the nominal ones do, and as the
+  posture changes the stiff joint loops would squeeze or spread the feet (100-150 N),
+  sliding a sole as it unloads; the friction holds the soles, so the legs give way.
+* **Torque limits.** The desired ZMP is moved back toward the reference just as far as
+  keeps every joint's torque (:meth:`NominalRobot.sole_torques`, the soles sharing the
+  wrench as flat feet do) within ``TORQUE_RATIO`` of its effort, or within what the
+  reference asks, if more: a ZMP the feet make by loading one hip past its effort is not
+  one they can make (the hip yields and the body falls toward it).
 * **CoM bias.** The nominal model misplaces a perturbed robot's CoM by centimetres. When
   no hand pushes, the measured ZMP less the one the plan's motion gives at the model's CoM
   is low-passed (``BIAS_S``) into the CoM's bias: on average over a few seconds the floor
@@ -65,10 +73,11 @@ BIAS_S = 2.0  # time constant of the CoM bias estimate, s
 ZMP_MARGIN_M = (
     0.004  # the desired ZMP is kept this far inside the support polygon (the feedback's authority at the edge)
 )
-K_FOOT_FORCE = 1e-4  # m/s per N of excess force on a sole
+K_FOOT_FORCE = 1e-4  # m/s per N of excess normal force on a sole
+K_FOOT_SHEAR = 3e-4  # m/s per N of excess horizontal (internal) force on a sole
 K_FOOT_TORQUE = 1e-3  # rad/s per N m of excess torque
 MAX_FOOT_SPEED = 0.02  # m/s and rad/s
-ADMITTED = np.array([0.0, 0.0, 1.0, 1.0, 1.0, 0.0])  # a sole gives way along its normal and tilts, never slides
+ADMITTED = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 0.0])  # a sole gives way to every force and tilts; never yaws
 BAND = np.array([20.0, 20.0, 20.0, 3.0, 3.0, 3.0])  # N, N m: a sole's excess below this leaves it where it is
 K_COM_PER_S = 3.0  # CoM position error -> the base's motion over the soles
 COM_BAND_M = 0.003  # a CoM error below this is left as it is (the robot rests still)
@@ -81,6 +90,8 @@ MAX_TURN_RAD_S = 0.05
 ATTITUDE_BAND_RAD = 0.003  # a tilt error below this is left as it is (the robot rests still)
 REST_DCM_M = 0.01  # during a hold the stabilizer rests while the DCM is this close to its reference
 REST_MARGIN_M = 0.01  # and the measured ZMP this far inside the support polygon
+TORQUE_RATIO = 0.95  # the desired ZMP's split asks no joint for more of its effort (or than the reference's asks)
+TORQUE_STEPS = 6  # bisection steps between the reference ZMP and the desired one
 POLYGON_EVERY = 25  # control steps between two computations of the support polygon (the soles barely move)
 
 
@@ -188,6 +199,7 @@ class Stabilizer:
     def __init__(self, scene: Scene, robot: NominalRobot, glued_feet: bool = False) -> None:
         self.robot = robot
         self.glued_feet = glued_feet  # welded soles: no admittance (their sensors read the welds)
+        self._limit = TORQUE_RATIO * np.nan_to_num(scene.effort_limit, nan=np.inf)  # (nj,) N m
         self.margin_m = scene.margins.zmp_m  # the reference ZMP is kept this far inside the polygon
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
@@ -251,8 +263,7 @@ class Stabilizer:
         balanced = np.linalg.norm(self.dcm_error) < REST_DCM_M and self._polygon().margin(measured) > REST_MARGIN_M
         if self.glued_feet or (holding and balanced):
             return [np.zeros(6) for _ in robot.soles]
-        desired = total.copy()
-        desired[3:5] = [self.zmp_desired[1] * total[2], -self.zmp_desired[0] * total[2]]  # its ZMP there
+        self.zmp_desired, shares = self._within_torques(total, zmp, self.zmp_desired)
         shift = np.zeros(3)  # the soles move back: the base moves on
         shift[2] = K_HEIGHT_PER_S * float(
             _beyond(np.array([robot.q[2] - planned.pelvis_z]), np.array([HEIGHT_BAND_M]))[0]
@@ -265,11 +276,41 @@ class Stabilizer:
         level = np.zeros(3)  # turning both soles by the base's tilt, relative to it, turns the base back
         tilt = _beyond(tilt_error(*attitude), np.full(2, ATTITUDE_BAND_RAD))
         level[:2] = np.clip(K_ATTITUDE_PER_S * tilt, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
-        shares = robot.sole_split(desired)
         return [
             _sole_twist(pose, wrench, share, shift, level, float(total[2]))
             for pose, wrench, share in zip(robot.sole_poses, soles.wrenches, shares, strict=True)
         ]
+
+    def _split_at(self, total: FloatArray, zmp: FloatArray) -> tuple[list[FloatArray], FloatArray]:
+        """The soles' shares (6,) LOCAL each of the total wrench (6,) moved to the ZMP (2,), and their torques (nj,)."""
+        desired = total.copy()
+        desired[3:5] = [zmp[1] * total[2], -zmp[0] * total[2]]
+        shares = self.robot.sole_split(desired)
+        return shares, np.abs(self.robot.sole_torques(shares))
+
+    def _within_torques(
+        self, total: FloatArray, reference: FloatArray, desired: FloatArray
+    ) -> tuple[FloatArray, list[FloatArray]]:
+        """The desired ZMP (2,) moved back toward the reference until its split asks no joint past its limit.
+
+        A joint is held within ``TORQUE_RATIO`` of its effort, or within what the reference ZMP's
+        split asks of it, if more: a stance leg at its effort limit yields, and its body falls
+        (a ZMP the feet make by loading one hip past its effort is not one they can make).
+        Returns the ZMP and the soles' shares (6,) LOCAL each.
+        """
+        shares, torques = self._split_at(total, desired)
+        if np.all(torques <= self._limit):
+            return desired, shares
+        bound = np.maximum(self._limit, self._split_at(total, reference)[1])
+        low, high = 0.0, 1.0
+        for _ in range(TORQUE_STEPS):
+            middle = 0.5 * (low + high)
+            if np.all(self._split_at(total, reference + middle * (desired - reference))[1] <= bound):
+                low = middle
+            else:
+                high = middle
+        zmp = reference + low * (desired - reference)
+        return zmp, self._split_at(total, zmp)[0]
 
 
 def _sole_twist(
@@ -283,7 +324,7 @@ def _sole_twist(
     excess = _beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
     if wrench[2] < LIGHT_SHARE * load:
         excess[3:] = 0.0
-    local = np.concatenate([K_FOOT_FORCE * excess[:3], K_FOOT_TORQUE * excess[3:]])
+    local = np.concatenate([K_FOOT_SHEAR * excess[:2], K_FOOT_FORCE * excess[2:3], K_FOOT_TORQUE * excess[3:]])
     local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
     rotation = pose[:3, :3]
     return np.concatenate([rotation @ local[:3] + shift, rotation @ local[3:] + level])

@@ -92,8 +92,10 @@ from posegen.robot.geometry import (
     tilt_angles,
     yaw_rotation,
 )
+from posegen.robot.motion_torques import MotionTorques, PointLoad, allowed_ratios, effort_ratios_at, torque_stretch
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for, scene_for_postures
+from posegen.robot.sole_split import COP_MARGIN_M, cross, least_size_map, least_size_share, split_wrench
 from posegen.robot.stance_space import StanceSpace
 from posegen.robot.statics import (
     MOMENT_ARM_M,
@@ -128,6 +130,7 @@ from posegen.robot.verification import (
 )
 
 __all__ = [
+    "COP_MARGIN_M",
     "COVER_TOL_M",
     "DEFAULT_KIND",
     "EXAMPLES",
@@ -160,7 +163,9 @@ __all__ = [
     "JointEffort",
     "LinearTorques",
     "MarginConfig",
+    "MotionTorques",
     "PairSurvey",
+    "PointLoad",
     "PriorConfig",
     "Projection",
     "Projector",
@@ -182,6 +187,7 @@ __all__ = [
     "Worst",
     "WorstSoFar",
     "add_self_pairs",
+    "allowed_ratios",
     "assess",
     "bare_links",
     "centres_of_pressure",
@@ -189,7 +195,9 @@ __all__ = [
     "contact_in_table",
     "contact_placement",
     "convex_hull_clockwise",
+    "cross",
     "effort_ratios",
+    "effort_ratios_at",
     "flatten_on_floor",
     "geometry_coverage",
     "gravity_torques",
@@ -197,6 +205,8 @@ __all__ = [
     "holding_torques",
     "kind_named",
     "kinematic_urdf",
+    "least_size_map",
+    "least_size_share",
     "left_out_m",
     "linear_torques",
     "link_masses",
@@ -218,6 +228,7 @@ __all__ = [
     "rpy_matrix",
     "scene_for",
     "scene_for_postures",
+    "split_wrench",
     "stretch_for_margin",
     "summarize",
     "survey_pairs",
@@ -225,6 +236,7 @@ __all__ = [
     "tilt_angles",
     "tilt_measurement",
     "tilt_measurement_jacobian",
+    "torque_stretch",
     "translation_matrix",
     "with_declared_frames",
     "worst_case",

@@ -92,6 +92,23 @@ class Balance:
         self, joints: FloatArray, velocity: FloatArray, acceleration: FloatArray, chain: str | None, force_n: float
     ) -> tuple[FloatArray, FloatArray]:
         """The floor's wrench at one point: its static and dynamic parts, (6,) each (see :meth:`floor_wrenches`)."""
+        gravity, motion = self.generalized(joints, velocity, acceleration)
+        base = self.data.oMi[1]
+        static = _world(base, gravity[:6])
+        if chain is not None and force_n != 0.0:
+            pin.updateFramePlacements(self.model, self.data)
+            force = force_n * self.normal
+            static -= np.concatenate([force, np.cross(self.data.oMf[self.hands[chain]].translation, force)])
+        return static, _world(base, motion[:6])
+
+    def generalized(
+        self, joints: FloatArray, velocity: FloatArray, acceleration: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The generalized forces (nv,) of one point: gravity's, and the motion's (RNEA less gravity).
+
+        The floating base moves so that the anchor sole stays still. The kinematics and the
+        joint Jacobians of the point stay in the workspace (``data``).
+        """
         model, data = self.model, self.data
         q = self.scene.configuration(joints)
         v, a = np.zeros(model.nv), np.zeros(model.nv)
@@ -102,15 +119,9 @@ class Balance:
         pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
         drift = pin.getFrameAcceleration(model, data, self.anchor, pin.LOCAL).vector  # (6,) J-dot v
         a[:6] = -np.linalg.solve(anchor[:, :6], anchor[:, 6:] @ a[6:] + drift)
-        gravity = pin.computeGeneralizedGravity(model, data, q)[:6].copy()
-        total = pin.rnea(model, data, q, v, a)[:6].copy()
-        base = data.oMi[1]
-        static = _world(base, gravity)
-        if chain is not None and force_n != 0.0:
-            pin.updateFramePlacements(model, data)
-            force = force_n * self.normal
-            static -= np.concatenate([force, np.cross(data.oMf[self.hands[chain]].translation, force)])
-        return static, _world(base, total - gravity)
+        gravity = np.array(pin.computeGeneralizedGravity(model, data, q))
+        total = np.array(pin.rnea(model, data, q, v, a))
+        return gravity, total - gravity
 
 
 def _world(base: pin.SE3, wrench: FloatArray) -> FloatArray:
@@ -118,9 +129,7 @@ def _world(base: pin.SE3, wrench: FloatArray) -> FloatArray:
     return np.asarray(base.act(pin.Force(wrench)).vector)
 
 
-def pressed_zmp_margin(
-    scene: Scene, com_m: FloatArray, mass_kg: float, hand_m: FloatArray, force_n: float
-) -> float:
+def pressed_zmp_margin(scene: Scene, com_m: FloatArray, mass_kg: float, hand_m: FloatArray, force_n: float) -> float:
     """Signed distance (m) of the soles' centre of pressure inside the support polygon, at rest, the hand pressing.
 
     The table pushes the hand at ``hand_m`` along its normal with ``force_n``; the floor

@@ -15,6 +15,10 @@ ground projection on a fast reach. Two pieces keep it inside:
   constraints on its grid): where the margin is still not kept, the whole segment is
   slowed down uniformly by the least stretch that keeps it (its accelerations fall as
   its square).
+* :func:`within_torques`, the joint torques at that speed, the floor's wrench shared as
+  flat feet share it (:mod:`posegen.robot.motion_torques`): a fast weight transfer loads
+  one leg past what it holds at rest; where a joint passes ``margins.effort_ratio`` (or
+  its ratio at rest, if more), the segment is slowed down uniformly the same way.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ import numpy as np
 import toppra.constraint
 
 from posegen.errors import InfeasibleError
-from posegen.robot import Balance, FloatArray, Scene, stretch_for_margin
+from posegen.robot import Balance, FloatArray, MotionTorques, Scene, stretch_for_margin, torque_stretch
 from posegen.route.timing import Timed, parameterize
 
 LOG = logging.getLogger(__name__)
@@ -92,8 +96,9 @@ def timed_in_balance(
     waypoints: FloatArray,
     velocity_limit: FloatArray,
     acceleration_limit: FloatArray,
+    torques: MotionTorques | None = None,
 ) -> Timed:
-    """The fastest timing of a path that keeps the joints' limits and the ZMP's margin.
+    """The fastest timing of a path that keeps the joints' limits, the ZMP's margin and the torques.
 
     toppra times the path within the joint limits first; only when that timing misses
     the ZMP's margin is it timed again with :class:`ZmpConstraint` (its inverse dynamics
@@ -106,6 +111,7 @@ def timed_in_balance(
         waypoints: (m, nj) rad.
         velocity_limit: (nj,) or (m, nj) rad/s.
         acceleration_limit: (nj,) rad/s^2.
+        torques: The workspace of the torques at speed (:func:`within_torques`); None: not checked.
 
     Raises:
         InfeasibleError: No timing (toppra's, or the ZMP outside even at rest).
@@ -118,9 +124,9 @@ def timed_in_balance(
     if len(timed.times) < 2:
         return timed
     wrenches = balance.floor_wrenches(timed.positions, timed.velocities, timed.accelerations, [None] * len(timed.times))
-    if stretch_for_margin(scene.support_polygon, wrenches, scene.margins.zmp_m) == 1.0:
-        return timed
-    return balanced(scene, balance, parameterize(waypoints, velocity_limit, acceleration_limit, [zmp]))
+    if stretch_for_margin(scene.support_polygon, wrenches, scene.margins.zmp_m) != 1.0:
+        timed = balanced(scene, balance, parameterize(waypoints, velocity_limit, acceleration_limit, [zmp]))
+    return timed if torques is None else within_torques(scene, torques, timed)
 
 
 def balanced(scene: Scene, balance: Balance, timed: Timed) -> Timed:
@@ -150,4 +156,31 @@ def balanced(scene: Scene, balance: Balance, timed: Timed) -> Timed:
     if stretch == 1.0:
         return timed
     LOG.debug("slowed by %.3f to keep the ZMP %.3f m inside the support polygon", stretch, margin)
+    return Timed(timed.times * stretch, timed.positions, timed.velocities / stretch, timed.accelerations / stretch**2)
+
+
+def within_torques(scene: Scene, torques: MotionTorques, timed: Timed) -> Timed:
+    """``timed`` slowed down uniformly just enough to keep every joint torque at speed within its allowed ratio.
+
+    The torques hold the points at their speed, the floor's wrench shared as flat feet share
+    it, each with its spread over the CoM's uncertainty: within ``margins.effort_ratio``
+    of the effort, or within the ratio of the same point at rest, if more
+    (:func:`posegen.robot.torque_stretch`).
+
+    Args:
+        scene: Scene.
+        torques: The workspace.
+        timed: A rest-to-rest segment.
+
+    Example:
+        >>> timed = within_torques(scene, MotionTorques(scene), timed)
+
+    """
+    if len(timed.times) < 2:
+        return timed
+    loads = torques.loads(timed.positions, timed.velocities, timed.accelerations)
+    stretch = torque_stretch(scene, torques, loads, torques.spreads(timed.positions))
+    if stretch == 1.0:
+        return timed
+    LOG.debug("slowed by %.3f to keep the torques at speed within the effort limits", stretch)
     return Timed(timed.times * stretch, timed.positions, timed.velocities / stretch, timed.accelerations / stretch**2)

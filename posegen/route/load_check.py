@@ -8,6 +8,10 @@ Recomputed from the stored angles, velocities and accelerations alone:
   limits, each with its spread over ``margins.com_uncertainty_m`` (the true CoM off the
   model's: :meth:`posegen.robot.Statics.com_spread`). Joints the URDF gives no effort
   limit are not checked (said when none has one).
+* **torque at speed**: the torques at the stored timing, hand unloaded, the floor's wrench
+  shared as flat feet share it (:mod:`posegen.robot.motion_torques`), each with its spread,
+  within half the static margin (0.95 of the effort for ``effort_ratio`` 0.9) or a little
+  more than the same point at rest, if that is more.
 * **zmp**: the soles' centre of pressure from the robot's inverse dynamics at the stored
   timing (:mod:`posegen.robot.balance`), and at a hold's points also at rest with the
   hand pressing (the force builds and is released while the robot holds still), inside
@@ -29,10 +33,13 @@ from posegen.robot import (
     FloatArray,
     FloorWrenches,
     JointEffort,
+    MotionTorques,
     Scene,
     Statics,
     Worst,
+    allowed_ratios,
     effort_ratios,
+    effort_ratios_at,
     worst_case,
     zmp_margins,
 )
@@ -45,6 +52,7 @@ class LoadInvariant(str, enum.Enum):
     """What the robot's actuators and feet must bear at every route point."""
 
     TORQUE = "torque"
+    TORQUE_AT_SPEED = "torque_at_speed"
     ZMP = "zmp"
 
 
@@ -105,7 +113,8 @@ def check_loads(
         wrenches = balance.floor_wrenches(q[idx], rest, rest, [holds[k] for k in idx], force)
         zmp[idx] = np.minimum(zmp[idx], zmp_margins(scene.support_polygon, wrenches.static))
     torque = _torque(scene, times, ratios, (torques, spreads), pressing)
-    return [torque, _zmp(scene, times, zmp, holds)], _per_joint(scene, ratios, torques)
+    at_speed = _torque_at_speed(scene, times, (q, v, a), spreads)
+    return [torque, at_speed, _zmp(scene, times, zmp, holds)], _per_joint(scene, ratios, torques)
 
 
 def _total(wrenches: FloorWrenches) -> FloatArray:
@@ -141,6 +150,30 @@ def _torque(
 
     excess = ratios.max(axis=1) - allowed - EFFORT_TOL
     return worst_case(LoadInvariant.TORQUE, excess, describe, f"holding torques within {allowed} x the effort limits")
+
+
+def _torque_at_speed(
+    scene: Scene, times: FloatArray, motion: tuple[FloatArray, FloatArray, FloatArray], spreads: FloatArray
+) -> Worst:
+    """The torque-at-speed invariant: ``motion`` (q, v, a) each (m, nj); ``spreads`` (m, nj) N m."""
+    if not np.any(np.isfinite(scene.effort_limit)):
+        return Worst(LoadInvariant.TORQUE_AT_SPEED, 0.0, -1, 0, "the URDF gives no effort limit", (), False)
+    torques = MotionTorques(scene)
+    loads = torques.loads(*motion)
+    moving = effort_ratios_at(scene, torques, loads, spreads, 1.0)  # (m, nj)
+    allowed = allowed_ratios(scene, effort_ratios_at(scene, torques, loads, spreads, np.inf))
+    names = scene.joint_names
+
+    def describe(k: int) -> str:
+        j = int(np.argmax(moving[k] - allowed[k]))
+        return (
+            f"{_at(times, k)} {names[j]}: {moving[k, j]:.3f} x its effort limit at speed (flat feet), "
+            f"{allowed[k, j]:.3f} allowed (half the static margin, or a little more than at rest)"
+        )
+
+    excess = (moving - allowed).max(axis=1) - EFFORT_TOL
+    detail = "torques at the stored timing (flat feet) within the effort limits"
+    return worst_case(LoadInvariant.TORQUE_AT_SPEED, excess, describe, detail)
 
 
 def _zmp(scene: Scene, times: FloatArray, margins: FloatArray, holds: dict[int, str | None]) -> Worst:

@@ -33,7 +33,16 @@ import numpy as np
 
 from posegen.errors import InfeasibleError
 from posegen.io import SegmentType
-from posegen.robot import Balance, CollisionChecker, Config, FloatArray, Projector, Scene, StanceSpace
+from posegen.robot import (
+    Balance,
+    CollisionChecker,
+    Config,
+    FloatArray,
+    MotionTorques,
+    Projector,
+    Scene,
+    StanceSpace,
+)
 from posegen.route.balancing import GRID_SLACK_M, ZmpConstraint, timed_in_balance
 from posegen.route.free_motion import FreeMotion, Method, free_motions, raised_midpoints, stream_of, via_sequences
 from posegen.route.motion import vertical_paths
@@ -78,6 +87,7 @@ class Planner:
         self.space = StanceSpace(scene, CollisionChecker(scene, convex=True))
         self.balance = Balance(scene)
         self.zmp = ZmpConstraint(scene, self.balance, scene.margins.zmp_m + GRID_SLACK_M)
+        self.torques = MotionTorques(scene, self.balance)
         self.start = start_posture(scene) if start is None else np.array(start, dtype=float)
 
     @functools.cached_property
@@ -114,7 +124,9 @@ def plan_stop(planner: Planner, request: tuple[int, tuple[float, ...], str]) -> 
     limit = scene.velocity_limit * scene.route.velocity_scale_contact
     try:
         path = np.array(vertical.go_to_contact)  # the hand presses at rest (the pool keeps that balanced)
-        timed = timed_in_balance(scene, planner.balance, planner.zmp, path, limit, _acceleration(scene))
+        timed = timed_in_balance(
+            scene, planner.balance, planner.zmp, path, limit, _acceleration(scene), planner.torques
+        )
     except InfeasibleError as exc:
         return Unplanned(UnplannedCause.NO_TIMING, f"go-to-contact: {exc}")
     return Stop(node, chain, np.array(vertical.approach), timed, vertical.clearance)
@@ -163,7 +175,9 @@ def _timed_transfer(
         SegmentType.APPROACH: scene.velocity_limit * route.velocity_scale_near,
     }
     limits = np.array([speed[k] for k in kinds])  # the force is released at rest, before the release moves
-    timed = timed_in_balance(scene, planner.balance, planner.zmp, np.array(path), limits, _acceleration(scene))
+    timed = timed_in_balance(
+        scene, planner.balance, planner.zmp, np.array(path), limits, _acceleration(scene), planner.torques
+    )
     if len(timed.times) != len(path):
         raise RuntimeError("a transfer has repeated waypoints")  # a blend or shortcut never repeats a state
     return Transfer(timed, tuple(kinds), found.method)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from posegen.physics.nominal import NominalRobot
-from posegen.physics.sole_split import COP_MARGIN_M, least_size_share, split_wrench
 from posegen.physics.tool import Tool
 from posegen.robot import Scene
+from posegen.robot.sole_split import COP_MARGIN_M, least_size_share, split_wrench
 
 
 def _split(scene: Scene, tools: dict[str, Tool], zmp: tuple[float, float]) -> tuple[NominalRobot, list[np.ndarray]]:

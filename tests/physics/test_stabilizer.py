@@ -93,3 +93,54 @@ def test_a_push_moves_the_com_only_when_the_zmp_would_leave_the_margin(scene: Sc
     assert polygon.margin(zmp) == pytest.approx(0.02, abs=1e-3)
     assert np.allclose((weight * reference - 300.0 * hand) / (weight - 300.0), zmp)  # the CoM moved to hold it
     assert (reference - com) @ (hand - com) > 0
+
+
+def test_the_soles_give_way_to_the_force_between_them_and_not_to_the_net_one(scene: Scene) -> None:
+    """Internal horizontal forces (the true legs do not close where the nominal ones do) move the soles apart
+    along them, equally and oppositely; the net horizontal force, carried as the shares say, moves neither."""
+    from posegen.physics.stabilizer import BAND, K_FOOT_SHEAR, _sole_twist
+
+    pose = np.eye(4)
+    share = np.array([5.0, -3.0, 440.0, 0.0, 0.0, 0.0])  # each sole's share of the net wrench (local)
+    squeeze = np.array([0.0, 70.0, 0.0, 0.0, 0.0, 0.0])  # the floor pushes the feet apart along y
+    none = np.zeros(3)
+    left = _sole_twist(pose, share + squeeze, share, none, none, 880.0)
+    right = _sole_twist(pose, share - squeeze, share, none, none, 880.0)
+    assert left[1] == pytest.approx(K_FOOT_SHEAR * (70.0 - BAND[1])) and left[1] > 0
+    assert left + right == pytest.approx(np.zeros(6))
+    assert _sole_twist(pose, share, share, none, none, 880.0) == pytest.approx(np.zeros(6))
+
+
+def test_the_desired_zmp_asks_no_leg_past_its_limit(scene: Scene, tools: dict[str, Tool]) -> None:
+    """A ZMP over one foot loads its hip past a (reduced) limit: the stabilizer moves it back toward the
+    reference just as far as every joint allows, re-checked on the nominal model's torques."""
+    from posegen.physics.stabilizer import Stabilizer
+
+    robot = NominalRobot(scene, tools)
+    robot.update(scene.reference)
+    stabilizer = Stabilizer(scene, robot)
+    weight = robot.mass_kg * 9.81
+    centres = [pose[:2, 3] for pose in robot.sole_poses]
+    reference = 0.5 * (centres[0] + centres[1])
+    desired = centres[1] + 0.5 * (centres[1] - reference)  # beyond the second sole's centre
+
+    def total_at(zmp: np.ndarray) -> np.ndarray:
+        return np.array([0.0, 0.0, weight, zmp[1] * weight, -zmp[0] * weight, 0.0])
+
+    def torques_at(zmp: np.ndarray) -> np.ndarray:
+        return np.abs(robot.sole_torques(robot.sole_split(total_at(zmp))))
+
+    at_reference, at_desired = torques_at(reference), torques_at(desired)
+    limit = np.full(len(scene.joint_names), np.inf)
+    worst = int(np.argmax(at_desired - at_reference))
+    limit[worst] = 0.5 * (at_reference[worst] + at_desired[worst])  # between what each ZMP asks of that joint
+    stabilizer._limit = limit
+    zmp, shares = stabilizer._within_torques(total_at(reference), reference, desired)
+    step = np.linalg.norm(zmp - reference) / np.linalg.norm(desired - reference)
+    assert 0.0 < step < 1.0
+    assert np.all(torques_at(zmp) <= limit + 1e-9)
+    assert np.abs(robot.sole_torques(shares))[worst] == pytest.approx(torques_at(zmp)[worst])
+    further = reference + min(step + 0.05, 1.0) * (desired - reference)
+    assert torques_at(further)[worst] > limit[worst]  # the largest step within the limit (bisection, 1/64)
+    stabilizer._limit = np.full(len(scene.joint_names), np.inf)
+    assert np.allclose(stabilizer._within_torques(total_at(reference), reference, desired)[0], desired)

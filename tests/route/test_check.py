@@ -272,3 +272,23 @@ def test_a_knee_inside_its_own_margin(config, route_file):
     limits = {w.invariant: w for w in result.worst}[RouteInvariant.JOINT_LIMITS]
     assert not result.ok and limits.violations > 0
     assert knee in limits.detail and f"margin {closest + 0.05:g} rad" in limits.detail
+
+
+def test_a_route_run_three_times_faster_asks_its_legs_for_more_than_they_have(scene, route_file, tmp_path):
+    """Planned: every torque at speed (flat feet) within its allowed ratio; three times faster, not."""
+    from posegen.route.load_check import LoadInvariant
+
+    _, planned = verdict(scene, route_file)
+    assert planned[LoadInvariant.TORQUE_AT_SPEED].violations == 0
+
+    def faster(arrays, header):
+        arrays["time_from_start"] /= 3.0
+        arrays["velocities"] *= 3.0
+        arrays["accelerations"] *= 9.0
+        for seg in header["segments"]:
+            seg["start_s"], seg["end_s"] = seg["start_s"] / 3.0, seg["end_s"] / 3.0
+
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, faster))
+    at_speed = worst[LoadInvariant.TORQUE_AT_SPEED]
+    assert not result.ok and at_speed.violations > 0
+    assert "x its effort limit at speed (flat feet)" in at_speed.detail

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from posegen.robot import MOMENT_ARM_M, FloatArray
+from posegen.robot.geometry import FloatArray
+from posegen.robot.statics import MOMENT_ARM_M
 
 COP_MARGIN_M = 0.01  # each sole's centre of pressure kept this far inside its rectangle
 WEIGHT = np.array([1.0, 1.0, 1.0, MOMENT_ARM_M, MOMENT_ARM_M, MOMENT_ARM_M])  # the planner's least-size scaling
