@@ -139,7 +139,8 @@ def test_inside_with_the_workers_and_their_states_last_from_one_map_to_the_next(
             first = list(backend.map(job, range(8)))
             again = list(backend.map(job, range(8)))
         assert [r[0] for r in again] == [i * i for i in range(8)]
-        assert {(pid, built) for _, pid, built in again} <= {(pid, built) for _, pid, built in first}
+        states = {(pid, built) for _, pid, built in first + again}  # a worker may sit out a map, never restart
+        assert len({pid for pid, _ in states}) == len(states) <= workers
 
 
 SCRIPT_JOB = """
