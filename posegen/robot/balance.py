@@ -108,6 +108,10 @@ class Balance:
 
         The floating base moves so that the anchor sole stays still. The kinematics and the
         joint Jacobians of the point stay in the workspace (``data``).
+
+        Example:
+            >>> gravity, motion = Balance(scene).generalized(joints, velocity, acceleration)
+
         """
         model, data = self.model, self.data
         q = self.scene.configuration(joints)

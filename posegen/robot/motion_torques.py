@@ -103,7 +103,12 @@ class MotionTorques:
 def effort_ratios_at(
     scene: Scene, torques: MotionTorques, loads: Sequence[PointLoad], spreads: FloatArray, stretch: float
 ) -> FloatArray:
-    """(m, nj) each point's torques, with their spreads, over the joints' efforts (0 where the URDF gives none)."""
+    """(m, nj) each point's torques, with their spreads, over the joints' efforts (0 where the URDF gives none).
+
+    Example:
+        >>> moving = effort_ratios_at(scene, torques, loads, spreads, 1.0)  # at rest: np.inf
+
+    """
     effort = np.where(np.isfinite(scene.effort_limit), scene.effort_limit, np.inf)
     moved = np.array([np.abs(torques.torques(load, stretch)) for load in loads]).reshape(spreads.shape)
     return np.asarray((moved + spreads) / effort)
@@ -115,6 +120,10 @@ def allowed_ratios(scene: Scene, at_rest: FloatArray) -> FloatArray:
     Half the margin the static plan keeps (``(1 + effort_ratio) / 2``: 0.95 for 0.9),
     or, where the point at rest asks more (the flat feet's split is not the least-size
     one the pool checked), its ratio at rest plus ``REST_SLACK``.
+
+    Example:
+        >>> allowed = allowed_ratios(scene, effort_ratios_at(scene, torques, loads, spreads, np.inf))
+
     """
     return np.maximum(0.5 * (1.0 + scene.margins.effort_ratio), at_rest + REST_SLACK)
 
@@ -131,6 +140,9 @@ def torque_stretch(scene: Scene, torques: MotionTorques, loads: Sequence[PointLo
     Returns:
         1 when the motion already keeps them; otherwise the stretch found by bisection
         (at most ``MAX_STRETCH``, where the motion is all but at rest).
+
+    Example:
+        >>> stretch = torque_stretch(scene, torques, torques.loads(q, v, a), torques.spreads(q))
 
     """
     if not loads or not np.any(np.isfinite(scene.effort_limit)):
