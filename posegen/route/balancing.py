@@ -17,8 +17,9 @@ ground projection on a fast reach. Two pieces keep it inside:
   its square).
 * :func:`within_torques`, the joint torques at that speed, the floor's wrench shared as
   flat feet share it (:mod:`posegen.robot.motion_torques`): a fast weight transfer loads
-  one leg past what it holds at rest; where a joint passes ``margins.effort_ratio`` (or
-  its ratio at rest, if more), the segment is slowed down uniformly the same way.
+  one leg past what it holds at rest; where a joint passes half the static margin (0.95 of
+  its effort for ``margins.effort_ratio`` 0.9, or its ratio at rest plus 0.02, if more),
+  the segment is slowed down uniformly the same way.
 """
 
 from __future__ import annotations
@@ -163,9 +164,9 @@ def within_torques(scene: Scene, torques: MotionTorques, timed: Timed) -> Timed:
     """``timed`` slowed down uniformly just enough to keep every joint torque at speed within its allowed ratio.
 
     The torques hold the points at their speed, the floor's wrench shared as flat feet share
-    it, each with its spread over the CoM's uncertainty: within ``margins.effort_ratio``
-    of the effort, or within the ratio of the same point at rest, if more
-    (:func:`posegen.robot.torque_stretch`).
+    it, each with its spread over the CoM's uncertainty: within half the static margin
+    (0.95 of the effort for ``margins.effort_ratio`` 0.9), or within the ratio of the same
+    point at rest plus 0.02, if more (:func:`posegen.robot.torque_stretch`).
 
     Args:
         scene: Scene.
