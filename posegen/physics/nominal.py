@@ -152,18 +152,26 @@ class NominalRobot:
             total[3:] += pose[:3, :3] @ wrench[3:] + cross(pose[:3, 3], force)
         return total
 
-    def sole_torques(self, wrenches: list[FloatArray]) -> FloatArray:
-        """Joint torques (nj,) N m that hold the posture, its weight carried by the soles' wrenches (6,) LOCAL each.
-
-        The hands are unloaded; the generalized gravity is computed once per :meth:`update`.
-        """
+    def _gravity_now(self) -> FloatArray:
+        """(nv,) the generalized gravity at the last :meth:`update` (computed once per update; do not modify)."""
         if self._gravity is None or self._gravity_at != self._updates:
             self._gravity = np.array(pin.computeGeneralizedGravity(self.model, self.data, self.q))
             self._gravity_at = self._updates
-        torques = self._gravity.copy()
+        return self._gravity
+
+    def _held_by_soles(self, load: FloatArray, wrenches: list[FloatArray]) -> FloatArray:
+        """The joint torques (nj,) that hold generalized forces ``load`` (nv,), the soles carrying ``wrenches``."""
+        torques = load.copy()
         for sole, wrench in zip(self.soles, wrenches, strict=True):
             torques -= pin.getFrameJacobian(self.model, self.data, sole, pin.LOCAL).T @ wrench
         return np.asarray(torques[self._velocity])
+
+    def sole_torques(self, wrenches: list[FloatArray]) -> FloatArray:
+        """Joint torques (nj,) N m that hold the posture, its weight carried by the soles' wrenches (6,) LOCAL each.
+
+        The hands are unloaded.
+        """
+        return self._held_by_soles(self._gravity_now(), wrenches)
 
     def static_torques(self, hand: dict[str, FloatArray]) -> FloatArray:
         """Joint torques (nj,) N m that hold the posture: gravity, the hands' wrenches, the soles' shares.
@@ -172,11 +180,9 @@ class NominalRobot:
             hand: Chain -> the table's wrench on its hand (6,), world axes at its contact frame.
 
         """
-        gravity = np.array(pin.computeGeneralizedGravity(self.model, self.data, self.q))  # (nv,)
+        load = self._gravity_now().copy()  # (nv,)
         for chain, wrench in hand.items():
             jacobian = pin.getFrameJacobian(self.model, self.data, self.contact_frames[chain], pin.LOCAL_WORLD_ALIGNED)
-            gravity -= jacobian.T @ wrench
-        base = self.data.oMi[1].toDualActionMatrix() @ gravity[:6]  # base wrench -> world origin
-        for sole, wrench in zip(self.soles, self.sole_split(base), strict=True):
-            gravity -= pin.getFrameJacobian(self.model, self.data, sole, pin.LOCAL).T @ wrench
-        return gravity[self._velocity]
+            load -= jacobian.T @ wrench
+        base = self.data.oMi[1].toDualActionMatrix() @ load[:6]  # base wrench -> world origin
+        return self._held_by_soles(load, self.sole_split(base))

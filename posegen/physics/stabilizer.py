@@ -301,16 +301,17 @@ class Stabilizer:
         shares, torques = self._split_at(total, desired)
         if np.all(torques <= self._limit):
             return desired, shares
-        bound = np.maximum(self._limit, self._split_at(total, reference)[1])
+        kept, at_reference = self._split_at(total, reference)
+        bound = np.maximum(self._limit, at_reference)
         low, high = 0.0, 1.0
         for _ in range(TORQUE_STEPS):
             middle = 0.5 * (low + high)
-            if np.all(self._split_at(total, reference + middle * (desired - reference))[1] <= bound):
-                low = middle
+            shares, torques = self._split_at(total, reference + middle * (desired - reference))
+            if np.all(torques <= bound):
+                low, kept = middle, shares
             else:
                 high = middle
-        zmp = reference + low * (desired - reference)
-        return zmp, self._split_at(total, zmp)[0]
+        return reference + low * (desired - reference), kept
 
 
 def _sole_twist(
