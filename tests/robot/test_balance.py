@@ -5,29 +5,7 @@ import pinocchio as pin
 import pytest
 
 from posegen.robot import Balance, centres_of_pressure, pressed_zmp_margin, stretch_for_margin, zmp_margins
-
-
-@pytest.fixture(scope="module")
-def motion(scene):
-    """A smooth joint motion q(t) = q0 + v0 t + a0 t^2 / 2 from a perturbed reference posture."""
-    rng = np.random.default_rng(11)
-    free = ~scene.locked
-    q0 = scene.reference + np.where(free, rng.normal(0.0, 0.05, len(free)), 0.0)
-    v0 = np.where(free, rng.normal(0.0, 0.4, len(free)), 0.0)
-    a0 = np.where(free, rng.normal(0.0, 1.0, len(free)), 0.0)
-    return q0, v0, a0
-
-
-def _full_state(scene, joints, velocity):
-    """Configuration and velocity (base moving so that the anchor sole stays still)."""
-    model, data = scene.model, scene.model.createData()
-    q = scene.configuration(joints)
-    pin.computeJointJacobians(model, data, q)
-    anchor = pin.getFrameJacobian(model, data, scene.frame_id(scene.anchor_sole), pin.LOCAL)
-    v = np.zeros(model.nv)
-    v[scene.velocity_indices()] = velocity
-    v[:6] = -np.linalg.solve(anchor[:, :6], anchor[:, 6:] @ v[6:])
-    return q, v
+from tests.robot.conftest import full_state
 
 
 def test_floor_wrench_is_the_rate_of_momentum_plus_the_weight(scene, motion):
@@ -40,7 +18,7 @@ def test_floor_wrench_is_the_rate_of_momentum_plus_the_weight(scene, motion):
 
     def state(t):
         joints, velocity = q0 + v0 * t + 0.5 * a0 * t * t, v0 + a0 * t
-        q, v = _full_state(scene, joints, velocity)
+        q, v, _ = full_state(scene, joints, velocity, np.zeros_like(velocity))
         com = pin.centerOfMass(model, data, q).copy()
         momentum = pin.computeCentroidalMomentum(model, data, q, v).angular.copy()
         return com, momentum
@@ -67,8 +45,9 @@ def test_static_wrench_is_the_weight_under_the_com(scene):
     data = scene.model.createData()
     com = pin.centerOfMass(scene.model, data, scene.configuration(scene.reference))
     assert centres_of_pressure(wrench.static)[0] == pytest.approx(com[:2], abs=1e-9)
-    assert zmp_margins(scene.support_polygon, wrench.static)[0] == pytest.approx(scene.com_margin(
-        scene.configuration(scene.reference), data), abs=1e-9)
+    assert zmp_margins(scene.support_polygon, wrench.static)[0] == pytest.approx(
+        scene.com_margin(scene.configuration(scene.reference), data), abs=1e-9
+    )
 
 
 def test_a_pressing_hand_moves_the_centre_of_pressure_away_from_it(scene):

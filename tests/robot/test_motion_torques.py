@@ -8,33 +8,7 @@ from posegen.robot import MotionTorques, Statics, torque_stretch
 from posegen.robot.motion_torques import REST_SLACK, allowed_ratios, effort_ratios_at
 from posegen.robot.sole_split import split_wrench
 from posegen.route.timing import parameterize
-
-
-@pytest.fixture(scope="module")
-def motion(scene):
-    """A moving point near the reference posture: q (nj,), v (nj,) rad/s, a (nj,) rad/s^2."""
-    rng = np.random.default_rng(5)
-    free = ~scene.locked
-    q = scene.reference + np.where(free, rng.normal(0.0, 0.05, len(free)), 0.0)
-    v = np.where(free, rng.normal(0.0, 0.4, len(free)), 0.0)
-    a = np.where(free, rng.normal(0.0, 1.0, len(free)), 0.0)
-    return q, v, a
-
-
-def _full_state(scene, joints, velocity, acceleration):
-    """Configuration, velocity and acceleration with the base moving so that the anchor sole stays still."""
-    model, data = scene.model, scene.model.createData()
-    q = scene.configuration(joints)
-    v, a = np.zeros(model.nv), np.zeros(model.nv)
-    v[scene.velocity_indices()], a[scene.velocity_indices()] = velocity, acceleration
-    anchor_id = scene.frame_id(scene.anchor_sole)
-    pin.computeJointJacobians(model, data, q)
-    anchor = pin.getFrameJacobian(model, data, anchor_id, pin.LOCAL)
-    v[:6] = -np.linalg.solve(anchor[:, :6], anchor[:, 6:] @ v[6:])
-    pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
-    drift = pin.getFrameAcceleration(model, data, anchor_id, pin.LOCAL).vector
-    a[:6] = -np.linalg.solve(anchor[:, :6], anchor[:, 6:] @ a[6:] + drift)
-    return q, v, a
+from tests.robot.conftest import full_state
 
 
 def test_the_torques_are_inverse_dynamics_with_the_soles_carrying_the_floors_wrench(scene, motion):
@@ -42,7 +16,7 @@ def test_the_torques_are_inverse_dynamics_with_the_soles_carrying_the_floors_wre
     torques = MotionTorques(scene)
     load = torques.load(*motion)
     model, data = scene.model, scene.model.createData()
-    q, v, a = _full_state(scene, *motion)
+    q, v, a = full_state(scene, *motion)
     pin.forwardKinematics(model, data, q)
     pin.updateFramePlacements(model, data)
     floor = data.oMi[1].act(pin.Force(pin.rnea(model, data, q, v, a)[:6])).vector  # world, about the origin
