@@ -136,12 +136,18 @@ class HandControl:
         self._settled: dict[str, float] = {}  # contact label -> time since its force first reached its band
         self._errors: dict[str, FloatArray] = {}  # chain -> its pose error beyond the band, renewed every HOLD_EVERY
         self._steps = 0
+        self._current_t = np.nan  # the route time of _current_of: chain -> its contact then
+        self._current_of: dict[str, ContactTimes | None] = {}
 
     def _current(self, chain: str, t: float) -> ContactTimes | None:
-        for contact in self.contacts[chain]:
-            if contact.approach_s - TARE_S <= t < contact.free_s:
-                return contact
-        return None
+        """The contact of ``chain`` whose time (tare to free) holds ``t``, if any (kept for the last ``t`` asked)."""
+        if t != self._current_t:
+            self._current_t, self._current_of = t, {}
+        if chain not in self._current_of:
+            self._current_of[chain] = next(
+                (c for c in self.contacts[chain] if c.approach_s - TARE_S <= t < c.free_s), None
+            )
+        return self._current_of[chain]
 
     def phase(self, chain: str, t: float) -> Phase:
         """A hand's phase at route time ``t``."""
@@ -181,7 +187,8 @@ class HandControl:
 
     def holding(self, t: float) -> bool:
         """Whether a hand holds a contact at route time ``t`` (its hold, as the route's clock has it)."""
-        return any(c.hold_s <= t < c.lift_s for contacts in self.contacts.values() for c in contacts)
+        current = (self._current(chain, t) for chain in self.hands)  # a hold lies within its contact's time
+        return any(c is not None and c.hold_s <= t < c.lift_s for c in current)
 
     def planned_push(self, chain: str, t: float) -> float:
         """The force (N) the plan has a hand push on the table at route time ``t``: the target, ramped in and out."""
@@ -242,7 +249,7 @@ class HandControl:
             self.wrenches[chain] = wrench
             rate = self._twist(chain, contact, t, wrench, hand)
             hand.offset += rate * dt_s
-            hand.offset[:3] = np.clip(hand.offset[:3], -MAX_OFFSET_M, MAX_OFFSET_M)
+            hand.offset[:3] = np.minimum(np.maximum(hand.offset[:3], -MAX_OFFSET_M), MAX_OFFSET_M)
             out[chain] = rate + (K_HOLD_PER_S * self._errors[chain] if hold else 0.0)
         return out
 
@@ -288,9 +295,9 @@ class HandControl:
         error = wrench[2] - target_n
         if abs(error) <= band * target_n:  # close enough: the hand stays still (a contact is measured still)
             return twist
-        twist[2] = np.clip(K_FORCE * error, -MAX_SPEED_M_S, MAX_SPEED_M_S)
+        twist[2] = min(max(K_FORCE * error, -MAX_SPEED_M_S), MAX_SPEED_M_S)
         torque = np.where(np.abs(wrench[3:5]) > TORQUE_BAND_NM, wrench[3:5], 0.0)
-        turn = np.clip(K_TORQUE * torque, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        turn = np.minimum(np.maximum(K_TORQUE * torque, -MAX_TURN_RAD_S), MAX_TURN_RAD_S)
         blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD
         twist[3:5] = np.where(blocked & (np.sign(turn) == np.sign(offset[3:5])), 0.0, turn)
         return twist

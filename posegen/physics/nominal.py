@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from posegen.physics.tool import Tool
 from posegen.robot import FloatArray, Scene, cross, least_size_map, split_wrench
@@ -43,8 +44,8 @@ class NominalRobot:
         self.sole_centres: list[FloatArray] = []  # (3,) each, the foot rectangles' centres
         self.tools = tools
         self._velocity = scene.velocity_indices()
+        self._joint_columns: dict[tuple[int, ...], NDArray[np.intp]] = {}  # joints (scene order) -> velocity columns
         self.soles = [scene.frame_id(s) for s in scene.stance.sole_frames]
-        self._anchor = self.soles[0]
         self.contact_frames = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.chains}
         self.wrench_frames = {c: scene.frame_id(t.frame) for c, t in tools.items()}
         self.mass_kg = float(pin.computeTotalMass(self.model))
@@ -55,6 +56,10 @@ class NominalRobot:
         self._updates = 0
         self._gravity: FloatArray | None = None  # (nv,) the generalized gravity at update number _gravity_at
         self._gravity_at = -1
+        self._com = np.zeros(3)  # m, the centre of mass at update number _com_at
+        self._com_at = -1
+        self._sole_jacobians: list[FloatArray] = []  # (6, nv) LOCAL each, at update number _sole_jacobians_at
+        self._sole_jacobians_at = -1
         self.q = scene.configuration(scene.reference)
 
     def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
@@ -65,10 +70,9 @@ class NominalRobot:
         kinematic = pin.Quaternion(q[3:7]).toRotationMatrix()
         yaw = np.arctan2(kinematic[1, 0], kinematic[0, 0]) - np.arctan2(imu[1, 0], imu[0, 0])
         rotation = pin.rpy.rpyToMatrix(0.0, 0.0, yaw) @ imu
-        pin.forwardKinematics(self.model, self._scratch, q)
-        anchor_flat = pin.updateFramePlacement(self.model, self._scratch, self._anchor)
-        local = pin.XYZQUATToSE3(q[:7]).actInv(anchor_flat.translation)  # the anchor origin in the base frame
-        q[:3] = self.scene.sole_poses[self.scene.anchor_sole][:3, 3] - rotation @ local
+        origin = self.scene.sole_poses[self.scene.anchor_sole][:3, 3]  # where the configuration puts the anchor
+        local = pin.XYZQUATToSE3(q[:7]).actInv(origin)  # the anchor origin in the base frame
+        q[:3] = origin - rotation @ local
         q[3:7] = pin.Quaternion(rotation).coeffs()
         return q
 
@@ -110,13 +114,27 @@ class NominalRobot:
         """
         return self._columns(pin.getFrameJacobian(self.model, self.data, frame, pin.LOCAL_WORLD_ALIGNED))
 
+    def joint_jacobian(self, frame: int, joints: list[int]) -> FloatArray:
+        """(6, len(joints)) a frame's twist (world axes at its origin) per rate of these joints (scene indices).
+
+        The columns :meth:`frame_jacobian` has for them, without building the others.
+        """
+        key = tuple(joints)
+        columns = self._joint_columns.get(key)
+        if columns is None:
+            columns = self._joint_columns[key] = self._velocity[list(joints)]
+        return np.asarray(pin.getFrameJacobian(self.model, self.data, frame, pin.LOCAL_WORLD_ALIGNED)[:, columns])
+
     def base_jacobian(self) -> FloatArray:
         """(6, 6 + nj) the free base's twist (world axes at its origin), as :meth:`frame_jacobian`."""
         return self._columns(pin.getJointJacobian(self.model, self.data, 1, pin.LOCAL_WORLD_ALIGNED))
 
     def com(self) -> FloatArray:
-        """World centre of mass (3,), m."""
-        return np.asarray(pin.centerOfMass(self.model, self.data, self.q, False))
+        """World centre of mass (3,), m (a new array: computed once per :meth:`update`)."""
+        if self._com_at != self._updates:
+            self._com = np.array(pin.centerOfMass(self.model, self.data, self.q, False))
+            self._com_at = self._updates
+        return self._com.copy()
 
     def com_jacobian(self) -> FloatArray:
         """(3, 6 + nj) CoM velocity per base twist and joint rate, as :meth:`frame_jacobian`."""
@@ -161,9 +179,12 @@ class NominalRobot:
 
     def _held_by_soles(self, load: FloatArray, wrenches: list[FloatArray]) -> FloatArray:
         """The joint torques (nj,) that hold generalized forces ``load`` (nv,), the soles carrying ``wrenches``."""
+        if self._sole_jacobians_at != self._updates:
+            self._sole_jacobians = [pin.getFrameJacobian(self.model, self.data, s, pin.LOCAL) for s in self.soles]
+            self._sole_jacobians_at = self._updates
         torques = load.copy()
-        for sole, wrench in zip(self.soles, wrenches, strict=True):
-            torques -= pin.getFrameJacobian(self.model, self.data, sole, pin.LOCAL).T @ wrench
+        for jacobian, wrench in zip(self._sole_jacobians, wrenches, strict=True):
+            torques -= jacobian.T @ wrench
         return np.asarray(torques[self._velocity])
 
     def sole_torques(self, wrenches: list[FloatArray]) -> FloatArray:

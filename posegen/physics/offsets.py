@@ -71,10 +71,17 @@ class JointOffsets:
         self._movable = np.zeros(len(scene.joint_names), dtype=bool)
         self._movable[[j for leg in self.legs for j in leg] + self.upper] = True
         self._at_limit = np.zeros(len(scene.joint_names), dtype=bool)
+        self._dampings: dict[int, FloatArray] = {}
 
     def moving(self, chain: str) -> list[int]:
         """The joints that move a chain's hand: its arm's and the torso's."""
         return self.arms[chain] + self.shared
+
+    def _damping(self, size: int) -> FloatArray:
+        """(size, size) the solves' damping, ``DAMPING`` times the identity (kept: do not modify)."""
+        if size not in self._dampings:
+            self._dampings[size] = DAMPING * np.eye(size)
+        return self._dampings[size]
 
     def _solve(self, frames: list[int], joints: list[int], twist: FloatArray, decay: bool = True) -> FloatArray:
         """Joint rates (len(joints),) that move frames by ``twist`` (6 per frame,) relative to the base.
@@ -83,12 +90,13 @@ class JointOffsets:
         (its self-motion would otherwise drift).
         """
         scale = np.where(self._at_limit[joints], 1.0 / np.sqrt(AT_LIMIT_WEIGHT), 1.0) * self._scale[joints]  # (n,)
-        jacobian = np.vstack([self.robot.frame_jacobian(f)[:, 6 + np.asarray(joints)] for f in frames]) * scale
+        blocks = [self.robot.joint_jacobian(f, joints) for f in frames]
+        jacobian = (blocks[0] if len(blocks) == 1 else np.vstack(blocks)) * scale
         rows = jacobian.shape[0]  # jacobian (6k, n)
         if jacobian.shape[1] < rows:
-            gram = jacobian.T @ jacobian + DAMPING * np.eye(len(joints))
+            gram = jacobian.T @ jacobian + self._damping(len(joints))
             return np.asarray(scale * np.linalg.solve(gram, jacobian.T @ twist))
-        gram = jacobian @ jacobian.T + DAMPING * np.eye(rows)
+        gram = jacobian @ jacobian.T + self._damping(rows)
         if not decay:
             return np.asarray(scale * (jacobian.T @ np.linalg.solve(gram, twist)))
         decaying = self.dq[joints] / scale / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
@@ -118,13 +126,13 @@ class JointOffsets:
         """
         robot = self.robot
         for frame, leg, twist in zip(robot.soles, self.legs, soles, strict=True):
-            if np.any(twist):
+            if twist.any():
                 self.dq[leg] += dt_s * self._solve([frame], leg, twist)
         twist = np.concatenate([hands[chain] for chain in self.arms])
-        if np.any(twist) or (decay and np.any(self.dq[self.upper])):
+        if twist.any() or (decay and self.dq[self.upper].any()):
             frames = [robot.contact_frames[chain] for chain in self.arms]
             self.dq[self.upper] += dt_s * self._solve(frames, self.upper, twist, decay)
         commanded = planned + self.dq
         self._at_limit = self._movable & ((commanded < self._lower) | (commanded > self._upper))
-        self.dq = np.where(self._movable, np.clip(commanded, self._lower, self._upper) - planned, 0.0)
+        self.dq = np.where(self._movable, np.minimum(np.maximum(commanded, self._lower), self._upper) - planned, 0.0)
         return self.dq

@@ -176,7 +176,7 @@ def clamp_into(hull: Hull, point: FloatArray, margin_m: float) -> FloatArray:
     return np.asarray(centre + low * (point - centre))
 
 
-def _beyond(values: FloatArray, band: FloatArray) -> FloatArray:
+def _beyond(values: FloatArray, band: FloatArray | float) -> FloatArray:
     """Each value less its band toward zero; zero within the band (a deadband: the soles rest near equilibrium)."""
     return np.asarray(np.sign(values) * np.maximum(np.abs(values) - band, 0.0))
 
@@ -268,14 +268,13 @@ class Stabilizer:
         shift[2] = K_HEIGHT_PER_S * float(
             _beyond(np.array([robot.q[2] - planned.pelvis_z]), np.array([HEIGHT_BAND_M]))[0]
         )
-        shift[:2] = -np.clip(
-            K_COM_PER_S * _beyond(reference - robot.com()[:2] - self.com_bias, np.full(2, COM_BAND_M)),
-            -MAX_COM_SPEED,
+        shift[:2] = -np.minimum(
+            np.maximum(K_COM_PER_S * _beyond(reference - robot.com()[:2] - self.com_bias, COM_BAND_M), -MAX_COM_SPEED),
             MAX_COM_SPEED,
         )
         level = np.zeros(3)  # turning both soles by the base's tilt, relative to it, turns the base back
-        tilt = _beyond(tilt_error(*attitude), np.full(2, ATTITUDE_BAND_RAD))
-        level[:2] = np.clip(K_ATTITUDE_PER_S * tilt, -MAX_TURN_RAD_S, MAX_TURN_RAD_S)
+        tilt = _beyond(tilt_error(*attitude), ATTITUDE_BAND_RAD)
+        level[:2] = np.minimum(np.maximum(K_ATTITUDE_PER_S * tilt, -MAX_TURN_RAD_S), MAX_TURN_RAD_S)
         return [
             _sole_twist(pose, wrench, share, shift, level, float(total[2]))
             for pose, wrench, share in zip(robot.sole_poses, soles.wrenches, shares, strict=True)
@@ -299,7 +298,7 @@ class Stabilizer:
         Returns the ZMP and the soles' shares (6,) LOCAL each.
         """
         shares, torques = self._split_at(total, desired)
-        if np.all(torques <= self._limit):
+        if (torques <= self._limit).all():
             return desired, shares
         kept, at_reference = self._split_at(total, reference)
         bound = np.maximum(self._limit, at_reference)
@@ -307,7 +306,7 @@ class Stabilizer:
         for _ in range(TORQUE_STEPS):
             middle = 0.5 * (low + high)
             shares, torques = self._split_at(total, reference + middle * (desired - reference))
-            if np.all(torques <= bound):
+            if (torques <= bound).all():
                 low, kept = middle, shares
             else:
                 high = middle
@@ -326,6 +325,6 @@ def _sole_twist(
     if wrench[2] < LIGHT_SHARE * load:
         excess[3:] = 0.0
     local = np.concatenate([K_FOOT_SHEAR * excess[:2], K_FOOT_FORCE * excess[2:3], K_FOOT_TORQUE * excess[3:]])
-    local = np.clip(local, -MAX_FOOT_SPEED, MAX_FOOT_SPEED)
+    local = np.minimum(np.maximum(local, -MAX_FOOT_SPEED), MAX_FOOT_SPEED)
     rotation = pose[:3, :3]
     return np.concatenate([rotation @ local[:3] + shift, rotation @ local[3:] + level])

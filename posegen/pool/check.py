@@ -60,11 +60,12 @@ def torque_detail(scene: Scene, found: Assessment) -> str:
 def _measure(state: tuple[Scene, CollisionChecker], postures: Sequence[Posture]) -> list[Measured]:
     scene, meshes = state
     statics = Statics(scene)
+    data = scene.model.createData()
     margin = scene.margins.collision_m
     out = []
     for posture in postures:
         joints = np.array(posture.joints, dtype=float)
-        found = assess(scene, None, joints, posture.chain, statics)
+        found = assess(scene, None, joints, posture.chain, statics, data)
         excess = found.excess(scene)
         details = {
             Invariant.SOLE: f"sole {found.sole_position_error_m:.2e} m, {found.sole_angle_error_rad:.2e} rad",

@@ -86,6 +86,7 @@ class PostureSampler:
         self.projector = Projector(scene)
         self.checker = CollisionChecker(scene, convex=True)
         self.statics = Statics(scene)
+        self.data = scene.model.createData()  # the assessments' kinematics
 
     def evaluate(self, index: int) -> Posture | Rejection:
         """Turn sample ``index`` into a feasible posture, or say why it is not one."""
@@ -94,7 +95,7 @@ class PostureSampler:
         result = self.projector.project(sample.joints, sample.chain, scene.spot_world(sample.spot))
         if not result.converged:
             return Rejection.NOT_CONVERGED
-        found = assess(scene, None, result.joints, sample.chain, self.statics)  # kinematics first: cheap
+        found = assess(scene, None, result.joints, sample.chain, self.statics, self.data)  # kinematics first: cheap
         violations = found.violations(scene)
         if violations:
             return _INVARIANT_REJECTION[next(k for k in Invariant if k in violations)]

@@ -181,9 +181,12 @@ class Projector:
         iterations = 0
         for hard, budget in ((False, sampling.soft_iterations), (True, sampling.hard_iterations)):
             problem.harden(hard)
+            if not hard:
+                self._release_torques(problem)
             errors: list[tuple[float, float]] = []
             for _ in range(budget):
-                self._limit_torques(problem, chain, hard)
+                if hard:
+                    self._limit_torques(problem, chain)
                 self._press(problem)
                 try:
                     problem.solver.solve(True)
@@ -213,7 +216,12 @@ class Projector:
         problem.pressed.polygon = share * hand[None, :] + (1.0 - share) * self.scene.support_polygon
         problem.pressed.margin = (1.0 - share) * (self.scene.margins.zmp_m + PRESSED_BUFFER_M)
 
-    def _limit_torques(self, problem: _ChainProblem, chain: str, hard: bool) -> None:
+    def _release_torques(self, problem: _ChainProblem) -> None:
+        """No torque rows (the soft phase): ``0 q <= 1``; the linearisation restarts in the hard phase."""
+        self._derivative = None
+        problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
+
+    def _limit_torques(self, problem: _ChainProblem, chain: str) -> None:
         """Linearise the holding torques near their limits (unloaded and pressing) as rows of ``A q <= b``.
 
         The torques are exact at every iteration; their derivative (that of the unloaded
@@ -222,16 +230,12 @@ class Projector:
         ``torque(q) + D (q' - q) <= allowed``: whatever ``D``, a fixed point keeps the limit.
         ``allowed`` is the effort margin less the torque's spread over the CoM's uncertainty.
         """
-        if not hard:
-            self._derivative = None
-            problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
-            return
         joints = self._joints()
         pair = self._statics.torque_pair(joints, chain, self.scene.route.contact_force_n)
-        allowed = self._allowed - self._statics.com_spread(joints)  # (nj,) N m, room for the CoM's uncertainty
+        allowed = self._allowed - pair.spread  # (nj,) N m, room for the CoM's uncertainty
         rows: list[FloatArray] = []
         bounds: list[float] = []
-        for torques in pair:
+        for torques in (pair.unloaded, pair.pressing):
             with np.errstate(invalid="ignore"):
                 active = np.flatnonzero(np.abs(torques) > TORQUE_ACTIVE * allowed)  # nan: never
             if not len(active):
@@ -257,7 +261,8 @@ class Projector:
         return jacobian
 
     def _joints(self) -> FloatArray:
-        return np.array([self.robot.get_joint(n) for n in self.scene.joint_names])
+        """(nj,) rad the solver's joint angles, in the scene's order."""
+        return np.array(self.robot.state.q[self._joint_q], dtype=float)
 
 
 def _cycling(errors: list[tuple[float, float]]) -> bool:

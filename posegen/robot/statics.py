@@ -37,6 +37,15 @@ MOMENT_ARM_M = 0.1  # a moment of 1 N m weighs like a force of 10 N in the wrenc
 
 
 @dataclass(frozen=True)
+class TorquePair:
+    """The holding torques of one contact posture, the hand unloaded and pressing, and their spread."""
+
+    unloaded: FloatArray  # (nj,) N m, the hand above the table
+    pressing: FloatArray  # (nj,) N m, the hand pressing its contact force
+    spread: FloatArray  # (nj,) N m, how far either moves with the CoM's uncertainty (Statics.com_spread)
+
+
+@dataclass(frozen=True)
 class LinearTorques:
     """Holding torques of one posture and their derivative with the soles on the floor."""
 
@@ -87,27 +96,49 @@ class Statics:
             self._kinematics(q)
         return uncertainty_m * np.abs(self._com_sensitivity()).sum(axis=1)
 
-    def _com_sensitivity(self) -> FloatArray:
-        """(nj, 2) d torques / d (CoM x, y), N m per m, at the kinematics in the workspace."""
-        model, data = self.model, self.data
-        load = np.zeros((model.nv, 2))
-        load[3:6] = data.oMi[1].rotation.T @ self._moment_per_m  # the base's local frame
-        contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in self.soles])  # (6 k, nv)
-        split = contact[:, :6].T * self.weight[None, :]
-        soles = _least_size(split, load[:6]) * self.weight[:, None]  # (6 k, 2)
-        return np.asarray((load - contact.T @ soles)[self.velocity])
+    def _com_sensitivity(self, soles: _SoleRows | None = None) -> FloatArray:
+        """(nj, 2) d torques / d (CoM x, y), N m per m, at the kinematics in the workspace (and its ``soles``)."""
+        load = np.zeros((self.model.nv, 2))
+        load[3:6] = self.data.oMi[1].rotation.T @ self._moment_per_m  # the base's local frame
+        return (soles or self._sole_rows()).held(load)[self.velocity]
+
+    def _sole_rows(self) -> _SoleRows:
+        """The soles' Jacobians and the least-size split's matrices at the kinematics in the workspace."""
+        contact = np.vstack([pin.getFrameJacobian(self.model, self.data, f, pin.LOCAL) for f in self.soles])
+        return _SoleRows(contact, self.weight)
 
     def torques(self, joints: FloatArray, chain: str | None, force_n: float) -> FloatArray:
         """Holding torques (nj,) N m of one posture (see :func:`holding_torques`)."""
         q = self.scene.configuration(joints)
         return self._wrenches(q, chain, force_n)[0][self.velocity]
 
-    def torque_pair(self, joints: FloatArray, chain: str, force_n: float) -> tuple[FloatArray, FloatArray]:
-        """Holding torques (nj,) N m of one posture, the hand unloaded and pressing (one kinematics pass)."""
+    def torque_pair(self, joints: FloatArray, chain: str, force_n: float) -> TorquePair:
+        """Holding torques of one posture, the hand unloaded and pressing, and their spread (one kinematics pass).
+
+        The same numbers as :meth:`torques` (``None`` and ``chain``) and :meth:`com_spread`, bit for bit.
+
+        Example:
+            >>> pair = statics.torque_pair(joints, "left", 30.0)
+            >>> np.abs(pair.pressing) + pair.spread  # (nj,) N m, what the effort limits must hold
+
+        """
         q = self.scene.configuration(joints)
         gravity = self._kinematics(q)
-        unloaded = self._wrenches(q, None, 0.0, gravity)[0][self.velocity]
-        return unloaded, self._wrenches(q, chain, force_n, gravity)[0][self.velocity]
+        soles = self._sole_rows()
+        pressing = gravity - self._hand_load(chain, force_n)[1]
+        uncertainty_m = self.scene.margins.com_uncertainty_m
+        spread = (
+            uncertainty_m * np.abs(self._com_sensitivity(soles)).sum(axis=1)
+            if uncertainty_m != 0.0
+            else np.zeros(len(self.velocity))
+        )
+        return TorquePair(soles.held(gravity)[self.velocity], soles.held(pressing)[self.velocity], spread)
+
+    def _hand_load(self, chain: str, force_n: float) -> tuple[pin.Force, FloatArray]:
+        """The table's push on ``chain``'s hand (its frame) and its generalized force (nv,), kinematics as placed."""
+        hand = self.hands[chain]
+        force = pin.Force(self.data.oMf[hand].rotation.T @ (force_n * self.normal), np.zeros(3))
+        return force, pin.getFrameJacobian(self.model, self.data, hand, pin.LOCAL).T @ force.vector
 
     def _kinematics(self, q: FloatArray) -> FloatArray:
         """Placements and Jacobians of ``q`` in the workspace; the generalized gravity (nv,)."""
@@ -126,19 +157,16 @@ class Statics:
         ``gravity``: the generalized gravity of ``q`` with its kinematics already in the
         workspace (:meth:`_kinematics`); None: computed here.
         """
-        model, data = self.model, self.data
         load = self._kinematics(q) if gravity is None else gravity  # (nv,) generalized forces the torques balance
         wrenches: list[tuple[int, pin.Force]] = []
         if chain is not None and force_n != 0.0:
-            hand = self.hands[chain]
-            force = pin.Force(data.oMf[hand].rotation.T @ (force_n * self.normal), np.zeros(3))
-            wrenches.append((hand, force))  # the table pushes the hand along its normal
-            load = load - pin.getFrameJacobian(model, data, hand, pin.LOCAL).T @ force.vector
-        contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in self.soles])  # (6 k, nv)
-        split = contact[:, :6].T * self.weight[None, :]  # (6, 6 k) free-flyer rows, acting on the scaled wrenches
-        soles = _least_size(split, load[:6]) * self.weight  # least-size wrenches balancing the load
+            force, generalized = self._hand_load(chain, force_n)
+            wrenches.append((self.hands[chain], force))  # the table pushes the hand along its normal
+            load = load - generalized
+        rows = self._sole_rows()
+        soles = rows.wrenches(load)  # least-size wrenches balancing the load
         wrenches.extend((f, pin.Force(soles[6 * k : 6 * k + 6])) for k, f in enumerate(self.soles))
-        return load - contact.T @ soles, wrenches
+        return load - rows.contact.T @ soles, wrenches
 
     def linear(self, joints: FloatArray, chain: str | None, force_n: float) -> LinearTorques:
         """Holding torques and their first-order change with the joints (see :func:`linear_torques`)."""
@@ -195,6 +223,25 @@ class Statics:
         return np.asarray(contact.T @ d_wrench)
 
 
+class _SoleRows:
+    """The soles' Jacobians (6 k, nv) LOCAL at one posture and the least-size split they define."""
+
+    def __init__(self, contact: FloatArray, weight: FloatArray) -> None:
+        self.contact = contact  # (6 k, nv)
+        self.weight = weight  # (6 k,) the wrenches' scaling (MOMENT_ARM_M)
+        self.split = contact[:, :6].T * weight[None, :]  # (6, 6 k) free-flyer rows, acting on the scaled wrenches
+        self.gram = self.split @ self.split.T  # (6, 6)
+
+    def wrenches(self, load: FloatArray) -> FloatArray:
+        """(6 k,) or (6 k, m): the soles' least-size wrenches balancing generalized forces ``load`` (nv,) or (nv, m)."""
+        scaled = self.split.T @ np.linalg.solve(self.gram, load[:6])
+        return np.asarray(scaled * (self.weight if scaled.ndim == 1 else self.weight[:, None]))
+
+    def held(self, load: FloatArray) -> FloatArray:
+        """(nv,) or (nv, m): the generalized torques that hold ``load``, the soles carrying the rest."""
+        return np.asarray(load - self.contact.T @ self.wrenches(load))
+
+
 def _ads(motions: FloatArray) -> FloatArray:
     """(K, 6, 6) the matrices of the spatial cross products ``motion x`` of (K, 6) motions (linear first)."""
     out = np.zeros((len(motions), 6, 6))
@@ -210,11 +257,6 @@ def _skews(vectors: FloatArray) -> FloatArray:
     out[:, 0, 1], out[:, 0, 2], out[:, 1, 2] = -vectors[:, 2], vectors[:, 1], -vectors[:, 0]
     out[:, 1, 0], out[:, 2, 0], out[:, 2, 1] = vectors[:, 2], -vectors[:, 1], vectors[:, 0]
     return out
-
-
-def _least_size(matrix: FloatArray, rhs: FloatArray) -> FloatArray:
-    """The least-norm solution of ``matrix x = rhs`` (full row rank)."""
-    return np.asarray(matrix.T @ np.linalg.solve(matrix @ matrix.T, rhs))
 
 
 def gravity_torques(scene: Scene, joints: FloatArray) -> FloatArray:

@@ -162,3 +162,21 @@ def _base_rotation(scene, posture):
     data = scene.model.createData()
     pin.forwardKinematics(scene.model, data, scene.configuration(posture))
     return data.oMi[1].rotation
+
+
+def test_torque_pair_is_the_torques_and_spread_computed_alone_bit_for_bit(scene, postures):
+    """The projection's one-pass pair: the same numbers as each torque and the spread on a fresh workspace."""
+    import dataclasses
+
+    from posegen.robot.statics import Statics
+
+    margins = dataclasses.replace(scene.margins, com_uncertainty_m=0.01)
+    paired, alone = Statics(scene), Statics(scene)
+    paired.scene = alone.scene = _with_margins(scene, margins)
+    for chain in ("left", "right"):
+        for posture in postures:
+            pair = paired.torque_pair(posture, chain, 30.0)
+            assert np.array_equal(pair.unloaded, Statics(scene).torques(posture, None, 0.0))
+            assert np.array_equal(pair.pressing, Statics(scene).torques(posture, chain, 30.0))
+            assert np.array_equal(pair.spread, alone.com_spread(posture))
+            assert np.any(pair.pressing != pair.unloaded) and np.any(pair.spread > 0.0)
