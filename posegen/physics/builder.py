@@ -22,7 +22,7 @@ noslip pass (without it, MuJoCo's soft friction lets a loaded sole creep).
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -43,6 +43,7 @@ MIN_INERTIA = 1e-6  # kg m^2: the least principal inertia MuJoCo is given
 SPECK_KG = 1e-6  # the mass a massless moving link is given
 FT_SITE = "ft:{}"  # a chain's wrist sensor site, and its sensors (force, torque)
 SOLE_SITE = "sole_ft:{}"
+GLUE = "glue:"  # a glued sole's weld to the world: this, then the sole frame
 
 
 NDIntArray = np.ndarray  # integer indices
@@ -75,6 +76,7 @@ class Layout:
     shapes: tuple[Shape, ...]  # geom id -> shape
     base_body: int  # the free base's body id
     sole_bodies: dict[str, int]  # sole frame -> body id of its link
+    glue: tuple[int, ...] = ()  # the soles' welds to the world (equality ids; glued feet); empty: standing free
 
 
 @dataclass(frozen=True)
@@ -257,7 +259,7 @@ def build(
         _add_sensor_pair(spec, SOLE_SITE.format(sole), link, sole_in_link(scene, sole))
     if glued_feet:
         for sole, link in soles.items():
-            weld = spec.add_equality(name=f"glue:{sole}", type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY)
+            weld = spec.add_equality(name=GLUE + sole, type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY)
             weld.name1 = link
     try:
         model = spec.compile()
@@ -304,17 +306,18 @@ def _layout(
         shapes=ordered,
         base_body=model.body(base).id,
         sole_bodies={sole: model.body(link).id for sole, link in soles.items()},
+        glue=tuple(k for k in range(model.neq) if (model.equality(k).name or "").startswith(GLUE)),
     )
 
 
-def glue_feet(model: mujoco.MjModel, data: mujoco.MjData) -> None:
+def glue_feet(model: mujoco.MjModel, data: mujoco.MjData, welds: Sequence[int]) -> None:
     """Weld each glued sole where it is now (``data``'s kinematics computed): the welds' relative poses.
 
     A weld's default relative pose is the one at ``qpos0``; the robot stands elsewhere.
+    ``welds``: the soles' welds (:attr:`Layout.glue`); the model's other equalities (a
+    URDF's mimic joints) are left as they are.
     """
-    for k in range(model.neq):
-        if model.eq_type[k] != mujoco.mjtEq.mjEQ_WELD:
-            continue
+    for k in welds:
         body = model.eq_obj1id[k]
         rotation = data.xmat[body].reshape(3, 3)
         quat = np.zeros(4)

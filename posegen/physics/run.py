@@ -93,7 +93,7 @@ class Run:
         self.sensors = sensors
         self.robot = NominalRobot(scene, tools)
         self.hands = HandControl(self.robot, contacts, force_n)
-        self.stabilizer = Stabilizer(scene, self.robot, glued_feet=self.model.neq > 0)
+        self.stabilizer = Stabilizer(scene, self.robot, glued_feet=bool(self.layout.glue))
         self.offsets = JointOffsets(scene, self.robot)
         self.force_n = force_n
         self.stride = stride
@@ -143,8 +143,8 @@ class Run:
         """Put the robot down at the route's first posture and settle its state."""
         closed = put_down(self.scene, self.model, self.data, self.layout, self.plan.positions[0])
         self.offsets.dq[:] = closed - self.plan.positions[0]
-        if self.model.neq:
-            glue_feet(self.model, self.data)
+        if self.layout.glue:
+            glue_feet(self.model, self.data, self.layout.glue)
 
     def run(self, progress: ProgressCallback = ignore_progress) -> RunResult:
         """Step to the end of the plan (or a fall).

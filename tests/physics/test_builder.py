@@ -139,9 +139,36 @@ def test_put_down_lays_both_soles_flat_and_glued_feet_stay(scene: Scene, gains, 
     sites = [s.site for s in built.layout.soles.values()]
     for site in sites:
         assert abs(data.site_xpos[site][2]) < 1e-9 and np.abs(data.site_xmat[site].reshape(3, 3)[2, :2]).max() < 1e-9
-    glue_feet(built.model, data)
+    assert len(built.layout.glue) == len(scene.stance.sole_frames)
+    glue_feet(built.model, data, built.layout.glue)
     before = [data.site_xpos[s].copy() for s in sites]
     data.ctrl[built.layout.actuator] = data.qpos[built.layout.qpos]
     for _ in range(250):
         mujoco.mj_step(built.model, data)
     assert max(np.abs(data.site_xpos[s] - b).max() for s, b in zip(sites, before, strict=True)) < 2e-3
+
+
+def test_a_robots_mimic_joints_are_not_glued_feet() -> None:
+    """JVRC-1's fingers are mimic joints (MuJoCo joint equalities): standing free, its stabilizer stays on.
+
+    ``Run`` once took any equality for the soles' welds, and the stabilizer rested for good.
+    """
+    from pathlib import Path
+
+    from posegen.physics.builder import build
+    from posegen.physics.gains import joint_gains
+    from posegen.physics.tool import wrist_tool
+    from posegen.robot import load_config
+
+    jvrc = Scene(load_config(Path(__file__).resolve().parents[2] / "configs" / "jvrc_table.yaml"))
+    tools = {c.name: wrist_tool(jvrc, c.sensor_frame) for c in jvrc.chains}
+    free = build(jvrc, jvrc.urdf_xml, jvrc.table_pose, joint_gains(jvrc), tools)
+    mimic = [k for k in range(free.model.neq) if free.model.eq_type[k] == mujoco.mjtEq.mjEQ_JOINT]
+    assert mimic and free.layout.glue == ()  # equalities there are, welds none
+    glued = build(jvrc, jvrc.urdf_xml, jvrc.table_pose, joint_gains(jvrc), tools, glued_feet=True)
+    assert len(glued.layout.glue) == 2 and not set(glued.layout.glue) & set(mimic)
+    data = mujoco.MjData(glued.model)
+    mujoco.mj_forward(glued.model, data)
+    before = glued.model.eq_data[mimic].copy()
+    glue_feet(glued.model, data, glued.layout.glue)
+    assert np.array_equal(glued.model.eq_data[mimic], before)  # the fingers' couplings untouched
