@@ -265,7 +265,7 @@ def build(
         model = spec.compile()
     except ValueError as exc:
         raise ConfigError(f"MuJoCo cannot compile the robot: {str(exc).strip()}") from exc
-    return Built(model, _layout(model, scene, shapes, efforts, spring_names, soles, base.name, tools))
+    return Built(model, _layout(model, scene, shapes, efforts, spring_names, soles, base.name, tools, glued_feet))
 
 
 def _sensor(model: mujoco.MjModel, site: str, frame: str) -> Sensor:
@@ -288,6 +288,7 @@ def _layout(
     soles: dict[str, str],
     base: str,
     tools: Mapping[str, Tool],
+    glued_feet: bool,
 ) -> Layout:
     joints = [model.joint(name) for name in scene.joint_names]
     by_geom = {s.name: s for s in shapes}
@@ -306,7 +307,7 @@ def _layout(
         shapes=ordered,
         base_body=model.body(base).id,
         sole_bodies={sole: model.body(link).id for sole, link in soles.items()},
-        glue=tuple(k for k in range(model.neq) if (model.equality(k).name or "").startswith(GLUE)),
+        glue=tuple(int(model.equality(GLUE + sole).id) for sole in soles) if glued_feet else (),
     )
 
 

@@ -261,7 +261,7 @@ class Projector:
         return jacobian
 
     def _joints(self) -> FloatArray:
-        """(nj,) rad the solver's joint angles, in the scene's order."""
+        """(nj,) rad the solver's joint angles, in the scene's order (one-value joints: q index = v index + 1)."""
         return np.array(self.robot.state.q[self._joint_q], dtype=float)
 
 

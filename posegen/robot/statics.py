@@ -100,7 +100,7 @@ class Statics:
         """(nj, 2) d torques / d (CoM x, y), N m per m, at the kinematics in the workspace (and its ``soles``)."""
         load = np.zeros((self.model.nv, 2))
         load[3:6] = self.data.oMi[1].rotation.T @ self._moment_per_m  # the base's local frame
-        return (soles or self._sole_rows()).held(load)[self.velocity]
+        return (self._sole_rows() if soles is None else soles).held(load)[self.velocity]
 
     def _sole_rows(self) -> _SoleRows:
         """The soles' Jacobians and the least-size split's matrices at the kinematics in the workspace."""

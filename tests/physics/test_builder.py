@@ -157,16 +157,24 @@ def test_a_robots_mimic_joints_are_not_glued_feet() -> None:
 
     from posegen.physics.builder import build
     from posegen.physics.gains import joint_gains
+    from posegen.physics.run import Run
+    from posegen.physics.sensors import SensorNoise, Sensors
     from posegen.physics.tool import wrist_tool
     from posegen.robot import load_config
+    from tests.physics.test_stabilizer import standing_plan
 
     jvrc = Scene(load_config(Path(__file__).resolve().parents[2] / "configs" / "jvrc_table.yaml"))
     tools = {c.name: wrist_tool(jvrc, c.sensor_frame) for c in jvrc.chains}
-    free = build(jvrc, jvrc.urdf_xml, jvrc.table_pose, joint_gains(jvrc), tools)
+    gains = joint_gains(jvrc)
+    free = build(jvrc, jvrc.urdf_xml, jvrc.table_pose, gains, tools)
     mimic = [k for k in range(free.model.neq) if free.model.eq_type[k] == mujoco.mjtEq.mjEQ_JOINT]
     assert mimic and free.layout.glue == ()  # equalities there are, welds none
-    glued = build(jvrc, jvrc.urdf_xml, jvrc.table_pose, joint_gains(jvrc), tools, glued_feet=True)
+    glued = build(jvrc, jvrc.urdf_xml, jvrc.table_pose, gains, tools, glued_feet=True)
     assert len(glued.layout.glue) == 2 and not set(glued.layout.glue) & set(mimic)
+    plan = standing_plan(jvrc, 0.1)
+    for built, stands_free in ((free, True), (glued, False)):
+        run = Run(jvrc, built, gains, plan, (), Sensors(built.layout, SensorNoise(), 1), tools, 30.0, 1)
+        assert run.stabilizer.glued_feet is not stands_free  # the stabilizer balances a robot standing free
     data = mujoco.MjData(glued.model)
     mujoco.mj_forward(glued.model, data)
     before = glued.model.eq_data[mimic].copy()

@@ -26,11 +26,11 @@ def test_the_imu_turns_the_base_about_the_anchor_sole(scene: Scene, tools: dict[
     robot.update(joints, imu)
     anchor = robot.sole_poses[0]
     place = scene.sole_poses[scene.anchor_sole]
-    assert np.allclose(anchor[:3, 3], place[:3, 3], atol=1e-12)
+    assert np.allclose(anchor[:3, 3], place[:3, 3], rtol=0.0, atol=1e-12)
     base = pin.XYZQUATToSE3(robot.q[:7]).rotation
-    assert np.allclose(pin.rpy.matrixToRpy(base)[:2], [0.03, -0.02], atol=1e-12)
+    assert np.allclose(pin.rpy.matrixToRpy(base)[:2], [0.03, -0.02], rtol=0.0, atol=1e-12)
     yaw = np.arctan2(base[1, 0], base[0, 0])
-    assert np.isclose(yaw, np.arctan2(flat_base[1, 0], flat_base[0, 0]), atol=1e-12)
+    assert np.isclose(yaw, np.arctan2(flat_base[1, 0], flat_base[0, 0]), rtol=0.0, atol=1e-12)
 
 
 def test_joint_jacobian_is_the_frames_motion_on_the_base(scene: Scene, tools: dict[str, Tool]) -> None:
@@ -53,7 +53,7 @@ def test_joint_jacobian_is_the_frames_motion_on_the_base(scene: Scene, tools: di
             poses.append(data.oMf[frame].copy())
         linear = (poses[1].translation - poses[0].translation) / (2 * step)
         angular = pin.log3(poses[1].rotation @ poses[0].rotation.T) / (2 * step)
-        assert np.allclose(jacobian[:, column], np.concatenate([linear, angular]), atol=1e-6)
+        assert np.allclose(jacobian[:, column], np.concatenate([linear, angular]), rtol=0.0, atol=1e-6)
 
 
 def test_com_is_a_new_array_renewed_by_each_update(scene: Scene, tools: dict[str, Tool]) -> None:
@@ -63,4 +63,4 @@ def test_com_is_a_new_array_renewed_by_each_update(scene: Scene, tools: dict[str
     first[:] = 0.0  # a caller's change stays the caller's
     assert np.array_equal(robot.com(), pin.centerOfMass(scene.model, scene.model.createData(), robot.q))
     robot.update(_posture(scene))
-    assert np.allclose(robot.com(), pin.centerOfMass(scene.model, scene.model.createData(), robot.q), atol=1e-15)
+    assert np.array_equal(robot.com(), pin.centerOfMass(scene.model, scene.model.createData(), robot.q))

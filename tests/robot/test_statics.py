@@ -180,3 +180,21 @@ def test_torque_pair_is_the_torques_and_spread_computed_alone_bit_for_bit(scene,
             assert np.array_equal(pair.pressing, Statics(scene).torques(posture, chain, 30.0))
             assert np.array_equal(pair.spread, alone.com_spread(posture))
             assert np.any(pair.pressing != pair.unloaded) and np.any(pair.spread > 0.0)
+            assert np.array_equal(pair.unloaded, _least_size_torques(scene, posture))  # the arithmetic of before
+
+
+def _least_size_torques(scene, posture):
+    """The unloaded holding torques (nj,) as the statics computed them before the one-pass pair, written out."""
+    from posegen.robot import MOMENT_ARM_M
+
+    model, data = scene.model, scene.model.createData()
+    q = scene.configuration(posture)
+    gravity = pin.computeGeneralizedGravity(model, data, q).copy()
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    frames = [scene.frame_id(f) for f in scene.stance.sole_frames]
+    contact = np.vstack([pin.getFrameJacobian(model, data, f, pin.LOCAL) for f in frames])  # (6 k, nv)
+    weight = np.tile([1.0, 1.0, 1.0, MOMENT_ARM_M, MOMENT_ARM_M, MOMENT_ARM_M], len(frames))
+    split = contact[:, :6].T * weight[None, :]
+    soles = split.T @ np.linalg.solve(split @ split.T, gravity[:6]) * weight
+    return (gravity - contact.T @ soles)[scene.velocity_indices()]
