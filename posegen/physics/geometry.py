@@ -10,7 +10,9 @@ only where the experiment makes them or where they would be a fault worth report
   config lets touch the floor (``stance.floor_contact_frames``) do not (their box does);
 * a small sphere at each fingertip end (flush contacts) or the point tip's rounding
   (point contacts) touches the table; the links carrying them (and the chain's
-  ``touching_links``) do not (their spheres do);
+  ``touching_links``) do not (their spheres do): the links the planner's collision check
+  exempts at a contact (:func:`posegen.robot.carrying_links`: a frame the config declares
+  is carried by the link with geometry it is fixed to);
 * every other robot shape touches the floor and the table, so that an unwanted contact
   happens, and is reported, instead of passing through;
 * the robot never touches itself (``check`` verifies self-collisions on the planned route).
@@ -29,7 +31,7 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot import FloatArray, Scene, robot_geometry
+from posegen.robot import FloatArray, Scene, carrying_links, link_of, robot_geometry
 
 TIP_RADIUS_M = 0.005  # the sphere at each fingertip end (its lowest point is the end)
 SOLE_THICKNESS_M = 0.01  # the box sole, above the sole frame
@@ -115,9 +117,10 @@ def _robot_shapes(spec: mujoco.MjSpec, scene: Scene) -> list[Shape]:
     no_floor = _links_carrying(model, scene.stance.floor_contact_frames)
     no_floor |= _links_carrying(model, scene.stance.sole_frames)
     no_table: set[str] = set()
+    links = set(link_of(model, geometry))
     for chain in scene.chains:
         carried = tuple(frame for kind in chain.kinds for frame in kind.carried_frames(chain))
-        no_table |= _links_carrying(model, carried) | set(chain.touching_links)
+        no_table |= carrying_links(model, carried, links) | set(chain.touching_links)
     shapes = []
     for obj in geometry.geometryObjects:
         frame = model.frames[obj.parentFrame]

@@ -32,6 +32,8 @@ from posegen.robot.chain_config import ChainConfig
 from posegen.robot.collision import TABLE, CollisionChecker, Proximity
 from posegen.robot.collision_geometry import (
     add_self_pairs,  # for the draft (robot init)
+    carrying_links,  # for physics: the links a contact exempts, as the collision check has them
+    link_of,
     robot_geometry,
 )
 from posegen.robot.collision_matrix import PairSurvey, survey_pairs, survey_scene_pairs  # for the draft (robot init)
@@ -192,6 +194,7 @@ __all__ = [
     "allowed_ratios",
     "assess",
     "bare_links",
+    "carrying_links",
     "centres_of_pressure",
     "check_for_planning",
     "contact_in_table",
@@ -212,6 +215,7 @@ __all__ = [
     "left_out_m",
     "linear_torques",
     "link_masses",
+    "link_of",
     "load_config",
     "offset_derivatives",
     "offset_matrix",

@@ -148,10 +148,12 @@ def test_put_down_lays_both_soles_flat_and_glued_feet_stay(scene: Scene, gains, 
     assert max(np.abs(data.site_xpos[s] - b).max() for s, b in zip(sites, before, strict=True)) < 2e-3
 
 
-def test_a_robots_mimic_joints_are_not_glued_feet() -> None:
+def test_a_robot_with_mimic_joints_and_declared_tips() -> None:
     """JVRC-1's fingers are mimic joints (MuJoCo joint equalities): standing free, its stabilizer stays on.
 
     ``Run`` once took any equality for the soles' welds, and the stabilizer rested for good.
+    Its contact points are frames the config declares: the physics once exempted their own
+    bodies (which carry no shape) from the table, not the finger links they are fixed to.
     """
     from pathlib import Path
 
@@ -171,6 +173,13 @@ def test_a_robots_mimic_joints_are_not_glued_feet() -> None:
     assert mimic and free.layout.glue == ()  # equalities there are, welds none
     glued = build(jvrc, jvrc.urdf_xml, jvrc.table_pose, gains, tools, glued_feet=True)
     assert len(glued.layout.glue) == 2 and not set(glued.layout.glue) & set(mimic)
+    # its point contacts are frames the config declares on the little fingers: those links
+    # may touch the table (as the planner's collision check has them), their tip spheres make the contact
+    for g, shape in enumerate(free.layout.shapes):
+        if shape.role == ShapeRole.BODY and shape.link in ("L_LLITTLE_S", "R_LLITTLE_S"):
+            assert Touches.TABLE not in Touches(int(free.model.geom_conaffinity[g])), shape.name
+    tips = {s.link for s in free.layout.shapes if s.role == ShapeRole.TIP}
+    assert tips == {"left_tip", "right_tip"}
     plan = standing_plan(jvrc, 0.1)
     for built, stands_free in ((free, True), (glued, False)):
         run = Run(jvrc, built, gains, plan, (), Sensors(built.layout, SensorNoise(), 1), tools, 30.0, 1)
