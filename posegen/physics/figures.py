@@ -15,7 +15,18 @@ from posegen.physics.physics_file import PhysicsReport, PhysicsSummary, SegmentF
 from posegen.physics.plan import Plan
 from posegen.robot import FloatArray
 
-HOLD_RANGE_N = (10.0, 60.0)  # a hold's normal force should stay within (the issue's target)
+HOLD_RANGE = (1.0 / 3.0, 2.0)  # of the target force: a hold's normal force should stay within ([10, 60] N for 30 N)
+
+
+def hold_range_n(force_n: float) -> tuple[float, float]:
+    """The normal forces (N) a hold of target ``force_n`` should stay within: a third of it to twice it.
+
+    Example:
+        >>> hold_range_n(30.0)
+        (10.0, 60.0)
+
+    """
+    return force_n / 3.0, 2.0 * force_n
 
 
 def _label(route: Route, index: int) -> str:
@@ -89,10 +100,11 @@ def summarize(
     contacts: tuple[ContactTimes, ...],
     fell_at_s: float | None,
     duration_s: float,
+    force_n: float,
 ) -> PhysicsSummary:
-    """The run's worst figures, and how many holds kept their force within :data:`HOLD_RANGE_N`."""
+    """The run's worst figures, and how many holds kept their force within :func:`hold_range_n` of ``force_n``."""
     holds = [s for s in segments if s.type == SegmentType.HOLD.value]
-    low, high = HOLD_RANGE_N
+    low, high = hold_range_n(force_n)
     in_range = sum(1 for s in holds if s.force_min_n >= low and s.force_max_n <= high)
     worst_torque = max(segments, key=lambda s: s.torque_ratio_max if np.isfinite(s.torque_ratio_max) else -1.0)
     return PhysicsSummary(
@@ -101,7 +113,7 @@ def summarize(
         duration_s=duration_s,
         contacts=len(contacts),
         holds_in_range=in_range,
-        hold_range_n=HOLD_RANGE_N,
+        hold_range_n=(low, high),
         zmp_margin_min_m=_worst(np.array([s.zmp_margin_min_m for s in segments]), low=True),
         slip_max_mm=_worst(np.array([max(s.slip_max_mm) for s in segments]), low=False),
         pelvis_deviation_max_m=_worst(np.array([s.pelvis_deviation_max_m for s in segments]), low=False),
@@ -120,14 +132,17 @@ def physics_report(
     joint_names: tuple[str, ...],
     contacts: tuple[ContactTimes, ...],
     fell_at_s: float | None,
+    force_n: float,
 ) -> PhysicsReport:
     """The report of a run (``physics.yaml``); a fall's time is given on the run's clock.
 
+    ``force_n``: the holds' target force (``route.contact_force_n``), which sets their range.
+
     Example:
-        >>> report = physics_report(prov, route, plan, result.truth, result.route_index, names, contacts, None)
+        >>> report = physics_report(prov, route, plan, result.truth, result.route_index, names, contacts, None, 30.0)
 
     """
     segments = segment_figures(route, plan, truth, route_index, joint_names)
     fell = None if fell_at_s is None else round(fell_at_s, 3)
     duration = float(len(truth.pelvis_z) * (plan.times_s[1] - plan.times_s[0]))
-    return PhysicsReport(provenance, summarize(segments, contacts, fell, duration), segments)
+    return PhysicsReport(provenance, summarize(segments, contacts, fell, duration, force_n), segments)

@@ -187,7 +187,15 @@ def simulate_physics_bag(
         wall = time.perf_counter() - started
         prov = _provenance(scene, route_path, options)
         report = physics_report(
-            prov, route, result.plan, result.truth, result.route_index, scene.joint_names, contacts, result.fell_at_s
+            prov,
+            route,
+            result.plan,
+            result.truth,
+            result.route_index,
+            scene.joint_names,
+            contacts,
+            result.fell_at_s,
+            scene.route.contact_force_n,
         )
         recorded = result.recorded
         joints = JointStates(scene.joint_names, recorded.times_s, recorded.encoders)
