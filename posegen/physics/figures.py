@@ -15,8 +15,6 @@ from posegen.physics.physics_file import PhysicsReport, PhysicsSummary, SegmentF
 from posegen.physics.plan import Plan
 from posegen.robot import FloatArray
 
-HOLD_RANGE = (1.0 / 3.0, 2.0)  # of the target force: a hold's normal force should stay within ([10, 60] N for 30 N)
-
 
 def hold_range_n(force_n: float) -> tuple[float, float]:
     """The normal forces (N) a hold of target ``force_n`` should stay within: a third of it to twice it.

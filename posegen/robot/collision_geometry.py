@@ -137,7 +137,12 @@ def check_link_names(model: pin.Model, collision: CollisionConfig) -> None:
 
 
 def link_of(model: pin.Model, geom: pin.GeometryModel) -> list[str]:
-    """The link (body frame) each geometry object belongs to."""
+    """The link (body frame) each geometry object belongs to.
+
+    Example:
+        >>> links = set(link_of(scene.model, robot_geometry(scene.model, scene.urdf_xml, dirs, collision, True)))
+
+    """
     return [str(model.frames[o.parentFrame].name) for o in geom.geometryObjects]
 
 
@@ -164,6 +169,11 @@ def carrying_links(model: pin.Model, frames: tuple[str, ...], geometry_links: se
 
     A fingertip frame is usually such a link itself; a frame declared in the config is
     not, and its touching geometry is the link it is fixed to.
+
+    Example:
+        >>> carrying_links(scene.model, ("right_tip",), links)  # a declared tip on a finger
+        {'R_LLITTLE_S'}
+
     """
     out = set()
     for name in frames:
