@@ -171,8 +171,8 @@ def carrying_links(model: pin.Model, frames: tuple[str, ...], geometry_links: se
     not, and its touching geometry is the link it is fixed to.
 
     Example:
-        >>> carrying_links(scene.model, ("right_tip",), links)  # a declared tip on a finger
-        {'R_LLITTLE_S'}
+        >>> tip = scene.chain("right").point_frame  # a point the config declares on a finger
+        >>> carrying_links(scene.model, (tip,), links)  # the finger's link, which carries its geometry
 
     """
     out = set()
