@@ -88,19 +88,21 @@ class Statics:
             >>> bound = np.abs(statics.torques(joints, None, 0.0)) + statics.com_spread(joints)
 
         """
-        uncertainty_m = self.scene.margins.com_uncertainty_m
-        if uncertainty_m == 0.0:
+        if self.scene.margins.com_uncertainty_m == 0.0:
             return np.zeros(len(self.velocity))
         q = self.scene.configuration(joints)
         if self._placed is None or not np.array_equal(q, self._placed):
             self._kinematics(q)
-        return uncertainty_m * np.abs(self._com_sensitivity()).sum(axis=1)
+        return self._spread(self._sole_rows())
 
-    def _com_sensitivity(self, soles: _SoleRows | None = None) -> FloatArray:
-        """(nj, 2) d torques / d (CoM x, y), N m per m, at the kinematics in the workspace (and its ``soles``)."""
-        load = np.zeros((self.model.nv, 2))
+    def _spread(self, soles: _SoleRows) -> FloatArray:
+        """(nj,) N m :meth:`com_spread` at the kinematics in the workspace, its soles' rows ``soles``."""
+        uncertainty_m = self.scene.margins.com_uncertainty_m
+        if uncertainty_m == 0.0:
+            return np.zeros(len(self.velocity))
+        load = np.zeros((self.model.nv, 2))  # d generalized forces / d (CoM x, y)
         load[3:6] = self.data.oMi[1].rotation.T @ self._moment_per_m  # the base's local frame
-        return (self._sole_rows() if soles is None else soles).held(load)[self.velocity]
+        return uncertainty_m * np.abs(soles.held(load)[self.velocity]).sum(axis=1)
 
     def _sole_rows(self) -> _SoleRows:
         """The soles' Jacobians and the least-size split's matrices at the kinematics in the workspace."""
@@ -126,13 +128,7 @@ class Statics:
         gravity = self._kinematics(q)
         soles = self._sole_rows()
         pressing = gravity - self._hand_load(chain, force_n)[1]
-        uncertainty_m = self.scene.margins.com_uncertainty_m
-        spread = (
-            uncertainty_m * np.abs(self._com_sensitivity(soles)).sum(axis=1)
-            if uncertainty_m != 0.0
-            else np.zeros(len(self.velocity))
-        )
-        return TorquePair(soles.held(gravity)[self.velocity], soles.held(pressing)[self.velocity], spread)
+        return TorquePair(soles.held(gravity)[self.velocity], soles.held(pressing)[self.velocity], self._spread(soles))
 
     def _hand_load(self, chain: str, force_n: float) -> tuple[pin.Force, FloatArray]:
         """The table's push on ``chain``'s hand (its frame) and its generalized force (nv,), kinematics as placed."""
