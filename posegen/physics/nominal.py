@@ -54,12 +54,10 @@ class NominalRobot:
         self._foot_half = np.array([(x1 - x0) / 2, (y1 - y0) / 2])
         self._normal_map: FloatArray | None = None  # the least-size split's, renewed every SPLIT_EVERY updates
         self._updates = 0
-        self._gravity: FloatArray | None = None  # (nv,) the generalized gravity at update number _gravity_at
-        self._gravity_at = -1
-        self._com = np.zeros(3)  # m, the centre of mass at update number _com_at
-        self._com_at = -1
-        self._sole_jacobians: list[FloatArray] = []  # (6, nv) LOCAL each, at update number _sole_jacobians_at
-        self._sole_jacobians_at = -1
+        # computed at most once per update, when first asked (update() forgets them)
+        self._gravity: FloatArray | None = None  # (nv,) the generalized gravity
+        self._com: FloatArray | None = None  # (3,) m, the centre of mass
+        self._sole_jacobians: list[FloatArray] | None = None  # (6, nv) LOCAL each
         self.q = scene.configuration(scene.reference)
 
     def _configuration(self, joints: FloatArray, imu: FloatArray | None) -> FloatArray:
@@ -88,6 +86,7 @@ class NominalRobot:
         """
         self.imu = imu
         self._updates += 1
+        self._gravity = self._com = self._sole_jacobians = None
         self.q = self._configuration(joints, imu)
         pin.computeJointJacobians(self.model, self.data, self.q)
         pin.updateFramePlacements(self.model, self.data)
@@ -131,9 +130,8 @@ class NominalRobot:
 
     def com(self) -> FloatArray:
         """World centre of mass (3,), m (a new array: computed once per :meth:`update`)."""
-        if self._com_at != self._updates:
+        if self._com is None:
             self._com = np.array(pin.centerOfMass(self.model, self.data, self.q, False))
-            self._com_at = self._updates
         return self._com.copy()
 
     def com_jacobian(self) -> FloatArray:
@@ -172,16 +170,14 @@ class NominalRobot:
 
     def _gravity_now(self) -> FloatArray:
         """(nv,) the generalized gravity at the last :meth:`update` (computed once per update; do not modify)."""
-        if self._gravity is None or self._gravity_at != self._updates:
+        if self._gravity is None:
             self._gravity = np.array(pin.computeGeneralizedGravity(self.model, self.data, self.q))
-            self._gravity_at = self._updates
         return self._gravity
 
     def _held_by_soles(self, load: FloatArray, wrenches: list[FloatArray]) -> FloatArray:
         """The joint torques (nj,) that hold generalized forces ``load`` (nv,), the soles carrying ``wrenches``."""
-        if self._sole_jacobians_at != self._updates:
+        if self._sole_jacobians is None:
             self._sole_jacobians = [pin.getFrameJacobian(self.model, self.data, s, pin.LOCAL) for s in self.soles]
-            self._sole_jacobians_at = self._updates
         torques = load.copy()
         for jacobian, wrench in zip(self._sole_jacobians, wrenches, strict=True):
             torques -= jacobian.T @ wrench
