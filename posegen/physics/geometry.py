@@ -79,11 +79,6 @@ def _link_of_frame(model: pin.Model, name: str) -> str:
     return str(frame.name)
 
 
-def _links_carrying(model: pin.Model, frames: tuple[str, ...]) -> set[str]:
-    """The links carrying these frames, and the links fixed to them (one rigid body in MuJoCo's eyes)."""
-    return {_link_of_frame(model, f) for f in frames}
-
-
 def _add_mesh_geom(spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, hull: coal.Convex) -> mujoco.MjsGeom:
     mesh = spec.add_mesh(name=f"{name}_hull")
     mesh.uservert = np.asarray(hull.points(), dtype=float).ravel()  # (v, 3) in the geom frame
@@ -114,10 +109,9 @@ def _robot_shapes(spec: mujoco.MjSpec, scene: Scene) -> list[Shape]:
     """Posegen's collision shapes on their links, each touching the floor and the table unless exempt."""
     model = scene.model
     geometry = robot_geometry(model, scene.urdf_xml, scene.files.package_dirs, scene.config.collision, True)
-    no_floor = _links_carrying(model, scene.stance.floor_contact_frames)
-    no_floor |= _links_carrying(model, scene.stance.sole_frames)
+    links = set(link_of(model, geometry))  # the links with shapes; a frame exempts the one that carries it
+    no_floor = carrying_links(model, (*scene.stance.floor_contact_frames, *scene.stance.sole_frames), links)
     no_table: set[str] = set()
-    links = set(link_of(model, geometry))
     for chain in scene.chains:
         carried = tuple(frame for kind in chain.kinds for frame in kind.carried_frames(chain))
         no_table |= carrying_links(model, carried, links) | set(chain.touching_links)
