@@ -76,12 +76,15 @@ def run(args: argparse.Namespace) -> int:
     )
     config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
 
-    def report_html(folder: Path) -> object:
-        return write_report_into(folder, args.config, shown_as=args.output)
-
-    finish = None if missing else report_html
-    preload = ("posegen.calibrate.model_selection", "matplotlib.pyplot")  # the workers' imports, meanwhile
+    preload: tuple[str, ...] = ("posegen.calibrate.model_selection", "matplotlib.pyplot")  # the workers' imports
+    if missing is None:
+        preload += ("posegen.view.report_figures",)  # the report's figures are drawn on the workers too
     with ProgressBar(args.quiet) as bar, open_backend(args.workers, preload=preload) as backend:
+
+        def report_html(folder: Path) -> object:
+            return write_report_into(folder, args.config, shown_as=args.output, backend=backend)
+
+        finish = None if missing else report_html
         calibrated = calibrate_files(
             args.measurements, args.validate, args.output, settings, config, bar, backend, finish
         )

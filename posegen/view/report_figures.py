@@ -3,17 +3,22 @@
 Residuals per contact (training and held-out) under the nominal URDF and calibrated.urdf,
 each as a stack loading it sees them, their distribution,
 the singular values of the base regressor, and the posterior correlation matrix.
+
+:func:`figure_uris` draws all four, on a backend's workers when it has more than one
+(each figure in a worker while the page's other parts are made here: the same PNG bytes).
 """
 
 from __future__ import annotations
 
 import base64
+import enum
 import io
 from collections.abc import Sequence
 
 import numpy as np
 
 from posegen.calibrate import DISPLAY, ContactResidual, ContactSet, Posterior
+from posegen.parallel import Backend, Job, job_name
 from posegen.robot import FloatArray
 
 COMPONENTS = ("height (mm)", "roll (deg)", "pitch (deg)")
@@ -115,6 +120,52 @@ def correlation_figure(posterior: Posterior) -> str:
     ax.set_title("posterior correlation of the base parameters")
     fig.tight_layout()
     return png_data_uri(fig)
+
+
+class ReportFigure(enum.Enum):
+    """The report's figures (the longest to draw first: the workers end together)."""
+
+    CORRELATION = "correlation"
+    RESIDUALS = "residuals"
+    SINGULAR_VALUES = "singular values"
+    DISTRIBUTION = "distribution"
+
+
+def _no_state() -> None:
+    return None
+
+
+def _draw(state: None, item: tuple[ReportFigure, Sequence[ContactResidual], Posterior]) -> str:
+    """One figure's data URI, from the contacts' residuals or the posterior (whichever it shows)."""
+    del state
+    kind, contacts, posterior = item
+    if kind == ReportFigure.RESIDUALS:
+        return residual_figure(contacts)
+    if kind == ReportFigure.DISTRIBUTION:
+        return distribution_figure(contacts)
+    if kind == ReportFigure.SINGULAR_VALUES:
+        return singular_value_figure(posterior)
+    return correlation_figure(posterior)
+
+
+def figure_uris(
+    contacts: Sequence[ContactResidual], posterior: Posterior, backend: Backend | None = None
+) -> dict[ReportFigure, str]:
+    """Every report figure as a ``data:image/png`` URI: on ``backend``'s workers (all at once), or here.
+
+    Example:
+        >>> uris = figure_uris(record.contacts, record.posterior)
+        >>> uris[ReportFigure.RESIDUALS].startswith("data:image/png;base64,")
+        True
+
+    """
+    items = [(kind, contacts, posterior) for kind in ReportFigure]
+    if backend is None or backend.slots < 2:
+        return {item[0]: _draw(None, item) for item in items}
+    job: Job[None, tuple[ReportFigure, Sequence[ContactResidual], Posterior], str] = Job(
+        job_name("report-figures"), _no_state, _draw
+    )
+    return dict(zip(ReportFigure, backend.map(job, items, len(items)), strict=True))
 
 
 def strongest_correlations(posterior: Posterior, count: int = 12) -> list[tuple[str, str, float]]:

@@ -11,6 +11,7 @@ conditioning and correlation of the base regressor, outliers and rejected rows, 
 
 from __future__ import annotations
 
+import concurrent.futures
 import html
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -19,16 +20,11 @@ from typing import Any
 from posegen.calibrate import COMPONENTS, ContactSet
 from posegen.errors import InputError
 from posegen.io import OutputKind, claim_output, write_atomic
+from posegen.parallel import Backend
 from posegen.view.artefact import CalibrationArtefact, open_artefact
 from posegen.view.calibration_view import displayed
-from posegen.view.report_figures import (
-    correlation_figure,
-    distribution_figure,
-    residual_figure,
-    singular_value_figure,
-    strongest_correlations,
-)
-from posegen.view.viewer import html_page
+from posegen.view.report_figures import ReportFigure, figure_uris, strongest_correlations
+from posegen.view.viewer import Page, html_page
 
 REPORT_FILE = "report.html"
 STYLE = """
@@ -178,7 +174,7 @@ def _parameters(report: dict[str, Any]) -> str:
     return f'<div class="scroll">{table(header, rows, names=2)}</div>'
 
 
-def _conditioning(artefact: CalibrationArtefact) -> str:
+def _conditioning(artefact: CalibrationArtefact, figures: dict[ReportFigure, str]) -> str:
     posterior = artefact.record.posterior
     pairs = table(
         ("parameter", "parameter", "correlation"),
@@ -188,9 +184,9 @@ def _conditioning(artefact: CalibrationArtefact) -> str:
     return (
         f"<p>Condition number of the noise-whitened regressor: <b>{posterior.condition:.4g}</b> "
         f"(with the prior: {posterior.condition_with_prior:.4g}).</p>"
-        f'<img src="{singular_value_figure(posterior)}" alt="singular values">'
+        f'<img src="{figures[ReportFigure.SINGULAR_VALUES]}" alt="singular values">'
         f"<h3>Most correlated pairs</h3>{pairs}"
-        f'<img src="{correlation_figure(posterior)}" alt="correlation matrix">'
+        f'<img src="{figures[ReportFigure.CORRELATION]}" alt="correlation matrix">'
     )
 
 
@@ -210,23 +206,34 @@ def _outliers(report: dict[str, Any]) -> str:
     return "".join(parts)
 
 
-def report_html(artefact: CalibrationArtefact, shown_as: Path | None = None) -> str:
-    """The report page of a calibration folder."""
+def _figures_and_view(artefact: CalibrationArtefact, backend: Backend | None) -> tuple[dict[ReportFigure, str], Page]:
+    """The report's figures and its 3D page: the figures on ``backend``'s workers while the page is made here."""
+    record = artefact.record
+    if backend is None or backend.slots < 2:
+        return figure_uris(record.contacts, record.posterior), html_page(artefact)
+    with concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="posegen-report-figures") as waiting:
+        figures = waiting.submit(figure_uris, record.contacts, record.posterior, backend)
+        view = html_page(artefact)
+        return figures.result(), view
+
+
+def report_html(artefact: CalibrationArtefact, shown_as: Path | None = None, backend: Backend | None = None) -> str:
+    """The report page of a calibration folder (its figures drawn on ``backend``'s workers, if any)."""
     report = artefact.record.report
-    contacts = artefact.record.contacts
-    view = html_page(artefact).html
+    figures, page = _figures_and_view(artefact, backend)
+    view = page.html
     sections = [
         ("What to load: the files written", _deliverables(report)),
         ("Summary", _summary(report, artefact)),
         ("Every file's errors, as a stack loading it sees them", _residual_tables(report)),
         (
             "Every contact",
-            f'<img src="{residual_figure(contacts)}" alt="residuals per contact">'
-            f'<img src="{distribution_figure(contacts)}" alt="residual distributions">',
+            f'<img src="{figures[ReportFigure.RESIDUALS]}" alt="residuals per contact">'
+            f'<img src="{figures[ReportFigure.DISTRIBUTION]}" alt="residual distributions">',
         ),
         ("Model selection: repeated grouped cross-validation", _cross_validation(report)),
         ("The interpretable model's parameters", _parameters(report)),
-        ("Conditioning and correlation of the regressor", _conditioning(artefact)),
+        ("Conditioning and correlation of the regressor", _conditioning(artefact, figures)),
         ("Rows left out", _outliers(report)),
         (
             "3D: nominal (grey) and calibrated (blue) robot at each contact",
@@ -261,7 +268,10 @@ def write_report(directory: str | Path, config_path: str | None = None) -> Path:
 
 
 def write_report_into(
-    directory: str | Path, config_path: str | None = None, shown_as: str | Path | None = None
+    directory: str | Path,
+    config_path: str | None = None,
+    shown_as: str | Path | None = None,
+    backend: Backend | None = None,
 ) -> Path:
     """Write ``report.html`` into a calibration folder the caller holds, and return its path.
 
@@ -273,6 +283,8 @@ def write_report_into(
         directory: The calibration folder (complete but for the report).
         config_path: Scene config to use instead of the one saved in the calibration.
         shown_as: The folder's name to show in the page (its destination); default ``directory``.
+        backend: Where the figures are drawn (meanwhile this process makes the 3D page);
+            None: here. The same page either way.
 
     Raises:
         PosegenError: The folder is not a complete calibration folder.
@@ -282,5 +294,5 @@ def write_report_into(
     if not isinstance(artefact, CalibrationArtefact):
         raise InputError(f"{directory}: not a calibration folder")
     path = artefact.record.directory / REPORT_FILE
-    write_atomic(path, report_html(artefact, None if shown_as is None else Path(shown_as)))
+    write_atomic(path, report_html(artefact, None if shown_as is None else Path(shown_as), backend))
     return path

@@ -10,14 +10,18 @@ Meshes: the URDF's visual meshes when they fit a triangle budget, else the colli
 geometry posegen checks (the URDF's meshes and the config's shapes; for TALOS: 158,856
 visual triangles, 26,202 collision ones, which still look like the robot), else the
 convex hulls of that geometry, else those of the visual meshes: a robot whose visual
-meshes are heavy and whose URDF has no collision geometry is drawn all the same.
+meshes are heavy and whose URDF has no collision geometry is drawn all the same. Visual
+meshes whose binary STL files alone hold more than ``SKIP_FACTOR`` times the budget (their
+headers say how many triangles) are not loaded to be counted.
 """
 
 from __future__ import annotations
 
 import enum
 import logging
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+from pathlib import Path
 
 import coal
 import numpy as np
@@ -25,11 +29,13 @@ import pinocchio as pin
 import trimesh
 import viser
 
-from posegen.robot import FloatArray, Scene, robot_geometry
+from posegen.robot import FloatArray, Scene, resolve_path, robot_geometry
 
 LOG = logging.getLogger(__name__)
 
 TRIANGLE_BUDGET = 60_000  # above this the visual meshes make the page heavy: use the collision ones
+SKIP_FACTOR = 2  # visual meshes whose STL headers hold this many budgets are over it for sure (not loaded)
+STL_HEADER_BYTES = 80  # a binary STL: this header, a uint32 triangle count, 50 bytes per triangle
 POSE_TOLERANCE = 1e-4  # m, or quaternion component (~0.2 mrad): smaller changes of a joint's pose are not re-sent
 RGB = tuple[int, int, int]
 
@@ -126,14 +132,44 @@ def _geometry(scene: Scene, source: MeshSource) -> pin.GeometryModel:
     return geometry_model
 
 
+def _stl_triangles(path: Path) -> int:
+    """The triangles of a binary STL file (its header's count, checked against its size); 0 for any other file."""
+    try:
+        size = path.stat().st_size
+        with path.open("rb") as stream:
+            stream.seek(STL_HEADER_BYTES)
+            raw = stream.read(4)
+    except OSError:
+        return 0
+    count = int.from_bytes(raw, "little") if len(raw) == 4 else -1
+    return count if size == STL_HEADER_BYTES + 4 + 50 * count else 0
+
+
+def visual_triangles_at_least(scene: Scene) -> int:
+    """How many triangles the URDF's visual meshes hold at least: its binary STL files', read from their headers.
+
+    Example:
+        >>> visual_triangles_at_least(scene) > TRIANGLE_BUDGET  # heavy: drawn with the collision geometry
+
+    """
+    package_dirs = tuple(scene.files.package_dirs)
+    meshes = ET.fromstring(scene.urdf_xml).iterfind("link/visual/geometry/mesh")
+    return sum(_stl_triangles(resolve_path(m.get("filename", ""), package_dirs)) for m in meshes)
+
+
 def robot_meshes(scene: Scene, budget: int = TRIANGLE_BUDGET) -> RobotMeshes:
     """The meshes to draw a scene's robot with: the first of :class:`MeshSource` that has some within ``budget``.
 
     When none fits, the one with the fewest triangles (never an empty figure when any
-    geometry exists).
+    geometry exists). Visual meshes over ``SKIP_FACTOR`` budgets by their STL headers
+    alone are loaded only if they are that one.
     """
-    found: list[tuple[int, MeshSource, pin.GeometryModel]] = []
+    found: list[tuple[int, MeshSource, pin.GeometryModel | None]] = []
     for source in MeshSource:
+        heavy = visual_triangles_at_least(scene) if source == MeshSource.VISUAL else 0
+        if heavy > SKIP_FACTOR * budget:
+            found.append((heavy, source, None))  # over the budget for sure: loaded only if it is the lightest
+            continue
         geometry_model = _geometry(scene, source)
         triangles = sum(_triangle_count(g.geometry) for g in geometry_model.geometryObjects)
         if geometry_model.ngeoms and triangles <= budget:
@@ -143,7 +179,8 @@ def robot_meshes(scene: Scene, budget: int = TRIANGLE_BUDGET) -> RobotMeshes:
             found.append((triangles, source, geometry_model))
     if not found:
         return RobotMeshes(MeshSource.VISUAL, ())
-    _, source, geometry_model = min(found, key=lambda item: item[0])
+    _, source, lightest = min(found, key=lambda item: item[0])
+    geometry_model = _geometry(scene, source) if lightest is None else lightest
     chosen = RobotMeshes(source, _meshes_of(geometry_model))
     LOG.info("robot drawn with its %s meshes (%d triangles)", chosen.source.value, chosen.triangles)
     return chosen

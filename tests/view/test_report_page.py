@@ -86,3 +86,16 @@ def test_the_3d_overlay_is_inlined_and_the_page_fetches_nothing(report):
 def test_a_report_needs_a_calibration_folder(tmp_path):
     with pytest.raises(InputError, match="not a calibration folder"):
         write_report(tmp_path / "nothing")
+
+
+def test_figures_drawn_on_workers_make_the_same_page(calibration_folder, report, tmp_path):
+    import shutil
+
+    from posegen.parallel import ProcessBackend
+    from posegen.view import write_report_into
+
+    copy = tmp_path / "calibration"
+    shutil.copytree(calibration_folder.path, copy)
+    with ProcessBackend(2) as backend:
+        path = write_report_into(copy, shown_as=calibration_folder.path, backend=backend)
+    assert path.read_bytes() == report[0].read_bytes()  # the figures, the 3D page and the order of each

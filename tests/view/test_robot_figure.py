@@ -45,3 +45,43 @@ def test_a_robot_without_collision_geometry_is_drawn_within_the_budget():
     light = robot_meshes(human, budget=2000)
     assert light.meshes and light.triangles < drawn.triangles
     assert light.source in (MeshSource.COLLISION, MeshSource.COLLISION_HULLS, MeshSource.VISUAL_HULLS)
+
+
+def test_stl_headers_count_the_triangles_of_binary_files_only(tmp_path):
+    import trimesh
+
+    from posegen.view.robot_figure import _stl_triangles
+
+    sphere = trimesh.creation.icosphere(subdivisions=2)  # 320 faces
+    sphere.export(tmp_path / "binary.stl")
+    (tmp_path / "ascii.stl").write_text(trimesh.exchange.stl.export_stl_ascii(sphere))
+    truncated = (tmp_path / "binary.stl").read_bytes()[:-50]  # its count no longer matches its size
+    (tmp_path / "truncated.stl").write_bytes(truncated)
+    assert _stl_triangles(tmp_path / "binary.stl") == len(sphere.faces) == 320
+    assert _stl_triangles(tmp_path / "ascii.stl") == 0
+    assert _stl_triangles(tmp_path / "truncated.stl") == 0
+    assert _stl_triangles(tmp_path / "missing.stl") == 0
+
+
+def test_heavy_visual_meshes_are_not_loaded_and_the_choice_is_the_same(scene, monkeypatch):
+    from posegen.view import robot_figure
+
+    loaded: list[MeshSource] = []
+    geometry = robot_figure._geometry
+
+    def counting(scene_, source):  # type: ignore[no-untyped-def]
+        loaded.append(source)
+        return geometry(scene_, source)
+
+    monkeypatch.setattr(robot_figure, "_geometry", counting)
+    lower_bound = robot_figure.visual_triangles_at_least(scene)
+    assert lower_bound > robot_figure.SKIP_FACTOR * TRIANGLE_BUDGET  # TALOS's binary STL files
+    assert lower_bound <= robot_meshes(scene, budget=10**7).triangles  # a lower bound of what is drawn
+    for budget in (TRIANGLE_BUDGET, 10):  # the collision meshes fit; nothing fits: the lightest
+        loaded.clear()
+        chosen = robot_meshes(scene, budget=budget)
+        assert MeshSource.VISUAL not in loaded
+        monkeypatch.setattr(robot_figure, "SKIP_FACTOR", float("inf"))  # every source loaded and counted
+        every = robot_meshes(scene, budget=budget)
+        monkeypatch.setattr(robot_figure, "SKIP_FACTOR", 2)
+        assert (chosen.source, chosen.triangles) == (every.source, every.triangles)
