@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
             index = start_session(args.pool, args.output, settings, backend)
             _planned(args.output, index.batches[-1])
             return 0
-        report, missing = _report_writer()
+        report, missing = _report_writer(backend)
         if args.step == "add":
             from posegen.session import add_bag
 
@@ -136,8 +136,11 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report_writer() -> tuple[Any, Exception | None]:
-    """What writes each calibration's report.html into its staging folder; None and why without ``[view]``."""
+def _report_writer(backend: Any) -> tuple[Any, Exception | None]:
+    """What writes each calibration's report.html into its staging folder (its figures on ``backend``'s workers).
+
+    None, and why, without ``[view]``.
+    """
     from posegen.errors import ExtraError
 
     try:
@@ -146,7 +149,7 @@ def _report_writer() -> tuple[Any, Exception | None]:
         return None, exc
 
     def report(staging: Path, destination: Path) -> object:
-        return write_report_into(staging, None, shown_as=destination)
+        return write_report_into(staging, None, shown_as=destination, backend=backend)
 
     return report, None
 
