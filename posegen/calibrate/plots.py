@@ -19,7 +19,7 @@ import numpy as np
 
 from posegen.calibrate.record import DISPLAY
 from posegen.io import atomic_path, write_atomic
-from posegen.parallel import Backend, Job, job_name
+from posegen.parallel import Backend, Job, job_name, no_state
 from posegen.robot import FloatArray
 
 DPI = 110
@@ -127,10 +127,6 @@ def png_bytes(plot: Plot) -> bytes:
     return buffer.getvalue()
 
 
-def _no_state() -> None:
-    return None
-
-
 def _draw(state: None, plot: Plot) -> bytes:
     del state
     return png_bytes(plot)
@@ -142,7 +138,7 @@ def draw_all(plots: Sequence[Plot], backend: Backend | None = None) -> None:
         for plot in plots:
             DRAW[plot.kind](*plot.arguments, path=plot.path)
         return
-    job: Job[None, Plot, bytes] = Job(job_name("calibrate-plots"), _no_state, _draw)
+    job: Job[None, Plot, bytes] = Job(job_name("calibrate-plots"), no_state, _draw)
     for plot, data in zip(plots, backend.map(job, plots, len(plots)), strict=True):
         write_atomic(plot.path, data)  # written here: a worker may not see this folder
 

@@ -46,6 +46,16 @@ class Job(Generic[StateT, ItemT, ResultT]):
     run: Callable[[StateT, ItemT], ResultT]  # one item's result
 
 
+def no_state() -> None:
+    """The per-worker state of a job whose items carry everything its runs need: none.
+
+    Example:
+        >>> job = Job(job_name("plots"), no_state, draw_one)  # draw_one(state, item): module-level
+
+    """
+    return None
+
+
 def job_name(kind: str, *parts: Any) -> str:
     """A job's name: its kind and a hash of what its state depends on (JSON-able parts)."""
     from posegen import __version__

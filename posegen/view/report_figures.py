@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from posegen.calibrate import DISPLAY, ContactResidual, ContactSet, Posterior
-from posegen.parallel import Backend, Job, job_name
+from posegen.parallel import Backend, Job, job_name, no_state
 from posegen.robot import FloatArray
 
 COMPONENTS = ("height (mm)", "roll (deg)", "pitch (deg)")
@@ -131,10 +131,6 @@ class ReportFigure(enum.Enum):
     DISTRIBUTION = "distribution"
 
 
-def _no_state() -> None:
-    return None
-
-
 def _draw(state: None, item: tuple[ReportFigure, Sequence[ContactResidual], Posterior]) -> str:
     """One figure's data URI, from the contacts' residuals or the posterior (whichever it shows)."""
     del state
@@ -163,7 +159,7 @@ def figure_uris(
     if backend is None or backend.slots < 2:
         return {item[0]: _draw(None, item) for item in items}
     job: Job[None, tuple[ReportFigure, Sequence[ContactResidual], Posterior], str] = Job(
-        job_name("report-figures"), _no_state, _draw
+        job_name("report-figures"), no_state, _draw
     )
     return dict(zip(ReportFigure, backend.map(job, items, len(items)), strict=True))
 
