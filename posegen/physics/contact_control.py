@@ -38,6 +38,7 @@ import pinocchio as pin
 
 from posegen.io import Route, SegmentType
 from posegen.physics.nominal import NominalRobot
+from posegen.physics.shaping import beyond, saturate
 from posegen.robot import FloatArray
 
 K_FORCE = 3e-3  # m/s per N of normal force error
@@ -60,11 +61,6 @@ MAX_OFFSET_M = 0.05  # the search and the force control move the hand at most th
 K_HOLD_PER_S = 5.0  # the hand's pose error to its target (the plan plus the admittance's offset) -> twist
 POSE_BAND = np.array([5e-4, 5e-4, 5e-4, 2e-3, 2e-3, 2e-3])  # m, rad: a smaller pose error is left as it is
 HOLD_EVERY = 5  # control periods between two computations of the hands' pose errors
-
-
-def _beyond(values: FloatArray, band: FloatArray) -> FloatArray:
-    """Each value less its band toward zero; zero within the band."""
-    return np.asarray(np.sign(values) * np.maximum(np.abs(values) - band, 0.0))
 
 
 class Phase(enum.Enum):
@@ -234,7 +230,7 @@ class HandControl:
             frames = [self.robot.contact_frames[chain] for chain in self.hands]
             at = dict(zip(self.hands, self.robot.commanded_poses(commanded, frames), strict=True))
             self._errors = {
-                c: _beyond(self._error(planned[c], h.offset, at[c]), POSE_BAND) for c, h in self.hands.items()
+                c: beyond(self._error(planned[c], h.offset, at[c]), POSE_BAND) for c, h in self.hands.items()
             }
         for chain, hand in self.hands.items():
             contact = self._current(chain, t)
@@ -249,7 +245,7 @@ class HandControl:
             self.wrenches[chain] = wrench
             rate = self._twist(chain, contact, t, wrench, hand)
             hand.offset += rate * dt_s
-            hand.offset[:3] = np.minimum(np.maximum(hand.offset[:3], -MAX_OFFSET_M), MAX_OFFSET_M)
+            hand.offset[:3] = saturate(hand.offset[:3], MAX_OFFSET_M)
             out[chain] = rate + (K_HOLD_PER_S * self._errors[chain] if hold else 0.0)
         return out
 
@@ -297,7 +293,7 @@ class HandControl:
             return twist
         twist[2] = min(max(K_FORCE * error, -MAX_SPEED_M_S), MAX_SPEED_M_S)
         torque = np.where(np.abs(wrench[3:5]) > TORQUE_BAND_NM, wrench[3:5], 0.0)
-        turn = np.minimum(np.maximum(K_TORQUE * torque, -MAX_TURN_RAD_S), MAX_TURN_RAD_S)
+        turn = saturate(K_TORQUE * torque, MAX_TURN_RAD_S)
         blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD
         twist[3:5] = np.where(blocked & (np.sign(turn) == np.sign(offset[3:5])), 0.0, turn)
         return twist

@@ -19,6 +19,7 @@ import numpy as np
 
 from posegen.model import ChainModel
 from posegen.physics.nominal import NominalRobot
+from posegen.physics.shaping import clamp
 from posegen.robot import FloatArray, Scene
 
 DAMPING = 1e-4  # of the least-squares solves (m^2: a few centimetres of damping near singularities)
@@ -134,5 +135,5 @@ class JointOffsets:
             self.dq[self.upper] += dt_s * self._solve(frames, self.upper, twist, decay)
         commanded = planned + self.dq
         self._at_limit = self._movable & ((commanded < self._lower) | (commanded > self._upper))
-        self.dq = np.where(self._movable, np.minimum(np.maximum(commanded, self._lower), self._upper) - planned, 0.0)
+        self.dq = np.where(self._movable, clamp(commanded, self._lower, self._upper) - planned, 0.0)
         return self.dq

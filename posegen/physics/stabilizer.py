@@ -65,6 +65,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posegen.physics.nominal import GRAVITY, NominalRobot
+from posegen.physics.shaping import beyond, saturate
 from posegen.robot import FloatArray, Scene, convex_hull_clockwise
 
 K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
@@ -176,11 +177,6 @@ def clamp_into(hull: Hull, point: FloatArray, margin_m: float) -> FloatArray:
     return np.asarray(centre + low * (point - centre))
 
 
-def _beyond(values: FloatArray, band: FloatArray | float) -> FloatArray:
-    """Each value less its band toward zero; zero within the band (a deadband: the soles rest near equilibrium)."""
-    return np.asarray(np.sign(values) * np.maximum(np.abs(values) - band, 0.0))
-
-
 def tilt_error(measured: FloatArray, planned: FloatArray) -> FloatArray:
     """(2,) rad: the roll and pitch (world x, y) that turn the planned orientation (3, 3) into the measured one."""
     error = measured @ planned.T
@@ -265,16 +261,12 @@ class Stabilizer:
             return [np.zeros(6) for _ in robot.soles]
         self.zmp_desired, shares = self._within_torques(total, zmp, self.zmp_desired)
         shift = np.zeros(3)  # the soles move back: the base moves on
-        shift[2] = K_HEIGHT_PER_S * float(
-            _beyond(np.array([robot.q[2] - planned.pelvis_z]), np.array([HEIGHT_BAND_M]))[0]
-        )
-        shift[:2] = -np.minimum(
-            np.maximum(K_COM_PER_S * _beyond(reference - robot.com()[:2] - self.com_bias, COM_BAND_M), -MAX_COM_SPEED),
-            MAX_COM_SPEED,
-        )
+        shift[2] = K_HEIGHT_PER_S * float(beyond(float(robot.q[2] - planned.pelvis_z), HEIGHT_BAND_M))
+        com_error = beyond(reference - robot.com()[:2] - self.com_bias, COM_BAND_M)  # (2,) m
+        shift[:2] = -saturate(K_COM_PER_S * com_error, MAX_COM_SPEED)
         level = np.zeros(3)  # turning both soles by the base's tilt, relative to it, turns the base back
-        tilt = _beyond(tilt_error(*attitude), ATTITUDE_BAND_RAD)
-        level[:2] = np.minimum(np.maximum(K_ATTITUDE_PER_S * tilt, -MAX_TURN_RAD_S), MAX_TURN_RAD_S)
+        tilt = beyond(tilt_error(*attitude), ATTITUDE_BAND_RAD)
+        level[:2] = saturate(K_ATTITUDE_PER_S * tilt, MAX_TURN_RAD_S)
         return [
             _sole_twist(pose, wrench, share, shift, level, float(total[2]))
             for pose, wrench, share in zip(robot.sole_poses, soles.wrenches, shares, strict=True)
@@ -321,10 +313,10 @@ def _sole_twist(
     ``pose`` (4, 4) where the nominal model puts it; ``wrench`` and ``share`` (6,) in its frame;
     ``load`` the soles' total vertical force, N.
     """
-    excess = _beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
+    excess = beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
     if wrench[2] < LIGHT_SHARE * load:
         excess[3:] = 0.0
     local = np.concatenate([K_FOOT_SHEAR * excess[:2], K_FOOT_FORCE * excess[2:3], K_FOOT_TORQUE * excess[3:]])
-    local = np.minimum(np.maximum(local, -MAX_FOOT_SPEED), MAX_FOOT_SPEED)
+    local = saturate(local, MAX_FOOT_SPEED)
     rotation = pose[:3, :3]
     return np.concatenate([rotation @ local[:3] + shift, rotation @ local[3:] + level])
