@@ -13,6 +13,7 @@ from posegen.cli.progress import ProgressBar
 
 if TYPE_CHECKING:
     from posegen.calibrate import Calibrated
+    from posegen.parallel import Backend
 
 NAME = "calibrate"
 HELP = "identify the kinematics from recorded contacts"
@@ -56,9 +57,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Calibrate, write the calibration folder and its HTML report, and print the files written first."""
+    from posegen.parallel import open_backend
+
+    # the workers' imports (the report's figures are drawn there too) start first, beside this process's own:
+    # a module an extra lacks is skipped there, and named here when the report needs it
+    preload = ("posegen.calibrate.model_selection", "matplotlib.pyplot", "posegen.view.report_figures")
+    with ProgressBar(args.quiet) as bar, open_backend(args.workers, preload=preload) as backend:
+        calibrated, missing = _calibrate(args, bar, backend)
+    _print(calibrated, args.output, missing)
+    return 0
+
+
+def _calibrate(args: argparse.Namespace, bar: ProgressBar, backend: Backend) -> tuple[Calibrated, Exception | None]:
+    """Calibrate on ``backend`` and write the folder (with its report unless the viewer's extra is missing)."""
     from posegen.calibrate import Settings, calibrate_files
     from posegen.errors import ExtraError
-    from posegen.parallel import open_backend
 
     try:
         from posegen.view import write_report_into
@@ -76,20 +89,12 @@ def run(args: argparse.Namespace) -> int:
     )
     config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
 
-    preload: tuple[str, ...] = ("posegen.calibrate.model_selection", "matplotlib.pyplot")  # the workers' imports
-    if missing is None:
-        preload += ("posegen.view.report_figures",)  # the report's figures are drawn on the workers too
-    with ProgressBar(args.quiet) as bar, open_backend(args.workers, preload=preload) as backend:
+    def report_html(folder: Path) -> object:
+        return write_report_into(folder, args.config, shown_as=args.output, backend=backend)
 
-        def report_html(folder: Path) -> object:
-            return write_report_into(folder, args.config, shown_as=args.output, backend=backend)
-
-        finish = None if missing else report_html
-        calibrated = calibrate_files(
-            args.measurements, args.validate, args.output, settings, config, bar, backend, finish
-        )
-    _print(calibrated, args.output, missing)
-    return 0
+    finish = None if missing else report_html
+    calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar, backend, finish)
+    return calibrated, missing
 
 
 def _print(calibrated: Calibrated, output: str, missing: Exception | None) -> None:

@@ -225,3 +225,20 @@ def test_preloaded_modules_are_imported_before_a_worker_sets_up(tmp_path):
     result = _run_script(tmp_path, body)
     assert result.returncode == 0, result.stderr
     assert result.stdout.splitlines() == ["[False, False, False, False]", "[True, True, True, True]"]
+
+
+def test_a_preloaded_module_that_cannot_be_imported_is_skipped(tmp_path):
+    """A preload names modules an extra may lack (the report's figures): the workers start and run without them."""
+    (tmp_path / "lacks_an_extra.py").write_text("raise ImportError('needs an extra')\n")
+    body = (
+        "import functools, sys\n"
+        "def seen(name, item):\n"
+        "    return name in sys.modules, item * item\n"
+        "if __name__ == '__main__':\n"
+        "    job = Job(name='seen', setup=functools.partial(str, 'tabnanny'), run=seen)\n"
+        "    with ProcessBackend(2, ('lacks_an_extra', 'tabnanny')) as backend:\n"
+        "        print(list(backend.map(job, range(4))))\n"
+    )
+    result = _run_script(tmp_path, body)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines() == ["[(True, 0), (True, 1), (True, 4), (True, 9)]"]
