@@ -25,9 +25,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
-from posegen.model import NOISE_FLOOR, CalibrationModel, Kind, Observations, Spec, row_mask
+from posegen.model import NOISE_FLOOR, CalibrationModel, Evaluations, Kind, Observations, Spec, row_mask
 from posegen.robot import FloatArray
 
 FLOOR_NOISE_FLOOR = (1e-5, 1e-5, 1e-5, float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)), float(np.deg2rad(1e-3)))
@@ -120,8 +119,16 @@ def _problem(
     noise: Noise,
     fixed: FloatArray,
     weights: FloatArray,
+    evaluations: Evaluations | None = None,
 ) -> tuple[Callable[[FloatArray], FloatArray], Callable[[FloatArray], FloatArray]]:
-    """Whitened residual and Jacobian of the free deviations (data rows, then prior rows)."""
+    """Whitened residual and Jacobian of the free deviations (data rows, then prior rows).
+
+    ``evaluations``: the model's evaluations at ``observations`` to ask (its remembered
+    ones reused); None: the model is evaluated at each call.
+    """
+    if evaluations is not None and evaluations.observations is not observations:
+        raise ValueError("evaluations are of other observations than the ones fitted")
+    evaluate = evaluations if evaluations is not None else Evaluations(model, observations, remembered=0)
     free = np.array(spec.free, dtype=int)
     sd = spec.prior_sd[free]
     prior = np.isfinite(sd)
@@ -143,11 +150,11 @@ def _problem(
         return np.concatenate(parts)
 
     def fun(values: FloatArray) -> FloatArray:
-        out = model.evaluate(x_of(values), observations, floor=spec.floor)
+        out = evaluate.evaluate(x_of(values), floor=spec.floor)
         return stack(out.contact, out.floor, values)
 
     def jac(values: FloatArray) -> FloatArray:
-        out = model.evaluate(x_of(values), observations, jacobian=True, floor=spec.floor)
+        out = evaluate.evaluate(x_of(values), jacobian=True, floor=spec.floor)
         rows = [project((out.contact_jacobian / sigma_c[None, :, None]) * root[:, :, None]).reshape(-1, len(free))]
         if spec.floor:
             whitened = (out.floor_jacobian / sigma_f[None, :, None]) * root[:, :, None]
@@ -181,6 +188,7 @@ def fit(
     start: FloatArray,
     max_iterations: int = 50,
     weights: FloatArray | None = None,
+    evaluations: Evaluations | None = None,
 ) -> tuple[FloatArray, int]:
     """Deviations (nx,) of the MAP estimate at a given noise, and the Jacobian evaluations used.
 
@@ -192,12 +200,15 @@ def fit(
         start: (nx,) starting parameters; directions that are not free keep their values.
         max_iterations: Cap on Levenberg-Marquardt iterations.
         weights: (n,) weight of each posture (robust screening); None: all 1.
+        evaluations: The model's evaluations at ``observations`` (:class:`Evaluations`),
+            shared with the fits and noise estimates before and after this one; None:
+            evaluated afresh.
 
     """
     free = np.array(spec.free, dtype=int)
     fixed = model.delta_of(start)
     w = np.ones(len(observations)) if weights is None else weights
-    fun, jac = _problem(model, observations, spec, noise, fixed, w)
+    fun, jac = _problem(model, observations, spec, noise, fixed, w, evaluations)
     values, iterations = levenberg_marquardt(fun, jac, fixed[free], max_iterations)
     delta = fixed.copy()
     delta[free] = values
@@ -219,75 +230,6 @@ def frozen_jacobian(
     return per_posture, np.diag(1.0 / np.where(prior, sd, 1.0))[prior]
 
 
-def refit_frozen(
-    model: CalibrationModel,
-    observations: Observations,
-    spec: Spec,
-    noise: Noise,
-    start: FloatArray,
-    jacobian: tuple[FloatArray, FloatArray],
-    iterations: int,
-) -> FloatArray:
-    """Deviations (nx,) of the MAP fit by Gauss-Newton steps with a frozen Jacobian (chord method).
-
-    Each step uses the true residuals of ``observations`` and the Jacobian of another fit
-    close by (the fit on all rows, for a fold of it): one factorisation, then one
-    residual evaluation per step. ``jacobian`` holds these postures' rows and the prior rows.
-    """
-    every = [range(len(observations))]
-    return refit_frozen_folds(model, observations, spec, noise, start, jacobian, every, iterations)[0]
-
-
-def refit_frozen_folds(
-    model: CalibrationModel,
-    observations: Observations,
-    spec: Spec,
-    noise: Noise,
-    start: FloatArray,
-    jacobian: tuple[FloatArray, FloatArray],
-    folds: Sequence[Sequence[int]],
-    iterations: int,
-) -> FloatArray:
-    """:func:`refit_frozen` of F folds at once, each on its own rows of ``observations``. Shape (F, nx).
-
-    Every fold takes its steps from ``start`` with its rows of the frozen Jacobian
-    ``jacobian`` (of all the observations' postures, and the prior rows); the residuals of
-    every fold's parameters are evaluated together (:meth:`CalibrationModel.evaluate_batch`),
-    the same numbers as one fold at a time.
-
-    Example:
-        >>> deltas = refit_frozen_folds(model, observations, spec, noise, x, jacobian, [f.train for f in folds], 3)
-
-    """
-    per_posture, prior_rows = jacobian
-    f = per_posture.shape[2]
-    free = np.array(spec.free, dtype=int)
-    fixed = model.delta_of(start)
-    sd = spec.prior_sd[free]
-    prior = np.isfinite(sd)
-    sigma = np.array(noise.contact + noise.floor)[: 9 if spec.floor else 3]
-    rows = [np.asarray(list(fold), dtype=int) for fold in folds]
-    if not rows:
-        return np.zeros((0, model.size))
-    matrices, factors = [], []
-    for mine in rows:
-        # in the order of the residual: every contact row, then every floor row, then the prior
-        matrix = np.vstack([per_posture[mine, :3].reshape(-1, f), per_posture[mine, 3:].reshape(-1, f), prior_rows])
-        matrices.append(matrix)
-        factors.append(scipy.linalg.cho_factor(matrix.T @ matrix))
-    deltas = np.tile(fixed, (len(rows), 1))
-    for _ in range(iterations):
-        contact, floor = model.evaluate_batch(model.nominal() + deltas @ model.basis.T, observations, spec.floor)
-        whitened = np.concatenate([contact, floor], axis=2) / sigma  # (F, n, 3 or 9)
-        for k, mine in enumerate(rows):
-            values = deltas[k, free]
-            residual = np.concatenate(
-                [whitened[k, mine, :3].ravel(), whitened[k, mine, 3:].ravel(), values[prior] / sd[prior]]
-            )
-            deltas[k, free] = values - scipy.linalg.cho_solve(factors[k], matrices[k].T @ residual)
-    return deltas
-
-
 def held_at_urdf(model: CalibrationModel, spec: Spec, x: FloatArray) -> FloatArray:
     """``x`` with every direction the spec does not free, except planes and floor constants, at the URDF."""
     delta = model.delta_of(x)
@@ -299,11 +241,16 @@ def held_at_urdf(model: CalibrationModel, spec: Spec, x: FloatArray) -> FloatArr
 
 
 def _hat_terms(
-    model: CalibrationModel, observations: Observations, spec: Spec, noise: Noise, delta: FloatArray
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    delta: FloatArray,
+    evaluations: Evaluations | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Whitened data Jacobian (m, f), residuals, leverage of each data row (m,), posterior covariance (f, f)."""
     free = np.array(spec.free, dtype=int)
-    fun, jac = _problem(model, observations, spec, noise, delta, np.ones(len(observations)))
+    fun, jac = _problem(model, observations, spec, noise, delta, np.ones(len(observations)), evaluations)
     values = delta[free]
     full = jac(values)
     n_data = len(observations) * (9 if spec.floor else 3)
@@ -315,10 +262,18 @@ def _hat_terms(
 
 
 def estimate_noise(
-    model: CalibrationModel, observations: Observations, spec: Spec, noise: Noise, delta: FloatArray
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    delta: FloatArray,
+    evaluations: Evaluations | None = None,
 ) -> Noise:
-    """Noise per component: residual RMS corrected for the fitted degrees of freedom."""
-    _, whitened, leverage, _ = _hat_terms(model, observations, spec, noise, delta)
+    """Noise per component: residual RMS corrected for the fitted degrees of freedom.
+
+    ``evaluations``: as :func:`fit`'s (the fit that ended at ``delta`` evaluated its residuals there).
+    """
+    _, whitened, leverage, _ = _hat_terms(model, observations, spec, noise, delta, evaluations)
     n = len(observations)
     contact = whitened[: 3 * n].reshape(n, 3) * np.array(noise.contact)
     dof = leverage[: 3 * n].reshape(n, 3).sum(axis=0)
@@ -354,16 +309,17 @@ def estimate(
     iterations = 0
     points = []
     converged = True
+    evaluations = Evaluations(model, observations)  # each fit ends where its noise is estimated, the next one starts
     for k in range(rounds + 1):
         begin = _warm_start(model, spec, x, warm[k]) if k < len(warm) else x
-        delta, used = fit(model, observations, spec, noise, begin, max_iterations)
+        delta, used = fit(model, observations, spec, noise, begin, max_iterations, evaluations=evaluations)
         iterations += used
         converged = converged and used < max_iterations
         x = model.x_of(delta)
         points.append(x)
         if k < rounds:
-            noise = estimate_noise(model, observations, spec, noise, delta)
-    _, _, _, covariance = _hat_terms(model, observations, spec, noise, delta)
+            noise = estimate_noise(model, observations, spec, noise, delta, evaluations)
+    _, _, _, covariance = _hat_terms(model, observations, spec, noise, delta, evaluations)
     std = np.zeros(model.size)
     std[list(spec.free)] = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
     return Estimate(x, delta, noise, iterations, std, tuple(points) if converged else ())

@@ -50,9 +50,9 @@ from posegen.calibrate.estimation import (
     frozen_jacobian,
     held_at_urdf,
     plane_spec,
-    refit_frozen_folds,
 )
 from posegen.calibrate.folds import Fold
+from posegen.calibrate.frozen_refits import refit_frozen_folds
 from posegen.calibrate.scoring import CvResult, implausible, one_standard_error, score_folds
 from posegen.errors import InfeasibleError
 from posegen.model import CalibrationModel, Kind, Observations, Spec, candidate_spec, masked, spec_for_rows, start_point

@@ -16,6 +16,7 @@ from posegen.model.calibration_model import CalibrationModel, Evaluation, Observ
 from posegen.model.contact_model import ContactModel, Contacts, planned_kinds
 from posegen.model.contact_rows import masked, row_counts, row_mask
 from posegen.model.design import RIDGE, SINGULAR, Design, build_design
+from posegen.model.evaluations import Evaluations
 from posegen.model.floor_model import FLOOR_FIELDS, SESSION_FIELDS, FloorModel
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
 from posegen.model.kinds import Direction, Kind, Part, kind_basis
@@ -84,6 +85,7 @@ __all__ = [
     "Design",
     "Direction",
     "Evaluation",
+    "Evaluations",
     "FloorModel",
     "Group",
     "Kind",

@@ -1,9 +1,10 @@
-"""Estimation: the frozen-Jacobian fold refit is a Gauss-Newton step on the same residual."""
+"""Frozen refits: the frozen-Jacobian fold refit is a Gauss-Newton step on the same residual."""
 
 import numpy as np
 import pytest
 
-from posegen.calibrate.estimation import Noise, _problem, frozen_jacobian, refit_frozen, refit_frozen_folds
+from posegen.calibrate.estimation import Noise, _problem, frozen_jacobian
+from posegen.calibrate.frozen_refits import refit_frozen, refit_frozen_folds
 from posegen.model import DEFAULT_FLOOR_NOISE, DEFAULT_NOISE, CalibrationModel, Contacts, candidate_spec
 from posegen.robot import CandidateConfig, PriorConfig
 
