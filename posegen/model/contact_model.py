@@ -312,26 +312,27 @@ class ContactModel:
         plane_inv = rigid_inverses(plane)
         n = joints.shape[0]
         frames = plane_inv @ (state.prefixes[-1] @ tip)  # (n, 4, 4) tip frames in the plane frame
-        measured = kind.measure_jacobian
         res = kind.measure(frames, model.config)
         if not jacobian:
             return res, np.zeros((n, 3, 0)), np.zeros((n, 3, 0))
         jac = np.zeros((n, 3, self.size))
         w = plane_inv[2]  # (4,) third row: the measurement only reads row 2 of the frame
         d_place, d_joint = row_derivatives(state, plane_inv[2:3], tip)
-        jac[:, :, self._chain_columns[model.chain].ravel()] = measured(frames[:, 2], d_place[:, :, 0])
+        # contact parameters: tip = C_nom Off(contact), the kind's offset (flush: z, roll, pitch; point: x, y, z)
+        offset = kind.tip_offset_derivatives(contact)  # (m, 4, 4)
+        u = w @ state.prefixes[-1]  # (n, 4)
+        d_tip = np.swapaxes(u @ (model.tip_nominal(kind) @ offset), 0, 1)  # (n, m, 4)
+        # plane: frames = P^-1 T -> d frames = -P^-1 dP frames
+        d_plane = -((w @ offset_derivatives(theta[self.plane_columns(session)]))[None] @ frames)  # (n, 3, 4)
+        # the kind measures each parameter's derivative on its own: one call for all of them
+        parts = [d_place[:, :, 0], d_tip, d_plane, *([d_joint[:, :, 0]] if by_joint else [])]
+        ends = np.cumsum([part.shape[1] for part in parts])
+        measured = np.split(kind.measure_jacobian(frames[:, 2], np.concatenate(parts, axis=1)), ends[:-1], axis=2)
+        jac[:, :, self._chain_columns[model.chain].ravel()] = measured[0]
+        jac[:, :, tip_columns] += measured[1]
+        jac[:, :, self.plane_columns(session)] += measured[2]
         d_joints = None
         if by_joint:
             d_joints = np.zeros((n, 3, joints.shape[1]))
-            d_joints[:, :, model.joint_indices] = measured(frames[:, 2], d_joint[:, :, 0])
-        prefix_last = state.prefixes[-1]
-        # contact parameters: tip = C_nom Off(contact), the kind's offset (flush: z, roll, pitch; point: x, y, z)
-        offset = kind.tip_offset_derivatives(contact)  # (m, 4, 4)
-        u = w @ prefix_last  # (n, 4)
-        d_row = np.swapaxes(u @ (model.tip_nominal(kind) @ offset), 0, 1)  # (n, m, 4)
-        jac[:, :, tip_columns] += measured(frames[:, 2], d_row)
-        # plane: frames = P^-1 T -> d frames = -P^-1 dP frames
-        d_plane = offset_derivatives(theta[self.plane_columns(session)])
-        d_row = -((w @ d_plane)[None] @ frames)  # (n, 3, 4)
-        jac[:, :, self.plane_columns(session)] += measured(frames[:, 2], d_row)
+            d_joints[:, :, model.joint_indices] = measured[3]
         return res, jac, (d_joints if d_joints is not None else np.zeros((n, 3, 0)))

@@ -122,7 +122,11 @@ class ContactKind(abc.ABC):
 
     @abc.abstractmethod
     def measure_jacobian(self, row: FloatArray, d_row: FloatArray) -> FloatArray:
-        """Derivatives (n, 3, p) of :meth:`measure` given the frames' third rows (n, 4) and theirs (n, p, 4)."""
+        """Derivatives (n, 3, p) of :meth:`measure` given the frames' third rows (n, 4) and theirs (n, p, 4).
+
+        Column by column: a parameter's derivatives depend on its own column of ``d_row``
+        alone (callers measure the derivatives of several parameter sets in one call).
+        """
 
 
 def height_rows(d_row: FloatArray) -> FloatArray:
