@@ -89,6 +89,7 @@ def __getattr__(name: str) -> Any:
         return getattr(bag_workflow, name)
     raise AttributeError(f"module 'posegen.calibrate' has no attribute {name!r}")
 
+
 __all__ = [
     "CALIBRATION_FILE",
     "CALIBRATION_FORMAT",

@@ -126,9 +126,7 @@ def _problem(
     ``evaluations``: the model's evaluations at ``observations`` to ask (its remembered
     ones reused); None: the model is evaluated at each call.
     """
-    if evaluations is not None and evaluations.observations is not observations:
-        raise ValueError("evaluations are of other observations than the ones fitted")
-    evaluate = evaluations if evaluations is not None else Evaluations(model, observations, remembered=0)
+    evaluate = _evaluations_of(model, observations, evaluations)
     free = np.array(spec.free, dtype=int)
     sd = spec.prior_sd[free]
     prior = np.isfinite(sd)
@@ -163,6 +161,22 @@ def _problem(
         return np.vstack(rows)
 
     return fun, jac
+
+
+def _evaluations_of(
+    model: CalibrationModel, observations: Observations, evaluations: Evaluations | None
+) -> Evaluations:
+    """``evaluations`` (checked to be of ``observations``), or the model evaluated afresh at each call (None).
+
+    Raises:
+        ValueError: ``evaluations`` are of other observations.
+
+    """
+    if evaluations is None:
+        return Evaluations(model, observations, remembered=0)
+    if evaluations.observations is not observations:
+        raise ValueError("evaluations are of other observations than the ones given")
+    return evaluations
 
 
 def projection(basis: FloatArray) -> Callable[[FloatArray], FloatArray]:
@@ -216,11 +230,19 @@ def fit(
 
 
 def frozen_jacobian(
-    model: CalibrationModel, observations: Observations, spec: Spec, noise: Noise, x: FloatArray
+    model: CalibrationModel,
+    observations: Observations,
+    spec: Spec,
+    noise: Noise,
+    x: FloatArray,
+    evaluations: Evaluations | None = None,
 ) -> tuple[FloatArray, FloatArray]:
-    """Whitened Jacobian of the free deviations at ``x``: per posture (n, 3 or 9, f), and the prior rows (q, f)."""
+    """Whitened Jacobian of the free deviations at ``x``: per posture (n, 3 or 9, f), and the prior rows (q, f).
+
+    ``evaluations``: as :func:`fit`'s (the fit that ended at ``x`` evaluated the model there).
+    """
     free = list(spec.free)
-    out = model.evaluate(x, observations, jacobian=True, floor=spec.floor)
+    out = _evaluations_of(model, observations, evaluations).evaluate(x, jacobian=True, floor=spec.floor)
     blocks = [out.contact_jacobian / np.array(noise.contact)[None, :, None]]
     if spec.floor:
         blocks.append(out.floor_jacobian / np.array(noise.floor)[None, :, None])
@@ -297,19 +319,23 @@ def estimate(
     rounds: int = 2,
     max_iterations: int = 50,
     warm: Sequence[FloatArray] = (),
+    evaluations: Evaluations | None = None,
 ) -> Estimate:
     """MAP estimate with the noise re-estimated from its own residuals ``rounds`` times.
 
     ``warm``: for each fit, parameters (nx,) to start its free directions from (the same
     fit's result on nearly the same rows); the others start from the previous fit (the
     first from ``start``). Each fit converges to the same optimum from either start.
+    ``evaluations``: the model's at ``observations``, shared with what follows the estimate
+    (its Jacobian at the estimate); None: the estimate's own.
     """
     x = start
     delta = model.delta_of(start)
     iterations = 0
     points = []
     converged = True
-    evaluations = Evaluations(model, observations)  # each fit ends where its noise is estimated, the next one starts
+    # each fit ends where its noise is estimated and the next one starts
+    evaluations = evaluations if evaluations is not None else Evaluations(model, observations)
     for k in range(rounds + 1):
         begin = _warm_start(model, spec, x, warm[k]) if k < len(warm) else x
         delta, used = fit(model, observations, spec, noise, begin, max_iterations, evaluations=evaluations)

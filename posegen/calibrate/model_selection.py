@@ -55,7 +55,17 @@ from posegen.calibrate.folds import Fold
 from posegen.calibrate.frozen_refits import refit_frozen_folds
 from posegen.calibrate.scoring import CvResult, implausible, one_standard_error, score_folds
 from posegen.errors import InfeasibleError
-from posegen.model import CalibrationModel, Kind, Observations, Spec, candidate_spec, masked, spec_for_rows, start_point
+from posegen.model import (
+    CalibrationModel,
+    Evaluations,
+    Kind,
+    Observations,
+    Spec,
+    candidate_spec,
+    masked,
+    spec_for_rows,
+    start_point,
+)
 from posegen.parallel import Backend, Job, as_backend
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray
@@ -110,16 +120,18 @@ def cross_validate(
     full: Estimate,
     folds: Sequence[Fold],
     iterations: int,
+    evaluations: Evaluations | None = None,
 ) -> list[FloatArray]:
     """Predicted contact residuals (t, 3) of each fold's held-out rows, NaN where a contact measures nothing.
 
     A region fold's fit takes ``iterations`` Gauss-Newton steps from the fit on all rows,
     with that fit's Jacobian frozen; a session fold (whose plane is unknown in training)
-    takes Levenberg-Marquardt steps.
+    takes Levenberg-Marquardt steps. ``evaluations``: the model's at ``observations``, as
+    the fit on all rows left them (its Jacobian at ``full.x``).
     """
     if not folds:
         return []
-    jacobian = frozen_jacobian(model, observations, spec, full.noise, full.x)
+    jacobian = frozen_jacobian(model, observations, spec, full.noise, full.x, evaluations)
     frozen = [k for k, fold in enumerate(folds) if _fold_spec(model, spec, observations, fold).free == spec.free]
     deltas = dict(
         zip(
@@ -179,7 +191,10 @@ def score_pair(
     sessions = set(observations.contacts.sessions)
     spec = spec_for_rows(model, candidate_spec(model, candidate, config.prior, scale), sessions)
     warm = problem.warm.get((candidate.name, scale), ())
-    full = estimate(model, observations, spec, problem.noise, held_at_urdf(model, spec, start), warm=warm)
+    evaluations = Evaluations(model, observations)  # the fit's last Jacobian is the folds' frozen one
+    full = estimate(
+        model, observations, spec, problem.noise, held_at_urdf(model, spec, start), warm=warm, evaluations=evaluations
+    )
     largest = largest_deviations(model, full.delta)
     negative = sorted(g for g, c in model.compliances(full.x).items() if g in candidate.compliance and c < 0.0)
     if largest[0] > config.plausible_mm or largest[1] > config.plausible_deg or negative:
@@ -191,7 +206,7 @@ def score_pair(
             negative,
         )
         return implausible(candidate.name, scale, len(spec.free), full.noise, largest, problem.folds), full
-    predicted = cross_validate(model, observations, spec, full, problem.folds, config.fold_iterations)
+    predicted = cross_validate(model, observations, spec, full, problem.folds, config.fold_iterations, evaluations)
     return score_folds(candidate.name, scale, len(spec.free), problem.folds, predicted, full.noise, largest), full
 
 

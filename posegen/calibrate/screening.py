@@ -27,7 +27,7 @@ import numpy as np
 import scipy.special
 
 from posegen.calibrate.estimation import Noise, fit, frozen_jacobian
-from posegen.model import CalibrationModel, Observations, Spec, Unit, row_counts, row_mask
+from posegen.model import CalibrationModel, Evaluations, Observations, Spec, Unit, row_counts, row_mask
 from posegen.robot import CalibrationConfig, FloatArray
 
 CAUCHY_SCALE = 2.385  # Cauchy constant of 95 % efficiency, per degree of freedom of a row
@@ -199,13 +199,15 @@ def robust_residuals(
     measured = np.hstack([row_mask(observations.contacts.kinds), np.ones((n, comps - 3), dtype=bool)])  # (n, comps)
     studentised = np.zeros(n)
     robust: FloatArray | None = None  # the first fit is unweighted: its mean square needs no correction
+    evaluations = Evaluations(model, observations)  # each fit ends where the residuals are read, the next starts
     for _ in range(ROBUST_ITERATIONS):
-        delta, _ = fit(model, observations, spec, noise, x, weights=weights)
+        delta, _ = fit(model, observations, spec, noise, x, weights=weights, evaluations=evaluations)
         x = model.x_of(delta)
-        out = model.evaluate(x, observations, floor=spec.floor)
+        out = evaluations.evaluate(x, floor=spec.floor)
         raw = np.hstack([out.contact, out.floor]) if spec.floor else out.contact  # (n, comps)
         sigma = np.array(noise.contact + noise.floor)[:comps]
-        variance = residual_variance(frozen_jacobian(model, observations, spec, noise, x), weights)  # (n, comps)
+        jacobian = frozen_jacobian(model, observations, spec, noise, x, evaluations)
+        variance = residual_variance(jacobian, weights)  # (n, comps)
         scaled = (raw / sigma) ** 2 / variance  # (n, comps)
         studentised = np.sqrt(scaled.sum(axis=1))
         # noise of the well-fitting rows: weighted, leverage-corrected mean square over the measured rows, and

@@ -73,13 +73,6 @@ def _calibrate(args: argparse.Namespace, bar: ProgressBar, backend: Backend) -> 
     from posegen.calibrate import Settings, calibrate_files
     from posegen.errors import ExtraError
 
-    try:
-        from posegen.view import write_report_into
-    except ExtraError as exc:  # the calibration needs no viewer: only its HTML report does
-        missing: ExtraError | None = exc
-    else:
-        missing = None
-
     settings = Settings(
         prior_scale=args.prior_scale,
         candidates=tuple(args.candidates),
@@ -88,13 +81,21 @@ def _calibrate(args: argparse.Namespace, bar: ProgressBar, backend: Backend) -> 
         seed=args.seed,
     )
     config = args.config or (None if _any_posegen_file(args.measurements) else DEFAULT_CONFIG)
+    missing: list[ExtraError] = []
 
     def report_html(folder: Path) -> object:
+        # the viewer is imported only now, while the workers draw the plots: the calibration needs none of it
+        try:
+            from posegen.view import write_report_into
+        except ExtraError as exc:  # no viewer: the folder goes without its report, and the command says so
+            missing.append(exc)
+            return None
         return write_report_into(folder, args.config, shown_as=args.output, backend=backend)
 
-    finish = None if missing else report_html
-    calibrated = calibrate_files(args.measurements, args.validate, args.output, settings, config, bar, backend, finish)
-    return calibrated, missing
+    calibrated = calibrate_files(
+        args.measurements, args.validate, args.output, settings, config, bar, backend, report_html
+    )
+    return calibrated, (missing[0] if missing else None)
 
 
 def _print(calibrated: Calibrated, output: str, missing: Exception | None) -> None:

@@ -78,5 +78,5 @@ def test_a_fit_with_remembered_evaluations_is_the_same_fit(model, observations, 
     for mine, fresh in ((shared_estimate.x, alone.x), (shared_estimate.std, alone.std)):
         assert np.array_equal(mine, fresh)
     assert shared_estimate.noise == alone.noise
-    with pytest.raises(ValueError, match="other observations"):
+    with pytest.raises(ValueError, match="other observations than the ones given"):
         fit(model, observations.subset(range(4)), spec, noise, start, evaluations=shared)
