@@ -96,6 +96,7 @@ def plot_cross_validation(
 def _save(plt: Any, fig: Any, path: Path | io.BytesIO) -> None:
     """Lay ``fig`` out, write it as PNG (a file atomically: a killed run leaves the old one or the new), close it."""
     fig.tight_layout()
+    fig.set_layout_engine(None)  # laid out once: with tight_layout's engine left behind, savefig would draw twice
     if isinstance(path, io.BytesIO):
         fig.savefig(path, format="png", dpi=DPI)
     else:

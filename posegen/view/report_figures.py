@@ -35,8 +35,11 @@ def _pyplot():  # type: ignore[no-untyped-def]
 
 
 def png_data_uri(figure: object) -> str:
-    """A matplotlib figure as a ``data:image/png`` URI (the figure is closed)."""
+    """A matplotlib figure, laid out, as a ``data:image/png`` URI (the figure is closed)."""
     plt = _pyplot()
+    figure.tight_layout()  # type: ignore[attr-defined]
+    # laid out once: with the layout engine tight_layout leaves behind, savefig would draw the figure twice
+    figure.set_layout_engine(None)  # type: ignore[attr-defined]
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=90)  # type: ignore[attr-defined]
     plt.close(figure)
@@ -70,7 +73,6 @@ def residual_figure(contacts: Sequence[ContactResidual]) -> str:
     labels = ", ".join(f"{s.value.replace('_', '-')} ({SET_COLOURS[s].removeprefix('tab:')})" for s in ContactSet)
     for ax in axes[-1]:
         ax.set_xlabel("contact: " + labels if ax is axes[-1][0] else "contact")
-    fig.tight_layout()
     return png_data_uri(fig)
 
 
@@ -88,7 +90,6 @@ def distribution_figure(contacts: Sequence[ContactResidual]) -> str:
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("contacts")
     axes[0].legend(fontsize=8)
-    fig.tight_layout()
     return png_data_uri(fig)
 
 
@@ -102,7 +103,6 @@ def singular_value_figure(posterior: Posterior) -> str:
     ax.set_ylabel("singular value (whitened)")
     ax.set_title(f"base regressor: condition number {posterior.condition:.3g}")
     ax.grid(alpha=0.3, which="both")
-    fig.tight_layout()
     return png_data_uri(fig)
 
 
@@ -118,7 +118,6 @@ def correlation_figure(posterior: Posterior) -> str:
         ax.set_xticks(range(n), posterior.names, rotation=90, fontsize=5)
         ax.set_yticks(range(n), posterior.names, fontsize=5)
     ax.set_title("posterior correlation of the base parameters")
-    fig.tight_layout()
     return png_data_uri(fig)
 
 
