@@ -166,16 +166,16 @@ def _problem(
 def _evaluations_of(
     model: CalibrationModel, observations: Observations, evaluations: Evaluations | None
 ) -> Evaluations:
-    """``evaluations`` (checked to be of ``observations``), or the model evaluated afresh at each call (None).
+    """``evaluations`` (checked to be of ``model`` at ``observations``), or the model evaluated afresh (None).
 
     Raises:
-        ValueError: ``evaluations`` are of other observations.
+        ValueError: ``evaluations`` are of other observations, or of another model.
 
     """
     if evaluations is None:
         return Evaluations(model, observations, remembered=0)
-    if evaluations.observations is not observations:
-        raise ValueError("evaluations are of other observations than the ones given")
+    if evaluations.observations is not observations or evaluations.model is not model:
+        raise ValueError("evaluations are of other observations than the ones given (or of another model)")
     return evaluations
 
 
