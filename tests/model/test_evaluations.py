@@ -80,3 +80,6 @@ def test_a_fit_with_remembered_evaluations_is_the_same_fit(model, observations, 
     assert shared_estimate.noise == alone.noise
     with pytest.raises(ValueError, match="other observations than the ones given"):
         fit(model, observations.subset(range(4)), spec, noise, start, evaluations=shared)
+    other = CalibrationModel(model.scene, ["left", "right"], ["a"], COMPLIANCE)  # the same layout, another object
+    with pytest.raises(ValueError, match="another model"):
+        fit(other, observations, spec, noise, start, evaluations=shared)
