@@ -141,3 +141,19 @@ def real_data() -> Path:
     if missing:
         pytest.skip(f"real TALOS data not found in {REAL_DATA} (set POSEGEN_REAL_DATA to its folder)")
     return REAL_DATA
+
+
+@pytest.fixture
+def figure_draws(monkeypatch: pytest.MonkeyPatch) -> list[object]:
+    """Every matplotlib figure drawn while the test runs (a figure drawn twice is in it twice)."""
+    from matplotlib.figure import Figure
+
+    draws: list[object] = []
+    original = Figure.draw
+
+    def counted(self: Figure, renderer: object) -> object:
+        draws.append(self)
+        return original(self, renderer)
+
+    monkeypatch.setattr(Figure, "draw", counted)
+    return draws

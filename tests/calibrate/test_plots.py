@@ -3,23 +3,14 @@
 import io
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from posegen.calibrate.plots import plot_residuals
 
 
-def test_a_plot_is_drawn_once_when_written(monkeypatch):
+def test_a_plot_is_drawn_once_when_written(figure_draws):
     """tight_layout leaves a layout engine behind, and savefig then draws a figure twice: the plots clear it."""
-    draws = []
-    original = Figure.draw
-
-    def counted(self, renderer):
-        draws.append(self)
-        return original(self, renderer)
-
-    monkeypatch.setattr(Figure, "draw", counted)
     residuals = np.random.default_rng(0).normal(0.0, 1e-3, (5, 3))  # (n, 3) m, rad, rad
     buffer = io.BytesIO()
     plot_residuals(residuals, residuals / 2, "residuals", buffer)
-    assert len(draws) == 1
+    assert len(figure_draws) == 1
     assert buffer.getvalue().startswith(b"\x89PNG")
