@@ -32,6 +32,7 @@ class Substitutes:
     postures: tuple[Posture, ...]  # the pool's postures
     rows: tuple[int | None, ...]  # the pool row of each selected posture (None: not found in the pool)
     build_design: Callable[[], Design]  # the selection's design of the pool (built on first need)
+    held: frozenset[int] = frozenset()  # pool rows never routed as a substitute (held in a session's earlier batch)
 
     def row(self, node: int, selected: int) -> int | None:
         """The pool row of a route node: nodes below ``selected`` are the selection's, the others substitutes."""
@@ -58,9 +59,9 @@ class Substitution:
 
 
 def ranked_substitutes(substitutes: Substitutes, routed_rows: Sequence[int], tried: set[int]) -> list[int]:
-    """Pool rows to try, by decreasing log det gain given the routed rows (selected and tried ones excluded)."""
+    """Pool rows to try, by decreasing log det gain given the routed rows (selected, held and tried ones excluded)."""
     gains = substitutes.design.gains(list(routed_rows))
-    excluded = {r for r in substitutes.rows if r is not None} | tried
+    excluded = {r for r in substitutes.rows if r is not None} | substitutes.held | tried
     gains[list(excluded)] = -np.inf
     order = np.argsort(-gains, kind="stable")
     return [int(r) for r in order[:SUBSTITUTE_TRIES] if np.isfinite(gains[r])]

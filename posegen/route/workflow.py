@@ -63,6 +63,7 @@ def route_postures_file(
     pool_path: str | None = None,
     csv: bool = False,
     from_posture: Sequence[float] | None = None,
+    held_rows: Sequence[int] = (),
 ) -> Routed:
     """Plan, time and export a trajectory through the postures of a selection (or pool) file.
 
@@ -79,6 +80,8 @@ def route_postures_file(
         from_posture: Where the robot stands (nj,) rad, in the scene's joint order: the route
             starts there and returns there (recorded in the summary as
             ``start_posture_rad``). None: the reference posture.
+        held_rows: Pool rows a repair must not route in place of a lost posture (a session's
+            earlier batches held them already).
 
     The seed, the postures file, its robot model and the outputs' place are checked before any
     planning; the output is locked while it is made.
@@ -99,7 +102,7 @@ def route_postures_file(
     chosen, entries = load_postures(postures_path)
     chosen, entries, repeated = _without_repeats(chosen, entries, postures_path)
     scene = scene_for_postures(chosen, postures_path, config_path)
-    substitutes, pool_entries, repair = _substitutes(scene, chosen, entries, postures_path, pool_path)
+    substitutes, pool_entries, repair = _substitutes(scene, chosen, entries, postures_path, pool_path, held_rows)
     with claim_output(path, beside=outputs[1:]):
         progress(Progress(0, 2 * len(chosen.postures) + 1, "job"))
         start = time.perf_counter()
@@ -153,7 +156,12 @@ def _without_repeats(
 
 
 def _substitutes(
-    scene: Scene, chosen: Pool, entries: list[dict[str, Any]], postures_path: str, pool_path: str | None
+    scene: Scene,
+    chosen: Pool,
+    entries: list[dict[str, Any]],
+    postures_path: str,
+    pool_path: str | None,
+    held_rows: Sequence[int],
 ) -> tuple[Substitutes | None, list[dict[str, Any]], str]:
     """The pool a selection came from, if it can be found; and a word on what a repair can use."""
     if not all("pool_id" in e for e in entries):
@@ -176,7 +184,8 @@ def _substitutes(
         return build_design(scene, pool.joints(), chains)[0]
 
     rows = tuple(int(e["pool_id"]) if 0 <= int(e["pool_id"]) < len(pool.postures) else None for e in entries)
-    return Substitutes(pool.postures, rows, design), pool_entries, f"repair from {path}"
+    held = frozenset(int(r) for r in held_rows)
+    return Substitutes(pool.postures, rows, design, held), pool_entries, f"repair from {path}"
 
 
 def check_route_file(

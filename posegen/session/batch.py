@@ -151,8 +151,12 @@ def standing_posture(route: Path) -> list[float] | None:
     return [float(v) for v in end]
 
 
-def route_batch(session: Path, number: int, pool_path: str, settings: SessionSettings, backend: Backend) -> Batch:
+def route_batch(
+    session: Path, number: int, pool_path: str, settings: SessionSettings, backend: Backend, held: Sequence[int] = ()
+) -> Batch:
     """Route the batch's selection from where the robot stands, check it on the meshes, export its rosbag2.
+
+    ``held``: the pool rows of the session's earlier batches, which a repair never routes again.
 
     Raises:
         InfeasibleError: The route fails its check (nothing is exported).
@@ -169,6 +173,7 @@ def route_batch(session: Path, number: int, pool_path: str, settings: SessionSet
         workers=backend,
         pool_path=pool_path,
         from_posture=standing,
+        held_rows=held,
     )
     verdict = check_route_file(str(route), None, workers=backend)
     if not verdict.ok:

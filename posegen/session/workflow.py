@@ -310,4 +310,4 @@ def _plan_next(folder: Path, index: SessionIndex, batch: Batch, backend: Backend
     sub = folder / batch_folder(number)
     sub.mkdir(exist_ok=True)
     select_next(index.pool, pool, sub, sources, index.settings)
-    return route_batch(folder, number, index.pool, index.settings, backend)
+    return route_batch(folder, number, index.pool, index.settings, backend, sources.planned)

@@ -101,8 +101,12 @@ def run_plain(argv):
 
 def test_every_routed_contact_is_measured(chain):
     folder, printed = chain
-    assert f"measure: {K} contacts" in printed["measure"] and "0 windows left out" in printed["measure"]
+    assert f"measure: {K} contacts" in printed["measure"]
     data = yaml.safe_load((folder / "measurements.yaml").read_text())
+    ends = [c["end_s"] for c in data["contacts"]]
+    for window in data["rejected"]:  # a hold's tail as the release starts, not a contact lost
+        assert window["reason"].startswith("too short") and min(abs(window["start_s"] - e) for e in ends) < 0.1
+    assert f"{len(data['rejected'])} windows left out" in printed["measure"]
     recording = data["provenance"]["recording"]
     assert recording["bag_sha256"] == RecordedBag(folder / "bag").sha256()
     assert recording["topics"] == {
@@ -110,7 +114,7 @@ def test_every_routed_contact_is_measured(chain):
         "wrenches": {"left": "/left_wrist_ft", "right": "/right_wrist_ft"},
     }
     assert recording["thresholds"]["force_threshold_n"] == 15.0 and recording["route"].endswith("route.yaml")
-    assert {c["chain"] for c in data["contacts"]} == {CHAIN} and data["rejected"] == []
+    assert {c["chain"] for c in data["contacts"]} == {CHAIN}
     labels = [c["label"] for c in data["contacts"]]
     assert len(set(labels)) == K and all("posture" in label for label in labels)
 

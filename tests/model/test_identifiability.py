@@ -34,7 +34,8 @@ def test_two_chains_share_the_torso(scene, example_pool):
     base = structural_base(model, pool_contacts(example_pool, ["left", "right"]))
     assert base.size == 114  # 111 robot + 3 plane: one more than two separate chains (55 + 55)
     names = [model.parameters[i].name for i in base.columns]
-    assert "left_contact.z" not in names and "right_contact.z" not in names  # at flush contact: plane height
+    heights = [n for n in names if n in ("plane@s.z", "left_contact.z", "right_contact.z")]
+    assert len(heights) <= 2  # at flush contact a chain's height offset is the plane's: the three span two
 
 
 def test_the_floor_equations_identify_more_of_the_legs(scene, example_pool):

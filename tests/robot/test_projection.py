@@ -1,6 +1,7 @@
 """The projection's stop rule: an iteration whose errors repeat is stuck, a shrinking one is not."""
 
-from posegen.robot.projection import _cycling
+from posegen.pool.sampler import draw
+from posegen.robot.projection import Projector, _cycling
 
 
 def test_repeating_errors_are_stuck():
@@ -17,3 +18,40 @@ def test_shrinking_or_wandering_errors_go_on():
     assert not any(_cycling(wandering[: k + 1]) for k in range(len(wandering)))
     slow = [(0.0079, 0.01), (0.0070, 0.01), (0.0051, 0.01), (0.0045, 0.01), (0.0034, 0.01)]
     assert not _cycling(slow)
+
+
+def test_the_hard_phase_of_a_flush_contact_converges_quadratically(scene):
+    """The hard phase is a least-change Gauss-Newton projection: no pull toward the sample fights the equalities.
+
+    With the sample's pull kept in the hard phase, the error only shrank about twofold per
+    iteration (median 6 hard iterations, up to 14, last step's ratio 0.17 on these samples).
+    """
+    projector = Projector(scene)
+    log: list[tuple[bool, float]] = []  # (hard phase, contact/sole position error m) per iteration
+    errors, limit = projector._errors, projector._limit_torques
+    hard = [False]
+
+    def record_errors(problem, target):
+        found = errors(problem, target)
+        log.append((hard[0], found[0]))
+        return found
+
+    def mark_hard(problem, chain):
+        hard[0] = True
+        return limit(problem, chain)
+
+    projector._errors, projector._limit_torques = record_errors, mark_hard
+    converged = 0
+    for index in range(40):
+        log.clear()
+        hard[0] = False
+        sample = draw(scene, 0, index)
+        assert scene.chain(sample.chain).contact_kind.aligned
+        if not projector.project(sample.joints, sample.chain, scene.spot_world(sample.spot)).converged:
+            continue
+        converged += 1
+        steps = [e for in_hard, e in log if in_hard]
+        assert 1 <= len(steps) <= 4
+        if len(steps) >= 2:
+            assert steps[-1] <= 0.02 * steps[-2]  # quadratic: the last step gains orders of magnitude
+    assert converged >= 25

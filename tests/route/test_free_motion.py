@@ -31,7 +31,7 @@ from posegen.route.planner import _timed_transfer
 def ends(scene, example_pool):
     space = StanceSpace(scene, CollisionChecker(scene, convex=True))
     projector = Projector(scene)
-    postures = [example_pool.postures[i] for i in (0, 2)]  # the straight line and the vias are blocked
+    postures = [example_pool.postures[i] for i in (0, 4)]  # the straight line and the vias are blocked
     verticals = [vertical_paths(space, projector, np.array(p.joints), p.chain) for p in postures]
     return space, verticals
 
@@ -89,7 +89,7 @@ def detour(scene, example_pool):
     """Two stops of the example pool whose straight line is blocked and that have two via paths."""
     planner = Planner(scene, seed=0)
     stops = [
-        plan_stop(planner, (i, tuple(example_pool.postures[i].joints), example_pool.postures[i].chain)) for i in (0, 11)
+        plan_stop(planner, (i, tuple(example_pool.postures[i].joints), example_pool.postures[i].chain)) for i in (0, 1)
     ]
     assert not any(isinstance(s, Unplanned) for s in stops)
     return planner, stops

@@ -175,6 +175,22 @@ def test_a_lost_posture_is_replaced_by_the_pool_posture_with_the_largest_gain(sc
     assert swap.rank_after >= swap.rank_before - 3  # a 3-row posture for a 3-row posture
 
 
+def test_a_posture_held_in_an_earlier_batch_is_never_the_substitute(scene, example_pool):
+    """A session's batch must not measure again what an earlier batch held: the best gain held, the next routes."""
+    rows = [8, 9, 10]
+    postures = [example_pool.postures[i] for i in rows]
+    postures[1] = unreachable(scene, postures[1])
+    design = build_design(scene, example_pool.joints(), [p.chain for p in example_pool.postures])[0]
+    gains = design.gains([rows[0], rows[2]])
+    gains[rows] = -np.inf
+    best = int(np.argmax(gains))
+    held = Substitutes(example_pool.postures, tuple(rows), lambda: design, frozenset({best}))
+    (swap,) = plan_route(scene, postures, seed=0, substitutes=held).substitutions
+    assert swap.substitute != best
+    gains[best] = -np.inf
+    assert swap.gain == pytest.approx(float(np.max(gains)))  # the best of those not held
+
+
 def test_without_a_pool_a_lost_posture_is_skipped_with_its_reason(scene, example_pool):
     good = example_pool.postures[0]
     bad = unreachable(scene, example_pool.postures[1])

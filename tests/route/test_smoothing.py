@@ -12,7 +12,7 @@ def detour(scene, example_pool):
     """Two approach poses joined through both lifts: a path with two corners."""
     space = StanceSpace(scene, CollisionChecker(scene, convex=True))
     projector = Projector(scene)
-    a, b = (vertical_paths(space, projector, np.array(p.joints), p.chain) for p in example_pool.postures[4:6])
+    a, b = (vertical_paths(space, projector, np.array(p.joints), p.chain) for p in example_pool.postures[0:2])
     path = through(space, [a.approach[0], a.clearance, b.clearance, b.approach[0]])
     assert path is not None
     return space, path
