@@ -21,12 +21,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", default="plans/pool.yaml", help="pool file (default plans/pool.yaml)")
 
 
+WORKER_MODULES = ("posegen.pool.generation",)  # what a worker's sampling job imports
+
+
 def run(args: argparse.Namespace) -> int:
     """Generate the pool and print its summary."""
     from posegen.parallel import open_backend
-    from posegen.pool import generate_pool_file
 
-    with open_backend(args.workers, args.scheduler) as backend, ProgressBar(args.quiet) as bar:
+    # the workers' imports (placo, pinocchio, coal) start first, in the forkserver, beside this process's own
+    with open_backend(args.workers, args.scheduler, preload=WORKER_MODULES) as backend, ProgressBar(args.quiet) as bar:
+        from posegen.pool import generate_pool_file
+
         pool = generate_pool_file(args.config, args.output, args.n, args.seed, backend, bar)
     rate = 100.0 * len(pool.postures) / max(pool.attempted, 1)
     print(
