@@ -95,18 +95,20 @@ class PostureSampler:
         result = self.projector.project(sample.joints, sample.chain, scene.spot_world(sample.spot))
         if not result.converged:
             return Rejection.NOT_CONVERGED
-        found = assess(scene, None, result.joints, sample.chain, self.statics, self.data)  # kinematics first: cheap
+        # collisions first: they reject 4 in 10 samples, the other invariants 1 in 5000 (TALOS), and a
+        # colliding posture is found at its first pair; the assessment (~0.6 ms) is then spent on fewer
+        closest = self.checker.closest_unless_within(
+            scene.configuration(result.joints), sample.chain, scene.margins.collision_m
+        )
+        if closest is None:
+            return Rejection.COLLISION
+        found = assess(scene, None, result.joints, sample.chain, self.statics, self.data)
         violations = found.violations(scene)
         if violations:
             return _INVARIANT_REJECTION[next(k for k in Invariant if k in violations)]
         offset = np.subtract(found.contact_xy_table_m, sample.spot.xy_table_m)
         if float(np.linalg.norm(offset)) > scene.sampling.spot_tolerance_m:
             return Rejection.SPOT_MISSED
-        closest = self.checker.closest_unless_within(
-            scene.configuration(result.joints), sample.chain, scene.margins.collision_m
-        )
-        if closest is None:
-            return Rejection.COLLISION
         return Posture(
             sample=index,
             chain=sample.chain,
