@@ -8,7 +8,7 @@ export OMP_NUM_THREADS := 1
 export MKL_NUM_THREADS := 1
 DEMO := plans/demo
 
-.PHONY: install demo test lint bench clean browser lock kill-matrix fuzz docs
+.PHONY: install demo test slow lint bench clean browser lock kill-matrix fuzz docs
 
 LOCK := constraints.txt
 
@@ -56,7 +56,12 @@ browser:
 	fi
 
 test: lint browser
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q -m 'not slow' tests
+
+# The slow checks (a step of .ci/run): the kill matrix at every crash point, every shipped robot
+# end to end, the whole example pipeline, kills of `session add`.
+slow: $(STAMP)
+	POSEGEN_KILL_MATRIX=full $(PY) -m pytest -q -m slow tests
 
 # Every command killed at every crash point, the files a folder is staged from included (~10 min).
 kill-matrix: $(STAMP)

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pinocchio as pin
+import pytest
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,6 +43,7 @@ def test_every_example_is_run_here():
     assert tested == {p.name for p in EXAMPLES.glob("*.py")}
 
 
+@pytest.mark.slow  # a minute: `make slow`; the wheel's step runs the example too
 def test_the_whole_pipeline(tmp_path):
     stdout = run_example("pipeline.py", "out", "--workers", "2", cwd=tmp_path)
     out = tmp_path / "out"

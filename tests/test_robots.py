@@ -14,6 +14,7 @@ import yaml
 from posegen.io import load_pool, write_pool
 from posegen.model import ChainModel
 from posegen.robot import Scene, load_config
+from tests.conftest import CONFIG
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
@@ -79,7 +80,10 @@ def test_every_shipped_chain_matches_pinocchio(shipped):
             assert frames[i] == pytest.approx(sole.actInv(contact).homogeneous, abs=1e-10)
 
 
-@pytest.mark.parametrize("config", [p.name for p in CONFIGS])
+@pytest.mark.parametrize(
+    "config",
+    [pytest.param(p.name, marks=() if p == CONFIG else pytest.mark.slow) for p in CONFIGS],
+)  # the default robot in `make test`, every other one in `make slow`
 def test_shipped_config_runs_end_to_end(config, tmp_path, capsys):
     """A few postures of each shipped robot: pool, check, route, check, simulate, calibrate (no edits).
 

@@ -10,10 +10,12 @@ what the next run removes (the lock, hidden temporaries, a sidecar or companion 
 header names, the pool's checkpoint). The same command run again then writes
 the bytes of an uninterrupted run.
 
-``make test`` kills where the output changes: just before the header or the page lands,
-before the old sidecar or companion is removed, before a folder is swapped in and before
-the old one is removed; ``POSEGEN_KILL_MATRIX=full`` (``make kill-matrix``, a step of
-``.ci/run``) also kills between the files a folder is staged from.
+The matrix takes minutes: ``make slow`` and ``make kill-matrix`` run it whole
+(``POSEGEN_KILL_MATRIX=full``: at every crash point, between the files a folder is staged
+from too), not ``make test`` (``tests/robustness/test_kill.py`` kills each stage there).
+Without that variable it kills only where the output changes: just before the header or
+the page lands, before the old sidecar or companion is removed, before a folder is
+swapped in and before the old one is removed.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from tests.conftest import CONFIG, EXAMPLE_POOL
 from tests.robustness.test_kill import files
 
 FULL = os.environ.get("POSEGEN_KILL_MATRIX") == "full"
+pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
 COMPANIONS = (".truth.yaml", ".csv")  # files named by their header's bytes: a simulation's truth, a route's CSV
 

@@ -75,6 +75,7 @@ def kill_points(points: list[tuple[int, str]]) -> list[int]:
     return [calibration, route_bag]
 
 
+@pytest.mark.slow  # two minutes: `make slow` (and `make fuzz`)
 def test_a_killed_add_leaves_a_session_the_same_add_finishes(started, rehearsed, uninterrupted, tmp_path):
     reference, points = uninterrupted
     bag = rehearsed[0] / "batch_001" / REHEARSAL_BAG
