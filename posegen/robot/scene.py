@@ -275,9 +275,17 @@ class Scene:
 
     def idle_joints(self, chain: str) -> list[int]:
         """Free joints that move neither ``chain``'s contact frame nor a sole (another arm, a head), sorted."""
-        config = self.chain(chain)
-        busy = set(self.moving_joints(config.frame(config.contact_kind))) | set(self.stance_leg_joints())
-        return [i for i in range(len(self.joint_names)) if i not in busy and not self.locked[i]]
+        return list(self._idle_joints[self.chain(chain).name])
+
+    @cached_property
+    def _idle_joints(self) -> dict[str, tuple[int, ...]]:
+        """Chain -> its idle joints (the pool asks for them at every sample: 40 us each to find)."""
+        legs = set(self.stance_leg_joints())
+        idle = {}
+        for config in self.chains:
+            busy = set(self.moving_joints(config.frame(config.contact_kind))) | legs
+            idle[config.name] = tuple(i for i in range(len(self.joint_names)) if i not in busy and not self.locked[i])
+        return idle
 
     @cached_property
     def _stance_ancestors(self) -> frozenset[int]:

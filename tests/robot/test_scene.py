@@ -97,3 +97,24 @@ def test_close_stance_below_a_waist_moves_the_second_leg_alone(waist_scene):
         for sole in scene.stance.sole_frames:
             pose = pin.SE3(scene.sole_poses[sole])
             assert np.linalg.norm(pin.log6(data.oMf[scene.frame_id(sole)].actInv(pose)).vector) < 1e-10
+
+
+def test_idle_joints_move_neither_the_contact_nor_a_sole_and_every_other_free_joint_does(scene, config):
+    data = scene.model.createData()
+    joints = scene.reference.copy()
+
+    def frames_at(angles, chain):
+        pin.framesForwardKinematics(scene.model, data, scene.configuration(angles))
+        names = [chain.contact_frame, *scene.sole_poses]
+        return np.array([data.oMf[scene.frame_id(n)].homogeneous for n in names])
+
+    for chain in config.chains:
+        idle = scene.idle_joints(chain.name)
+        at_rest = frames_at(joints, chain)
+        for j in np.flatnonzero(~scene.locked):
+            moved = joints.copy()
+            moved[j] += 0.1
+            still = np.allclose(frames_at(moved, chain), at_rest, atol=1e-12)
+            assert still == (j in idle), (chain.name, scene.joint_names[j])
+        idle.clear()  # the caller's copy: the scene's answer stays
+        assert scene.idle_joints(chain.name)
