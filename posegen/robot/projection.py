@@ -131,6 +131,9 @@ class Projector:
         self._statics = Statics(scene)
         weight = float(np.linalg.norm(scene.model.gravity.linear)) * sum(i.mass for i in scene.model.inertias)
         self._pressing_share = scene.route.contact_force_n / weight  # of the weight the table carries (vertical)
+        self._pressed_polygon = (1.0 - self._pressing_share) * scene.support_polygon  # (n, 2) m, (1 - a) P
+        for problem in self._problems.values():
+            problem.pressed.margin = (1.0 - self._pressing_share) * (scene.margins.zmp_m + PRESSED_BUFFER_M)
         allowed = (scene.margins.effort_ratio - TORQUE_BUFFER) * scene.effort_limit  # (nj,) N m, nan: no limit
         self._allowed = np.where(scene.locked, np.nan, allowed)  # a locked joint does not move here
         self._nq = scene.model.nq
@@ -146,8 +149,10 @@ class Projector:
         self.robot.set_T_world_frame(anchor, self.scene.sole_poses[anchor])
         self.robot.update_kinematics()
 
-    def _errors(self, problem: _ChainProblem, target_m: list[float]) -> tuple[float, float]:
+    def _errors(self, problem: _ChainProblem, target_m: list[float], contact: list[list[float]]) -> tuple[float, float]:
         """Largest equality errors: soles' position (m) and rotation (Frobenius), contact height (m) and tilt (rad).
+
+        ``contact``: the contact frame's (4, 4) world placement at the kinematics in the robot.
 
         Plain floats on purpose: numpy's per-call overhead on 3-vectors cost more than the
         QP step it checks (172 vs 72-110 us per iteration).
@@ -158,7 +163,6 @@ class Projector:
             actual = self.robot.get_T_world_frame(frame).tolist()
             position = max(position, math.sqrt(sum((actual[i][3] - origin[i]) ** 2 for i in range(3))))
             angle = max(angle, math.sqrt(sum((actual[i][j] - rotation[i][j]) ** 2 for i in range(3) for j in range(3))))
-        contact = self.robot.get_T_world_frame(problem.contact).tolist()
         normal = self._normal
         position = max(position, abs(sum(normal[i] * (contact[i][3] - target_m[i]) for i in range(3))))
         if not problem.kind.aligned:
@@ -189,6 +193,7 @@ class Projector:
         problem.height.target_world = np.array(target_m, dtype=float)
         problem.spot.target_world = np.array(target_m, dtype=float)
         target = [float(v) for v in target_m]
+        contact = self.robot.get_T_world_frame(problem.contact).tolist()  # (4, 4) the contact frame, world
         sampling = scene.sampling
         iterations = 0
         for hard, budget in ((False, sampling.soft_iterations), (True, sampling.hard_iterations)):
@@ -199,14 +204,15 @@ class Projector:
             for _ in range(budget):
                 if hard:
                     self._limit_torques(problem, chain)
-                self._press(problem)
+                self._press(problem, contact)
                 try:
                     problem.solver.solve(True)
                 except RuntimeError:
                     return Projection(self._joints(), False, iterations)
                 self.robot.update_kinematics()
                 iterations += 1
-                position, angle = self._errors(problem, target)
+                contact = self.robot.get_T_world_frame(problem.contact).tolist()  # (4, 4) read once per iteration
+                position, angle = self._errors(problem, target, contact)
                 if hard and position < CONVERGED_M and angle < CONVERGED_RAD:
                     return Projection(self._joints(), True, iterations)
                 if not hard and position < 2e-2 and angle < 5e-2 and iterations >= 3:
@@ -216,17 +222,16 @@ class Projector:
                     return Projection(self._joints(), False, iterations)
         return Projection(self._joints(), False, iterations)
 
-    def _press(self, problem: _ChainProblem) -> None:
+    def _press(self, problem: _ChainProblem, contact: list[list[float]]) -> None:
         """The CoM's polygon that keeps the centre of pressure inside by ``margins.zmp_m`` with the hand pressing.
 
         A vertical force ``F`` on the hand at ``h`` moves the soles' centre of pressure
         from the CoM ``c`` to ``(c - a h) / (1 - a)``, ``a = F / (m g)``: it is inside the
-        polygon ``P`` by ``d`` exactly when ``c`` is inside ``a h + (1 - a) P`` by ``(1 - a) d``.
+        polygon ``P`` by ``d`` exactly when ``c`` is inside ``a h + (1 - a) P`` by ``(1 - a) d``
+        (the margin is set once, in :class:`Projector`). ``contact``: the hand's (4, 4) world placement.
         """
-        share = self._pressing_share
-        hand = np.array(self.robot.get_T_world_frame(problem.contact))[:2, 3]
-        problem.pressed.polygon = share * hand[None, :] + (1.0 - share) * self.scene.support_polygon
-        problem.pressed.margin = (1.0 - share) * (self.scene.margins.zmp_m + PRESSED_BUFFER_M)
+        hand = np.array([contact[0][3], contact[1][3]])  # (2,) m
+        problem.pressed.polygon = self._pressing_share * hand[None, :] + self._pressed_polygon
 
     def _release_torques(self, problem: _ChainProblem) -> None:
         """No torque rows (the soft phase): ``0 q <= 1``; the linearisation restarts in the hard phase."""

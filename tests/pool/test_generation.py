@@ -162,8 +162,13 @@ def test_malformed_pool_is_an_input_error():
 
 
 def test_example_pool_is_reproducible_and_valid(scene, config, example_pool):
-    """plans/talos/pool.yaml is what posegen makes today, and it passes the mesh check."""
+    """plans/talos/pool.yaml is what posegen makes today, and it passes the mesh check.
+
+    To solver precision rather than bit for bit: another CPU rounds the last bits otherwise
+    (see tests/numeric_fingerprint.py); a change of the projection moves postures by far more.
+    """
     again = generate_pool(config, n=15, seed=example_pool.provenance["seed"], workers=1)
-    assert [p.joints for p in again.postures] == [p.joints for p in example_pool.postures[:15]]
+    assert [p.sample for p in again.postures] == [p.sample for p in example_pool.postures[:15]]
+    np.testing.assert_allclose(again.joints(), example_pool.joints()[:15], rtol=0, atol=1e-6)
     assert example_pool.provenance["config"] == config.to_dict()
     assert verify_postures(scene, example_pool.postures).ok
