@@ -183,7 +183,7 @@ def _timed_transfer(
     return Transfer(timed, tuple(kinds), found.method)
 
 
-def timed_release(scene: Scene, stop: Stop) -> Timed:
+def timed_release(planner: Planner, stop: Stop) -> Timed:
     """A route's last release, from the contact straight up to the standoff, timed as a transfer is.
 
     Within the joint limits at ``velocity_scale_near``, the ZMP inside the support polygon by
@@ -191,14 +191,18 @@ def timed_release(scene: Scene, stop: Stop) -> Timed:
     ``check`` verifies: the route ends there when no free motion leads back to the start.
 
     Example:
-        >>> timed = timed_release(scene, stop)  # (m,) times s, (m, nj) positions rad, ...
+        >>> timed = timed_release(planner, stop)  # (m,) times s, (m, nj) positions rad, ...
 
     """
-    up = np.vstack([stop.go_to_contact.positions[::-1], stop.approach[::-1][1:]])  # (m, nj) rad
-    balance = Balance(scene)
-    zmp = ZmpConstraint(scene, balance, scene.margins.zmp_m + GRID_SLACK_M)
+    scene = planner.scene
+    up = np.array(_release_path(stop))  # (m, nj) rad
     limit = scene.velocity_limit * scene.route.velocity_scale_near
-    return timed_in_balance(scene, balance, zmp, up, limit, _acceleration(scene), MotionTorques(scene, balance))
+    return timed_in_balance(scene, planner.balance, planner.zmp, up, limit, _acceleration(scene), planner.torques)
+
+
+def _release_path(stop: Stop) -> list[FloatArray]:
+    """A stop's release waypoints (nj,) rad: overshoot -> pre-contact -> standoff."""
+    return list(stop.go_to_contact.positions[::-1]) + list(stop.approach[::-1][1:])
 
 
 def _acceleration(scene: Scene) -> FloatArray:
@@ -209,10 +213,7 @@ def _with_verticals(
     free: list[FloatArray], source: Stop | None, target: Stop | None
 ) -> tuple[list[FloatArray], list[SegmentType], list[bool]]:
     """Release + free + approach waypoints, their kinds, and which must stay (lower verticals, ends)."""
-    release: list[FloatArray] = []
-    if source is not None:
-        contact = list(source.go_to_contact.positions[::-1])  # overshoot -> pre-contact
-        release = contact + list(source.approach[::-1][1:])  # ... -> standoff
+    release = _release_path(source) if source is not None else []
     approach = list(target.approach) if target is not None else []
     path = release + free[1:] + approach[1:] if release else free + approach[1:]
     kinds = (

@@ -124,7 +124,7 @@ def plan_route(
     with contextlib.nullcontext() if backend is workers else backend:  # one made here keeps its workers, then stops
         run = _Routing(scene, postures, substitutes, start, _all_in_flight(backend, job), progress)
         run.plan(order.sequence)
-    return run.assemble(order)
+    return run.assemble(order, local)
 
 
 def _all_in_flight(
@@ -317,8 +317,8 @@ class _Routing:
 
     # -- assembly -----------------------------------------------------------------------
 
-    def assemble(self, order: Order) -> PlannedRoute:
-        """Concatenate the timed pieces into one trajectory with its segment table."""
+    def assemble(self, order: Order, planner: Planner) -> PlannedRoute:
+        """Concatenate the timed pieces into one trajectory with its segment table (``planner``: this process's)."""
         route = self.scene.route
         pieces: list[tuple[Timed, list[tuple[SegmentType, int | None]]]] = []
         methods: list[str] = []
@@ -339,7 +339,7 @@ class _Routing:
         if not self.closed:  # straight up to the standoff, at rest
             stop = self._stop(previous)
             assert stop is not None
-            timed = timed_release(self.scene, stop)
+            timed = timed_release(planner, stop)
             pieces.append((timed, [(SegmentType.RELEASE, previous)] * len(timed.times)))
         return self._concatenate(pieces, order, tuple(methods))
 
