@@ -183,6 +183,24 @@ def _timed_transfer(
     return Transfer(timed, tuple(kinds), found.method)
 
 
+def timed_release(scene: Scene, stop: Stop) -> Timed:
+    """A route's last release, from the contact straight up to the standoff, timed as a transfer is.
+
+    Within the joint limits at ``velocity_scale_near``, the ZMP inside the support polygon by
+    the margin and the torques at speed within their limits (:func:`timed_in_balance`), as
+    ``check`` verifies: the route ends there when no free motion leads back to the start.
+
+    Example:
+        >>> timed = timed_release(scene, stop)  # (m,) times s, (m, nj) positions rad, ...
+
+    """
+    up = np.vstack([stop.go_to_contact.positions[::-1], stop.approach[::-1][1:]])  # (m, nj) rad
+    balance = Balance(scene)
+    zmp = ZmpConstraint(scene, balance, scene.margins.zmp_m + GRID_SLACK_M)
+    limit = scene.velocity_limit * scene.route.velocity_scale_near
+    return timed_in_balance(scene, balance, zmp, up, limit, _acceleration(scene), MotionTorques(scene, balance))
+
+
 def _acceleration(scene: Scene) -> FloatArray:
     return np.full(len(scene.joint_names), scene.route.acceleration_limit_rad_s2)
 

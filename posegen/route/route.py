@@ -41,7 +41,7 @@ from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback, ignore_progress
 from posegen.robot import FloatArray, Scene, check_for_planning
 from posegen.route.ordering import Order, order_postures, rest_to_rest_time
-from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer
+from posegen.route.planner import START, Planner, Stop, Transfer, plan_stop, plan_transfer, timed_release
 from posegen.route.repair import (
     Substitutes,
     Substitution,
@@ -49,7 +49,7 @@ from posegen.route.repair import (
     ranked_substitutes,
     substitution,
 )
-from posegen.route.timing import SAFETY, Timed, hold, parameterize
+from posegen.route.timing import SAFETY, Timed, hold
 from posegen.route.unplanned import Unplanned
 
 LOG = logging.getLogger(__name__)
@@ -339,9 +339,7 @@ class _Routing:
         if not self.closed:  # straight up to the standoff, at rest
             stop = self._stop(previous)
             assert stop is not None
-            up = np.vstack([stop.go_to_contact.positions[::-1], stop.approach[::-1][1:]])
-            limit = self.scene.velocity_limit * route.velocity_scale_near
-            timed = parameterize(up, limit, np.full(len(limit), route.acceleration_limit_rad_s2))
+            timed = timed_release(self.scene, stop)
             pieces.append((timed, [(SegmentType.RELEASE, previous)] * len(timed.times)))
         return self._concatenate(pieces, order, tuple(methods))
 

@@ -31,8 +31,8 @@ def test_the_hard_phase_of_a_flush_contact_converges_quadratically(scene):
     errors, limit = projector._errors, projector._limit_torques
     hard = [False]
 
-    def record_errors(problem, target):
-        found = errors(problem, target)
+    def record_errors(problem, target, contact):
+        found = errors(problem, target, contact)
         log.append((hard[0], found[0]))
         return found
 
