@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from posegen.io import Posture
-from posegen.robot import CollisionChecker, FloatArray, Invariant, Projector, Scene, Spot, Statics, assess
+from posegen.robot import CollisionChecker, FloatArray, Invariant, Projector, Scene, Separation, Spot, Statics, assess
 
 
 class Rejection(str, enum.Enum):
@@ -85,6 +85,7 @@ class PostureSampler:
         self.seed = seed
         self.projector = Projector(scene)
         self.checker = CollisionChecker(scene, convex=True)
+        self.separation = Separation(scene, self.checker)
         self.statics = Statics(scene)
         self.data = scene.model.createData()  # the assessments' kinematics
 
@@ -95,13 +96,22 @@ class PostureSampler:
         result = self.projector.project(sample.joints, sample.chain, scene.spot_world(sample.spot))
         if not result.converged:
             return Rejection.NOT_CONVERGED
-        # collisions first: they reject 4 in 10 samples, the other invariants 1 in 5000 (TALOS), and a
-        # colliding posture is found at its first pair; the assessment (~0.6 ms) is then spent on fewer
+        # collisions first: 5 in 10 converged TALOS samples collide (the thighs, mostly), the other invariants
+        # fail 1 in 5000; a colliding posture is moved apart (Projector.separate) and checked again, and the
+        # assessment (~0.6 ms) is spent on collision-free postures only
+        spot = scene.spot_world(sample.spot)
         closest = self.checker.closest_unless_within(
             scene.configuration(result.joints), sample.chain, scene.margins.collision_m
         )
         if closest is None:
-            return Rejection.COLLISION
+            result = self.projector.separate(result.joints, sample.chain, spot, self.separation)
+            if not result.converged:
+                return Rejection.COLLISION
+            closest = self.checker.closest_unless_within(
+                scene.configuration(result.joints), sample.chain, scene.margins.collision_m
+            )
+            if closest is None:
+                return Rejection.COLLISION
         found = assess(scene, None, result.joints, sample.chain, self.statics, self.data)
         violations = found.violations(scene)
         if violations:

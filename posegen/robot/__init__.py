@@ -29,7 +29,7 @@ from posegen.robot.balance import (
 )
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig
-from posegen.robot.collision import TABLE, CollisionChecker, Proximity
+from posegen.robot.collision import TABLE, CollisionChecker, Proximity, Witness
 from posegen.robot.collision_geometry import (
     add_self_pairs,  # for the draft (robot init)
     carrying_links,  # for physics: the links a contact exempts, as the collision check has them
@@ -97,6 +97,7 @@ from posegen.robot.geometry import (
 from posegen.robot.motion_torques import MotionTorques, PointLoad, allowed_ratios, effort_ratios_at, torque_stretch
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for, scene_for_postures
+from posegen.robot.separation import Separation, SeparationRows
 from posegen.robot.sole_split import COP_MARGIN_M, cross, least_size_map, least_size_share, split_wrench
 from posegen.robot.stance_space import StanceSpace
 from posegen.robot.statics import (
@@ -179,6 +180,8 @@ __all__ = [
     "RouteConfig",
     "SamplingConfig",
     "Scene",
+    "Separation",
+    "SeparationRows",
     "Shape",
     "Spot",
     "StanceConfig",
@@ -188,6 +191,7 @@ __all__ = [
     "TorquePair",
     "Verification",
     "VisualHull",
+    "Witness",
     "Worst",
     "WorstSoFar",
     "add_self_pairs",

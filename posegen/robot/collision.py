@@ -7,6 +7,7 @@ the original meshes for the independent re-check of ``posegen check``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import coal
@@ -33,6 +34,17 @@ class Proximity:
 
     distance_m: float  # negative when penetrating
     pair: tuple[str, str]
+
+
+@dataclass(frozen=True)
+class Witness:
+    """One collision pair's nearest points in a configuration (world frame)."""
+
+    pair: int  # index in the geometry model's collision pairs
+    distance_m: float  # negative when penetrating
+    points_m: tuple[FloatArray, FloatArray]  # (3,) each: the nearest point on the pair's first and second body
+    normal: FloatArray  # (3,) unit, from the first body toward the second
+    joints: tuple[int, int]  # the pinocchio joints carrying the first and second body (0: the world)
 
 
 class CollisionChecker:
@@ -132,6 +144,20 @@ class CollisionChecker:
             margin_m: Stop at the first pair closer than this (m).
 
         """
+        data, bounds = self._screened(q, contact_chain)
+        best, best_pair = np.inf, -1
+        for k in np.argsort(bounds, kind="stable").tolist():
+            if bounds[k] >= best:
+                break
+            distance = float(self._distance(data, k).min_distance)
+            if distance < margin_m:
+                return None
+            if distance < best:
+                best, best_pair = distance, k
+        return Proximity(distance_m=best, pair=self._pair_names(best_pair))
+
+    def _screened(self, q: FloatArray, contact_chain: str | None) -> tuple[pin.GeometryData, FloatArray]:
+        """The screening workspace placed at ``q``, and every pair's lower bound (m; inf: inactive)."""
         if self._bounds is None:
             self._bounds = BoundingSpheres(self.geom)
         if contact_chain not in self._screen:
@@ -141,19 +167,54 @@ class CollisionChecker:
         pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
         bounds = self._bounds.lower_bounds(data)
         bounds[~active] = np.inf
-        best, best_pair = np.inf, -1
-        for k in np.argsort(bounds, kind="stable").tolist():
-            if bounds[k] >= best:
-                break
-            request = data.distanceRequests[k]
-            request.cached_gjk_guess = _DEFAULT_GJK_GUESS
-            request.cached_support_func_guess = _DEFAULT_SUPPORT_GUESS
-            distance = float(pin.computeDistance(self.geom, data, k).min_distance)
-            if distance < margin_m:
-                return None
-            if distance < best:
-                best, best_pair = distance, k
-        return Proximity(distance_m=best, pair=self._pair_names(best_pair))
+        return data, bounds
+
+    def _distance(self, data: pin.GeometryData, k: int) -> coal.DistanceResult:
+        """Pair ``k``'s exact distance from coal's default guesses (an answer of the placement alone)."""
+        request = data.distanceRequests[k]
+        request.cached_gjk_guess = _DEFAULT_GJK_GUESS
+        request.cached_support_func_guess = _DEFAULT_SUPPORT_GUESS
+        return pin.computeDistance(self.geom, data, k)
+
+    def witnesses(
+        self, q: FloatArray, contact_chain: str | None, within_m: float, pairs: Sequence[int] | None = None
+    ) -> list[Witness]:
+        """The active pairs closer than ``within_m`` and their nearest points, by pair index.
+
+        Args:
+            q: Full configuration, shape (nq,).
+            contact_chain: The chain whose fingertips touch the table, or None.
+            within_m: Distance below which a pair is returned (m).
+            pairs: Only these pairs (indices of active pairs, e.g. an earlier answer's),
+                without screening the others; None: every active pair.
+
+        Example:
+            >>> near = checker.witnesses(q, "left", 0.01)  # pairs within 1 cm, e.g. the two thighs
+
+        """
+        if pairs is None:
+            data, bounds = self._screened(q, contact_chain)
+            candidates = np.flatnonzero(bounds < within_m).tolist()
+        else:
+            data = (
+                self._screen[contact_chain][0] if contact_chain in self._screen else self._screened(q, contact_chain)[0]
+            )
+            pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
+            candidates = list(pairs)
+        found = []
+        for k in candidates:
+            result = self._distance(data, k)
+            if result.min_distance < within_m:
+                pair = self.geom.collisionPairs[k]
+                objects = self.geom.geometryObjects[pair.first], self.geom.geometryObjects[pair.second]
+                points = np.array(result.getNearestPoint1()), np.array(result.getNearestPoint2())
+                normal = np.array(result.normal, dtype=float)
+                found.append(
+                    Witness(
+                        k, float(result.min_distance), points, normal, (objects[0].parentJoint, objects[1].parentJoint)
+                    )
+                )
+        return found
 
     def collides(self, q: FloatArray, contact_chain: str | None, margin_m: float) -> bool:
         """Whether any active pair is closer than ``margin_m`` (a fast yes/no for planning).

@@ -21,6 +21,13 @@ drawn, against 4348 with the pull in the soft phase only). A point contact keeps
 pulls in both phases: its tilt is free, and its pull upright, balanced by the sample's,
 gives the varied tilts that identify the tip's offset (without the sample's pull in the
 hard phase every tilt went upright).
+
+A converged posture whose bodies came closer than the collision margin (TALOS: the two
+thighs, in 95 % of such samples, as the legs close on their soles) is moved apart by
+:meth:`Projector.separate`: more hard-phase steps with the pairs within reach linearised
+(:mod:`posegen.robot.separation`), unless they are more than ``SEPARATION_DEPTH_M`` into
+each other. TALOS, 1500 postures: 2005 samples drawn instead of 4348, and a pool whose
+selection is as informative or more (IROC's O1 +2.0 to +3.0 %, seeds 0-2).
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ import placo
 from posegen.robot.description import kinematic_urdf
 from posegen.robot.geometry import FloatArray
 from posegen.robot.scene import Scene
+from posegen.robot.separation import Separation
 from posegen.robot.statics import Statics
 
 FOOT_WEIGHT = 100.0
@@ -56,6 +64,12 @@ TORQUE_REFRESH = 4  # the torques' derivative is recomputed after this many uses
 TORQUE_BUFFER = 0.005  # solved this fraction of the effort limit inside the allowed ratio
 TORQUE_WEIGHT = 1.0  # the torque rows in the soft phase (N m)
 CYCLE_TOLERANCE = 1e-2  # relative: errors repeating this closely with period 1 or 2 never converge
+SEPARATION_BUFFER_M = 2e-3  # a colliding pair is pushed this far beyond the collision margin ...
+SEPARATION_REACH_M = 3e-3  # ... and so is every pair within this of that distance (they move together)
+SEPARATION_ITERATIONS = 10  # Gauss-Newton steps to separate a converged posture's colliding pairs
+SEPARATION_WATCH_M = 0.006  # the pairs this much beyond the margin before separating are the ones watched
+SEPARATION_DEPTH_M = 5e-3  # bodies deeper into each other than this are another posture: not separated.
+# TALOS: 88 % of its colliding samples are within it (the thighs touching); JVRC: 20 % (a shoulder in the table)
 
 
 @dataclass(frozen=True)
@@ -222,6 +236,65 @@ class Projector:
                     return Projection(self._joints(), False, iterations)
         return Projection(self._joints(), False, iterations)
 
+    def separate(self, joints: FloatArray, chain: str, target_m: FloatArray, separation: Separation) -> Projection:
+        """Move a converged posture whose collision pairs came closer than the margin apart, its equalities kept.
+
+        Hard-phase steps as :meth:`project`'s, each with every pair within reach linearised
+        (:class:`Separation`) and held ``SEPARATION_BUFFER_M`` beyond ``margins.collision_m``,
+        until the equalities hold and no pair is closer than the margin plus half that buffer.
+        Bodies more than ``SEPARATION_DEPTH_M`` into each other are left as they are (not converged).
+        The sample's pulls are those of the last :meth:`project` (call it on the same sample first).
+
+        Args:
+            joints: The converged posture (rad), shape (nj,).
+            chain: Name of the chain in contact.
+            target_m: The target spot given to :meth:`project`, shape (3,).
+            separation: The robot's collision pairs, linearised.
+
+        Returns:
+            The separated posture; ``converged``: equalities and distances reached. The
+            caller checks collisions again (a pair out of reach may have come closer).
+
+        Example:
+            >>> found = projector.project(sample, "left", spot)
+            >>> q = scene.configuration(found.joints)
+            >>> if found.converged and checker.closest_unless_within(q, "left", margin) is None:
+            ...     found = projector.separate(found.joints, "left", spot, separation)
+
+        """
+        problem = self._problems[chain]
+        margin = self.scene.margins.collision_m
+        target = [float(v) for v in np.asarray(target_m, dtype=float) + problem.lift_m * self.scene.table_pose[:3, 2]]
+        self._set_joints(np.where(self.scene.locked, self.scene.locked_values, joints))
+        problem.harden(True)
+        self._derivative = None
+        contact = self.robot.get_T_world_frame(problem.contact).tolist()  # (4, 4) the contact frame, world
+        held = True  # the equalities hold (the posture given converged)
+        reach = margin + SEPARATION_BUFFER_M + SEPARATION_REACH_M
+        watched: tuple[int, ...] | None = None  # the pairs looked at while the posture moves (set at the start)
+        for iteration in range(SEPARATION_ITERATIONS):
+            now = self._joints()
+            if watched is None:
+                rows = separation.rows(now, chain, margin + SEPARATION_WATCH_M)
+                if np.any(rows.distances_m < -SEPARATION_DEPTH_M):
+                    return Projection(now, False, 0)
+                watched, rows = rows.pairs, rows.within(reach)
+            else:
+                rows = separation.rows(now, chain, reach, watched)
+            if held and np.all(rows.distances_m >= margin + SEPARATION_BUFFER_M / 2):
+                return Projection(now, True, iteration)
+            self._limit_torques(problem, chain, rows.half_spaces(margin + SEPARATION_BUFFER_M))
+            self._press(problem, contact)
+            try:
+                problem.solver.solve(True)
+            except RuntimeError:
+                break
+            self.robot.update_kinematics()
+            contact = self.robot.get_T_world_frame(problem.contact).tolist()
+            position, angle = self._errors(problem, target, contact)
+            held = position < CONVERGED_M and angle < CONVERGED_RAD
+        return Projection(self._joints(), False, SEPARATION_ITERATIONS)
+
     def _press(self, problem: _ChainProblem, contact: list[list[float]]) -> None:
         """The CoM's polygon that keeps the centre of pressure inside by ``margins.zmp_m`` with the hand pressing.
 
@@ -238,8 +311,12 @@ class Projector:
         self._derivative = None
         problem.torque.A, problem.torque.b = np.zeros((1, self._nq)), np.ones(1)
 
-    def _limit_torques(self, problem: _ChainProblem, chain: str) -> None:
+    def _limit_torques(
+        self, problem: _ChainProblem, chain: str, extra: tuple[FloatArray, FloatArray] | None = None
+    ) -> None:
         """Linearise the holding torques near their limits (unloaded and pressing) as rows of ``A q <= b``.
+
+        ``extra``: more rows ``(A, b)`` on the joints, (m, nj) and (m,), e.g. :meth:`SeparationRows.half_spaces`.
 
         The torques are exact at every iteration; their derivative (that of the unloaded
         robot: 30 N on the hand changes it little) is computed when a joint first comes
@@ -264,6 +341,11 @@ class Projector:
                 row[self._joint_q] = sign * derivative[j]
                 rows.append(row)
                 bounds.append(float(allowed[j] - sign * torques[j] + sign * derivative[j] @ joints))
+        for row_joints, bound in zip(*(extra or ((), ())), strict=True):
+            row = np.zeros(self._nq)
+            row[self._joint_q] = row_joints
+            rows.append(row)
+            bounds.append(float(bound))
         if rows:
             problem.torque.A, problem.torque.b = np.array(rows), np.array(bounds)
         else:

@@ -10,7 +10,11 @@ from posegen.model import ContactModel, Contacts
 
 @pytest.fixture(scope="module")
 def contacts(example_pool):
-    rows = list(range(60))
+    """The first 30 contacts of each chain (4 regions of 7-8: with 5, balance can push a region past its neighbour)."""
+    chains = [p.chain for p in example_pool.postures]
+    rows = [i for i, c in enumerate(chains) if c == "left"][:30] + [i for i, c in enumerate(chains) if c == "right"][
+        :30
+    ]
     postures = [example_pool.postures[i] for i in rows]
     labels = tuple(f"f.csv:{i}:{p.spot}" for i, p in enumerate(postures))
     return Contacts(example_pool.joints()[rows], tuple(p.chain for p in postures), ("day",) * 60, labels)

@@ -80,7 +80,9 @@ def test_same_seed_same_pool_whatever_the_workers(config, small_pool):
     assert other_seed.postures[0].joints != small_pool.postures[0].joints
 
 
-def test_resume_after_interruption(config, small_pool, tmp_path):
+def test_resume_after_interruption(config, tmp_path):
+    n = 3 * config.sampling.chunk_size  # more than two chunks accept (4 samples in 5 do)
+    uninterrupted = generate_pool(config, n=n, seed=7, workers=2)
     checkpoint = tmp_path / "pool.yaml.partial.jsonl"
     calls = []
 
@@ -90,17 +92,17 @@ def test_resume_after_interruption(config, small_pool, tmp_path):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        generate_pool(config, n=24, seed=7, workers=2, checkpoint_path=checkpoint, progress=interrupt)
+        generate_pool(config, n=n, seed=7, workers=2, checkpoint_path=checkpoint, progress=interrupt)
     done = checkpoint.read_text().splitlines()
     assert len(done) == 1 + 2  # header and the two chunks finished before the kill
     with checkpoint.open("a") as handle:
         handle.write('[{"sample": 1, "cha')  # a line cut short by the kill
     seen = []
     resumed = generate_pool(
-        config, n=24, seed=7, workers=1, checkpoint_path=checkpoint, progress=lambda p: seen.append(p.attempts)
+        config, n=n, seed=7, workers=1, checkpoint_path=checkpoint, progress=lambda p: seen.append(p.attempts)
     )
     assert seen[0] == 2 * config.sampling.chunk_size  # it did not start over
-    assert resumed.to_dict() == small_pool.to_dict()
+    assert resumed.to_dict() == uninterrupted.to_dict()
 
 
 def test_pool_file_round_trip(small_pool, tmp_path):

@@ -31,7 +31,7 @@ from posegen.route.planner import _timed_transfer
 def ends(scene, example_pool):
     space = StanceSpace(scene, CollisionChecker(scene, convex=True))
     projector = Projector(scene)
-    postures = [example_pool.postures[i] for i in (0, 4)]  # the straight line and the vias are blocked
+    postures = [example_pool.postures[i] for i in (0, 1)]  # the straight line between them is blocked
     verticals = [vertical_paths(space, projector, np.array(p.joints), p.chain) for p in postures]
     return space, verticals
 
