@@ -156,16 +156,26 @@ class CollisionChecker:
                 best, best_pair = distance, k
         return Proximity(distance_m=best, pair=self._pair_names(best_pair))
 
-    def _screened(self, q: FloatArray, contact_chain: str | None) -> tuple[pin.GeometryData, FloatArray]:
-        """The screening workspace placed at ``q``, and every pair's lower bound (m; inf: inactive)."""
+    def _spheres(self) -> BoundingSpheres:
+        """The bounding spheres of the geometry (made on first use)."""
         if self._bounds is None:
             self._bounds = BoundingSpheres(self.geom)
-        if contact_chain not in self._screen:
+        return self._bounds
+
+    def _workspace(
+        self, cache: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]], contact_chain: str | None
+    ) -> tuple[pin.GeometryData, NDArray[np.bool_]]:
+        """``cache``'s geometry data for ``contact_chain`` and its active pairs (made on first use)."""
+        if contact_chain not in cache:
             data = self._fresh_data(contact_chain)
-            self._screen[contact_chain] = (data, np.array(data.activeCollisionPairs, dtype=bool))
-        data, active = self._screen[contact_chain]
+            cache[contact_chain] = (data, np.array(data.activeCollisionPairs, dtype=bool))
+        return cache[contact_chain]
+
+    def _screened(self, q: FloatArray, contact_chain: str | None) -> tuple[pin.GeometryData, FloatArray]:
+        """The screening workspace placed at ``q``, and every pair's lower bound (m; inf: inactive)."""
+        data, active = self._workspace(self._screen, contact_chain)
         pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
-        bounds = self._bounds.lower_bounds(data)
+        bounds = self._spheres().lower_bounds(data)
         bounds[~active] = np.inf
         return data, bounds
 
@@ -224,18 +234,13 @@ class CollisionChecker:
         GeometryData per contact chain: coal's warm starts could only change a verdict
         for a pair within numerical precision (1e-15 m) of the margin.
         """
-        if self._bounds is None:
-            self._bounds = BoundingSpheres(self.geom)
-        if contact_chain not in self._fast:
-            data = self._fresh_data(contact_chain)
-            self._fast[contact_chain] = (data, np.array(data.activeCollisionPairs, dtype=bool))
-        data, active = self._fast[contact_chain]
+        data, active = self._workspace(self._fast, contact_chain)
         if self._fast_margin.get(contact_chain) != margin_m:
             for request in data.collisionRequests:
                 request.security_margin = margin_m
             self._fast_margin[contact_chain] = margin_m
         pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
-        bounds = self._bounds.lower_bounds(data)
+        bounds = self._spheres().lower_bounds(data)
         for k in np.flatnonzero((bounds < margin_m) & active).tolist():
             if pin.computeCollision(self.geom, data, k):
                 return True
