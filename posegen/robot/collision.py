@@ -206,9 +206,7 @@ class CollisionChecker:
             data, bounds = self._screened(q, contact_chain)
             candidates = np.flatnonzero(bounds < within_m).tolist()
         else:
-            data = (
-                self._screen[contact_chain][0] if contact_chain in self._screen else self._screened(q, contact_chain)[0]
-            )
+            data = self._workspace(self._screen, contact_chain)[0]
             pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
             candidates = list(pairs)
         found = []
