@@ -93,13 +93,13 @@ class PostureSampler:
         """Turn sample ``index`` into a feasible posture, or say why it is not one."""
         scene = self.scene
         sample = draw(scene, self.seed, index)
-        result = self.projector.project(sample.joints, sample.chain, scene.spot_world(sample.spot))
+        spot = scene.spot_world(sample.spot)  # (3,) m, world
+        result = self.projector.project(sample.joints, sample.chain, spot)
         if not result.converged:
             return Rejection.NOT_CONVERGED
         # collisions first: 5 in 10 converged TALOS samples collide (the thighs, mostly), the other invariants
         # fail 1 in 5000; a colliding posture is moved apart (Projector.separate) and checked again, and the
         # assessment (~0.6 ms) is spent on collision-free postures only
-        spot = scene.spot_world(sample.spot)
         closest = self.checker.closest_unless_within(
             scene.configuration(result.joints), sample.chain, scene.margins.collision_m
         )
