@@ -60,10 +60,18 @@ def information(regressors: FloatArray, weights: FloatArray) -> FloatArray:
 
 
 def _step_length(eigen: FloatArray, nb: int, low: float, high: float) -> float:
-    """Maximise f(t) = sum log(1 + t lambda_k) - nb log(1 + t) over t in [low, high]."""
+    """Maximise f(t) = sum log(1 + t lambda_k) - nb log(1 + t) over t in [low, high].
+
+    The slope is summed over the (3,) eigenvalues in plain floats: the same operations, in
+    the same order, as numpy's sum of so few, without an array per evaluation.
+    """
+    values = [float(v) for v in eigen]
 
     def slope(t: float) -> float:
-        return float(np.sum(eigen / (1.0 + t * eigen)) - nb / (1.0 + t))
+        total = 0.0
+        for value in values:
+            total += value / (1.0 + t * value)
+        return total - nb / (1.0 + t)
 
     if slope(low) <= 0:
         return low
