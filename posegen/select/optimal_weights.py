@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg.blas
 import scipy.optimize
 
 from posegen.model import Design
@@ -53,10 +54,14 @@ def _variances(regressors: FloatArray, inverse: FloatArray) -> FloatArray:
 
 
 def information(regressors: FloatArray, weights: FloatArray) -> FloatArray:
-    """M(w) = sum_i w_i A_i^T A_i. Shape (nb, nb)."""
+    """M(w) = sum_i w_i A_i^T A_i. Shape (nb, nb).
+
+    One triangle computed (BLAS ``syrk`` on the rows scaled by ``sqrt(w_i)``), then mirrored.
+    """
     nb = regressors.shape[2]
-    flat = regressors.reshape(-1, nb)
-    return np.asarray((flat * np.repeat(weights, 3)[:, None]).T @ flat)
+    scaled = regressors.reshape(-1, nb) * np.sqrt(np.repeat(weights, 3))[:, None]  # (3 n, nb)
+    upper = scipy.linalg.blas.dsyrk(1.0, scaled.T)  # (nb, nb): the upper triangle of scaled^T scaled
+    return np.asarray(np.triu(upper) + np.triu(upper, 1).T)
 
 
 def _step_length(eigen: FloatArray, nb: int, low: float, high: float) -> float:
