@@ -15,7 +15,7 @@ names here are its plumbing and may change between versions.
 from posegen.model.calibration_model import CalibrationModel, Evaluation, Observations, body_parts, start_point
 from posegen.model.contact_model import ContactModel, Contacts, planned_kinds
 from posegen.model.contact_rows import masked, row_counts, row_mask
-from posegen.model.design import RIDGE, SINGULAR, Design, build_design
+from posegen.model.design import RIDGE, SINGULAR, Design, build_design, information
 from posegen.model.evaluations import Evaluations
 from posegen.model.floor_model import FLOOR_FIELDS, SESSION_FIELDS, FloorModel
 from posegen.model.identifiability import RANK_TOLERANCE, BaseParameters, base_parameters, observability_o1
@@ -103,6 +103,7 @@ __all__ = [
     "build_design",
     "candidate_spec",
     "free_directions",
+    "information",
     "initial_planes",
     "kind_basis",
     "kind_sigmas",

@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg.blas
 from numpy.typing import NDArray
 
 from posegen.errors import InfeasibleError
@@ -131,13 +132,25 @@ class Design:
 
     def o1_of_weights(self, weights: FloatArray) -> float:
         """O1 of a continuous design: det(sum w_i I_i)^(1/(2 nb)), weights summing to one."""
-        nb = self.n_params
-        flat = self.regressors.reshape(-1, nb)
-        info = (flat * np.repeat(weights, 3)[:, None]).T @ flat
-        sign, value = np.linalg.slogdet(info)
+        sign, value = np.linalg.slogdet(information(self.regressors, weights))
         if sign <= 0:
             return 0.0
         return float(np.exp((value + self.log_det_pool) / (2 * self.n_params)))
+
+
+def information(regressors: FloatArray, weights: FloatArray) -> FloatArray:
+    """M(w) = sum_i w_i A_i^T A_i of postures' regressors (n, 3, nb) weighted (n,) >= 0. Shape (nb, nb).
+
+    One triangle computed (BLAS ``syrk`` on the rows scaled by ``sqrt(w_i)``), then mirrored.
+
+    Example:
+        >>> information(design.regressors, np.full(design.size, 1.0 / design.size))  # (nb, nb)
+
+    """
+    nb = regressors.shape[2]
+    scaled = regressors.reshape(-1, nb) * np.sqrt(np.repeat(weights, 3))[:, None]  # (3 n, nb)
+    upper = scipy.linalg.blas.dsyrk(1.0, scaled.T)  # (nb, nb): the upper triangle of scaled^T scaled
+    return np.asarray(np.triu(upper) + np.triu(upper, 1).T)
 
 
 def _chunks(count: int, size: int) -> list[slice]:

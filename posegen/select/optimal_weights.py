@@ -15,10 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg.blas
 import scipy.optimize
 
-from posegen.model import Design
+from posegen.model import Design, information
 from posegen.robot import FloatArray
 
 REFRESH_EVERY = 50  # exact recomputation of M^-1 and d every this many steps
@@ -51,17 +50,6 @@ def _variances(regressors: FloatArray, inverse: FloatArray) -> FloatArray:
     n, _, nb = regressors.shape
     flat = regressors.reshape(-1, nb)
     return np.asarray(((flat @ inverse) * flat).sum(axis=1).reshape(n, 3).sum(axis=1))
-
-
-def information(regressors: FloatArray, weights: FloatArray) -> FloatArray:
-    """M(w) = sum_i w_i A_i^T A_i. Shape (nb, nb).
-
-    One triangle computed (BLAS ``syrk`` on the rows scaled by ``sqrt(w_i)``), then mirrored.
-    """
-    nb = regressors.shape[2]
-    scaled = regressors.reshape(-1, nb) * np.sqrt(np.repeat(weights, 3))[:, None]  # (3 n, nb)
-    upper = scipy.linalg.blas.dsyrk(1.0, scaled.T)  # (nb, nb): the upper triangle of scaled^T scaled
-    return np.asarray(np.triu(upper) + np.triu(upper, 1).T)
 
 
 def _step_length(eigen: FloatArray, nb: int, low: float, high: float) -> float:

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from posegen.select.optimal_weights import _step_length, information
+from posegen.model import information
+from posegen.select.optimal_weights import _step_length
 
 
 def test_information_is_the_weighted_sum_of_the_postures_information():
