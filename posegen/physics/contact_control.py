@@ -21,8 +21,11 @@ A contact of the route runs, in route time:
   about the contact frame's origin, so the fingertips settle flush and share the load;
 * an arm whose joint loop is at its effort limit (its tracking error past the loop's
   saturation) neither presses further nor turns: the admittance does not wind up;
-* **release**: the target force falls to zero over ``UNLOAD_S`` as the route's release
-  starts, then the hand's offset fades back to the plan over the rest of the release.
+* **release**: the target force falls to zero over the first ``UNLOAD_SHARE`` of the route's
+  release (``UNLOAD_S`` at least; :func:`unload_s`), then the hand's offset fades back to the
+  plan over the rest of the release. The floor takes back the hand's load gradually: a hand
+  unloaded at once moves the floor's ZMP toward it by ``F h / W`` in a step (about 1 cm for
+  30 N at 0.3 m), which a robot leaning on its hand near the polygon's edge does not survive.
 
 A free hand outside these phases stays where the plan puts it (zero twist) unless a force
 above ``GUARD_FORCE_N`` pushes it.
@@ -52,7 +55,8 @@ MAX_SPEED_M_S = 0.02
 MAX_TURN_RAD_S = 0.2
 GUARD_FORCE_N = 10.0
 TOUCH_FORCE_N = 3.0  # in contact: above this normal force
-UNLOAD_S = 0.1
+UNLOAD_S = 0.1  # s, the shortest unloading
+UNLOAD_SHARE = 0.5  # the force is taken off over this share of the release (at least UNLOAD_S)
 TARE_S = 0.1
 REACHED = 0.9  # a hold starts once the normal force is this fraction of the target (in the force band)
 SEARCH_TIMEOUT_S = 4.0  # the route waits at most this long for a contact before its hold
@@ -100,6 +104,17 @@ def contact_times(route: Route) -> tuple[ContactTimes, ...]:
         label = f"posture {posture}" + ("" if hold[3] is None else f" (pool {hold[3]})")
         out.append(ContactTimes(hold[2], label, approach[0], press[0], hold[0], release[0], release[1]))
     return tuple(sorted(out, key=lambda c: c.hold_s))
+
+
+def unload_s(contact: ContactTimes) -> float:
+    """How long (s) a contact's release takes its force off: ``UNLOAD_SHARE`` of the release, ``UNLOAD_S`` at least.
+
+    Example:
+        >>> unload_s(ContactTimes("left", "posture 0", 0.0, 0.3, 0.6, 1.6, 2.2))
+        0.30000000000000004
+
+    """
+    return max(UNLOAD_S, UNLOAD_SHARE * (contact.free_s - contact.lift_s))
 
 
 @dataclass
@@ -193,7 +208,7 @@ class HandControl:
             return 0.0
         if t < contact.lift_s:
             return self.force_n * min((t - contact.press_s) / max(contact.hold_s - contact.press_s, 1e-3), 1.0)
-        return self.force_n * max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)
+        return self.force_n * max(1.0 - (t - contact.lift_s) / unload_s(contact), 0.0)
 
     def step(
         self,
@@ -259,7 +274,7 @@ class HandControl:
 
     def _twist(self, chain: str, contact: ContactTimes | None, t: float, wrench: FloatArray, hand: _Hand) -> FloatArray:
         phase = self.phase(chain, t)
-        if phase == Phase.RELEASE and contact is not None and t >= contact.lift_s + UNLOAD_S:
+        if phase == Phase.RELEASE and contact is not None and t >= contact.lift_s + unload_s(contact):
             remaining = max(contact.free_s - t, 0.05)
             return -hand.offset / remaining  # back to the plan by the release's end
         if phase in (Phase.FREE, Phase.APPROACH):
@@ -269,7 +284,7 @@ class HandControl:
             return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset, 0.0)
         target = self.force_n
         if phase == Phase.RELEASE and contact is not None:
-            target *= max(1.0 - (t - contact.lift_s) / UNLOAD_S, 0.0)
+            target *= max(1.0 - (t - contact.lift_s) / unload_s(contact), 0.0)
         band = HOLD_BAND if contact is not None and contact.hold_s <= t < contact.lift_s else FORCE_BAND
         twist = self._give_way(wrench, target, hand.offset, band)
         if self.saturated.get(chain, False):  # anti-windup: an arm at its effort limit pushes no further

@@ -12,9 +12,13 @@ from posegen.physics.contact_control import (
     SEARCH_SPEED_M_S,
     SEARCH_TIMEOUT_S,
     SETTLE_S,
+    UNLOAD_S,
+    UNLOAD_SHARE,
+    ContactTimes,
     HandControl,
     Phase,
     contact_times,
+    unload_s,
 )
 from posegen.physics.nominal import NominalRobot
 from posegen.physics.tool import Tool
@@ -60,3 +64,27 @@ def test_the_route_waits_for_the_force_then_goes_on(route_file: Path, scene: Sce
     assert not hands.holds_back(before + 1.0, after + 1.0, dt)  # elsewhere: never
     other = HandControl(robot, (contact,), force_n=30.0)
     assert abs(sum(other.holds_back(before, after, dt) for _ in range(5000)) - SEARCH_TIMEOUT_S / dt) <= 1
+
+
+def test_a_release_takes_the_force_off_over_half_of_it(route_file: Path, scene: Scene, tools: dict[str, Tool]) -> None:
+    robot = NominalRobot(scene, tools)
+    contact = contact_times(read_route(route_file))[0]
+    release = contact.free_s - contact.lift_s
+    assert unload_s(contact) == max(UNLOAD_SHARE * release, UNLOAD_S)
+    short = ContactTimes(contact.chain, "short", 0.0, 0.1, 0.2, 1.2, 1.25)
+    assert unload_s(short) == UNLOAD_S  # never faster than UNLOAD_S
+    hands = HandControl(robot, (contact,), force_n=30.0)
+    half = contact.lift_s + 0.5 * unload_s(contact)
+    assert hands.phase(contact.chain, half) == Phase.RELEASE
+    assert np.isclose(hands.planned_push(contact.chain, contact.lift_s), 30.0)
+    assert np.isclose(hands.planned_push(contact.chain, half), 15.0)  # linear, not a step
+    assert hands.planned_push(contact.chain, contact.lift_s + unload_s(contact)) < 1e-9
+    hand = hands.hands[contact.chain]
+    hand.offset = np.array([0.0, 0.0, -0.01, 0.0, 0.0, 0.0])
+    at_half = hands._twist(contact.chain, contact, half, np.array([0, 0, 15.0, 0, 0, 0]), hand)
+    assert not np.any(at_half)  # the target's ramp: 15 N at half way is on target, the hand still
+    pressing = hands._twist(contact.chain, contact, half, np.array([0, 0, 30.0, 0, 0, 0]), hand)
+    assert pressing[2] > 0  # the full force at half way: it lifts
+    after = contact.lift_s + unload_s(contact) + 1e-3
+    back = hands._twist(contact.chain, contact, after, np.zeros(6), hand)
+    assert back[2] > 0 and np.isclose(back[2] * (contact.free_s - after), 0.01)  # then back to the plan by the end
