@@ -8,8 +8,8 @@ the contact frame's origin in world axes.
 
 A contact of the route runs, in route time:
 
-* **approach** (the route's): the hand gives way to any force above ``GUARD_FORCE_N``
-  (a table higher than planned is met, not pushed);
+* **approach** (the route's): the hand gives way to any force above ``GUARD_FORCE_N``,
+  at up to ``GUARD_SPEED_M_S`` (a table higher than planned is met, not pushed);
 * **go-to-contact and hold**: force control along the table normal to the target force
   ``force_n``: ``dz/dt = K_FORCE (f - force_n)`` within ``MAX_SPEED_M_S`` once
   touching (still within ``FORCE_BAND`` of the target: the contact is measured with the
@@ -28,7 +28,10 @@ A contact of the route runs, in route time:
   30 N at 0.3 m), which a robot leaning on its hand near the polygon's edge does not survive.
 
 A free hand outside these phases stays where the plan puts it (zero twist) unless a force
-above ``GUARD_FORCE_N`` pushes it.
+above ``GUARD_FORCE_N`` pushes it: it gives way as in the approach, at up to
+``GUARD_SPEED_M_S``, five times the contact's ``MAX_SPEED_M_S``: the true hand may pass
+centimetres lower than the nominal one, and an arm that keeps moving while its hand yields at
+the contact's speed presses 100 N and more on the table, enough to push the robot over.
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ TORQUE_BAND_NM = 0.5  # roll and pitch torques below this leave the hand's tilt 
 MAX_TILT_RAD = 0.05  # the hand turns at most this far from the plan
 SEARCH_SPEED_M_S = 0.02
 MAX_SPEED_M_S = 0.02
+GUARD_SPEED_M_S = 0.1  # a hand that meets the table unplanned gives way this fast at most (the arm moves on)
 MAX_TURN_RAD_S = 0.2
 GUARD_FORCE_N = 10.0
 TOUCH_FORCE_N = 3.0  # in contact: above this normal force
@@ -281,7 +285,7 @@ class HandControl:
             size = float(np.linalg.norm(wrench[:3]))
             if size <= GUARD_FORCE_N:
                 return np.zeros(6) if phase == Phase.APPROACH else -hand.offset / 0.5
-            return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset, 0.0)
+            return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset, 0.0, GUARD_SPEED_M_S)
         target = self.force_n
         if phase == Phase.RELEASE and contact is not None:
             target *= max(1.0 - (t - contact.lift_s) / unload_s(contact), 0.0)
@@ -293,7 +297,9 @@ class HandControl:
         return twist
 
     @staticmethod
-    def _give_way(wrench: FloatArray, target_n: float, offset: FloatArray, band: float = FORCE_BAND) -> FloatArray:
+    def _give_way(
+        wrench: FloatArray, target_n: float, offset: FloatArray, band: float = FORCE_BAND, speed: float = MAX_SPEED_M_S
+    ) -> FloatArray:
         """The admittance twist (6,): along the normal to the target force, roll and pitch to zero torque.
 
         The tangent and the yaw are held (the fingertips' friction holds them; the
@@ -306,7 +312,7 @@ class HandControl:
         error = wrench[2] - target_n
         if abs(error) <= band * target_n:  # close enough: the hand stays still (a contact is measured still)
             return twist
-        twist[2] = min(max(K_FORCE * error, -MAX_SPEED_M_S), MAX_SPEED_M_S)
+        twist[2] = min(max(K_FORCE * error, -speed), speed)
         torque = np.where(np.abs(wrench[3:5]) > TORQUE_BAND_NM, wrench[3:5], 0.0)
         turn = saturate(K_TORQUE * torque, MAX_TURN_RAD_S)
         blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD

@@ -9,6 +9,9 @@ import numpy as np
 from posegen.io import SegmentType, read_route
 from posegen.physics.contact_control import (
     FORCE_BAND,
+    GUARD_FORCE_N,
+    GUARD_SPEED_M_S,
+    MAX_SPEED_M_S,
     SEARCH_SPEED_M_S,
     SEARCH_TIMEOUT_S,
     SETTLE_S,
@@ -88,3 +91,20 @@ def test_a_release_takes_the_force_off_over_half_of_it(route_file: Path, scene: 
     after = contact.lift_s + unload_s(contact) + 1e-3
     back = hands._twist(contact.chain, contact, after, np.zeros(6), hand)
     assert back[2] > 0 and np.isclose(back[2] * (contact.free_s - after), 0.01)  # then back to the plan by the end
+
+
+def test_a_free_hand_that_meets_the_table_gives_way_fast(
+    route_file: Path, scene: Scene, tools: dict[str, Tool]
+) -> None:
+    robot = NominalRobot(scene, tools)
+    contact = contact_times(read_route(route_file))[0]
+    hands = HandControl(robot, (contact,), force_n=30.0)
+    hand = hands.hands[contact.chain]
+    free = contact.approach_s - 0.05
+    assert hands.phase(contact.chain, free) == Phase.FREE
+    struck = np.array([0, 0, 100.0, 0, 0, 0])
+    assert hands._twist(contact.chain, contact, free, struck, hand)[2] == GUARD_SPEED_M_S > MAX_SPEED_M_S
+    light = np.array([0, 0, 0.5 * GUARD_FORCE_N, 0, 0, 0])
+    assert not np.any(hands._twist(contact.chain, contact, free, light, hand))  # below the guard: held
+    pressing = 0.5 * (contact.press_s + contact.hold_s)
+    assert hands._twist(contact.chain, contact, pressing, struck, hand)[2] == MAX_SPEED_M_S  # in contact: slow
