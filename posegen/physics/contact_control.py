@@ -286,9 +286,7 @@ class HandControl:
             if size <= GUARD_FORCE_N:
                 return np.zeros(6) if phase == Phase.APPROACH else -hand.offset / 0.5
             return self._give_way(wrench * (size - GUARD_FORCE_N) / size, 0.0, hand.offset, 0.0, GUARD_SPEED_M_S)
-        target = self.force_n
-        if phase == Phase.RELEASE and contact is not None:
-            target *= max(1.0 - (t - contact.lift_s) / unload_s(contact), 0.0)
+        target = self.planned_push(chain, t) if phase == Phase.RELEASE else self.force_n  # the release's ramp
         band = HOLD_BAND if contact is not None and contact.hold_s <= t < contact.lift_s else FORCE_BAND
         twist = self._give_way(wrench, target, hand.offset, band)
         if self.saturated.get(chain, False):  # anti-windup: an arm at its effort limit pushes no further
