@@ -21,7 +21,7 @@ from posegen.io import Pool, write_yaml
 from posegen.model import Contacts
 from posegen.pool import generate_pool
 from posegen.robot import Config, Scene, load_config
-from posegen.route import route_postures_file
+from posegen.route import Planner, Unplanned, plan_stop, route_postures_file
 from posegen.select import select_pool_file
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,6 +37,22 @@ REAL_DATA = (  # $POSEGEN_REAL_DATA; else shared/data/talos_real beside the chec
 REAL_FILES = ("left_train.csv", "left_validation.csv", "right_train.csv")
 EXAMPLE_POOL = ROOT / "plans" / "talos" / "pool.yaml"
 RADIUS_M = 0.01  # tip radius of the point contacts of point_config_data
+DETOUR_ROWS = (4, 6)
+"""Two example-pool postures whose approach poses no straight line joins, with raised midpoints and more than one
+via path, the first found not the fastest. The route tests' fixtures assert each property, so that a regenerated
+example pool fails there, saying which; pick another pair then (``git log`` of this line shows how)."""
+
+
+def routable_rows(scene: Scene, pool: Pool, first: int, count: int) -> list[int]:
+    """The first ``count`` pool rows from ``first`` on whose stop plans: a vertical approach and lift exist."""
+    planner, rows = Planner(scene, seed=0), []
+    for row in range(first, len(pool.postures)):
+        posture = pool.postures[row]
+        if not isinstance(plan_stop(planner, (row, tuple(posture.joints), posture.chain)), Unplanned):
+            rows.append(row)
+        if len(rows) == count:
+            return rows
+    raise AssertionError(f"fewer than {count} routable postures from row {first} of the example pool")
 
 
 def point_config_data(cone_deg: float = 30.0) -> dict:

@@ -256,10 +256,11 @@ def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
     """A selected posture that cannot be reached is replaced by a pool posture, and the swap is reported."""
     import hashlib
 
-    from tests.conftest import EXAMPLE_POOL
+    from posegen.io import load_pool
+    from tests.conftest import EXAMPLE_POOL, routable_rows
 
     data = yaml.safe_load(EXAMPLE_POOL.read_text())
-    rows = [0, 9, 10]  # pool row 0 among them: a falsy row must still count in the O1 figures
+    rows = [0, *routable_rows(scene, load_pool(EXAMPLE_POOL), 9, 2)]  # row 0 among them: a falsy row counts in O1
     postures = [{"pool_id": r, "rank": i + 1, "weight": 0.1, **data["postures"][r]} for i, r in enumerate(rows)]
     other = "right" if postures[1]["chain"] == "left" else "left"
     k = scene.joint_index(f"arm_{other}_1_joint")
@@ -278,7 +279,7 @@ def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
     assert "posture 1 replaced by pool posture" in stdout and "vertical approach" in stdout
     header = yaml.safe_load(out.read_text())
     (swap,) = header["substitutions"]
-    assert swap["pool_id"] == 9 and swap["substitute_pool_id"] not in rows and not header["skipped"]
+    assert swap["pool_id"] == rows[1] and swap["substitute_pool_id"] not in rows and not header["skipped"]
     assert [p["pool_id"] for p in header["postures"]].count(swap["substitute_pool_id"]) == 1
     information = header["summary"]["information"]
     assert information["rank_routed"] == information["rank_selected"] == 9  # 3 postures x 3 rows, all counted

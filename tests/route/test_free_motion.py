@@ -25,14 +25,17 @@ from posegen.route import (
 )
 from posegen.route.free_motion import RAISE_FRACTIONS, VIA_CANDIDATES, _plan_ompl, stream_of
 from posegen.route.planner import _timed_transfer
+from tests.conftest import DETOUR_ROWS
 
 
 @pytest.fixture(scope="module")
 def ends(scene, example_pool):
     space = StanceSpace(scene, CollisionChecker(scene, convex=True))
     projector = Projector(scene)
-    postures = [example_pool.postures[i] for i in (0, 1)]  # the straight line between them is blocked
+    postures = [example_pool.postures[i] for i in DETOUR_ROWS]
     verticals = [vertical_paths(space, projector, np.array(p.joints), p.chain) for p in postures]
+    a, b = verticals
+    assert straight(space, a.approach[0], b.approach[0]) is None, f"DETOUR_ROWS {DETOUR_ROWS}: a straight line joins"
     return space, verticals
 
 
@@ -53,7 +56,7 @@ def test_ompl_gives_the_same_path_whatever_ran_before_it_in_the_process(ends):
 def test_ompl_stops_when_its_goal_is_invalid(example_pool, ends):
     """RRTConnect waits for a valid goal without checking a state: the search must still end (it did not)."""
     space, (a, _) = ends
-    touching = np.array(example_pool.postures[0].joints)  # the hand on the table: not a free state
+    touching = np.array(example_pool.postures[DETOUR_ROWS[0]].joints)  # the hand on the table: not a free state
     assert not space.is_valid(touching, None)
     result: list[object] = []
     search = threading.Thread(
@@ -86,12 +89,13 @@ def test_via_sequences_skip_missing_lifts_and_duplicates(scene):
 
 @pytest.fixture(scope="module")
 def detour(scene, example_pool):
-    """Two stops of the example pool whose straight line is blocked and that have two via paths."""
+    """Two stops of the example pool whose straight line is blocked, with raised midpoints and via paths."""
     planner = Planner(scene, seed=0)
-    stops = [
-        plan_stop(planner, (i, tuple(example_pool.postures[i].joints), example_pool.postures[i].chain)) for i in (0, 1)
-    ]
-    assert not any(isinstance(s, Unplanned) for s in stops)
+    postures = [example_pool.postures[i] for i in DETOUR_ROWS]
+    stops = [plan_stop(planner, (i, tuple(p.joints), p.chain)) for i, p in zip(DETOUR_ROWS, postures, strict=True)]
+    assert not any(isinstance(s, Unplanned) for s in stops), f"DETOUR_ROWS {DETOUR_ROWS}: a stop does not plan"
+    a, b = stops
+    assert raised_midpoints(planner.space, a.approach[0], b.approach[0], a.lift, b.lift), f"DETOUR_ROWS {DETOUR_ROWS}"
     return planner, stops
 
 
@@ -99,7 +103,7 @@ def test_raised_midpoints_are_valid_states_halfway_between_the_ends_and_up(detou
     planner, (a, b) = detour
     space, start, goal = planner.space, a.approach[0], b.approach[0]
     found = raised_midpoints(space, start, goal, a.lift, b.lift)
-    assert found  # this pair has them
+    assert found  # this pair has them (the fixture checks)
     lift = ((a.lift - start) + (b.lift - goal)) / 2
     expected = [space.coordinates_of((start + goal) / 2 + f * lift) for f in RAISE_FRACTIONS]
     for state in found:

@@ -19,8 +19,9 @@ from posegen.route import (
     transfer_times,
     verify_route,
 )
+from tests.conftest import routable_rows
 
-ROWS = [0, 1, 2, 4, 5]  # the first postures of the example pool with a vertical approach (3 has none)
+ROWS = [0, 1, 2, 4, 5]  # five example-pool postures that route (the first test asserts none is skipped)
 
 
 def write(route, pool, rows, path):
@@ -157,7 +158,7 @@ def unreachable(scene, posture):
 
 
 def test_a_lost_posture_is_replaced_by_the_pool_posture_with_the_largest_gain(scene, example_pool):
-    rows = [8, 9, 10]
+    rows = routable_rows(scene, example_pool, 8, 3)  # three postures that route: the middle one is made unreachable
     postures = [example_pool.postures[i] for i in rows]
     postures[1] = unreachable(scene, postures[1])
     pool = example_pool
@@ -177,7 +178,7 @@ def test_a_lost_posture_is_replaced_by_the_pool_posture_with_the_largest_gain(sc
 
 def test_a_posture_held_in_an_earlier_batch_is_never_the_substitute(scene, example_pool):
     """A session's batch must not measure again what an earlier batch held: the best gain held, the next routes."""
-    rows = [8, 9, 10]
+    rows = routable_rows(scene, example_pool, 8, 3)
     postures = [example_pool.postures[i] for i in rows]
     postures[1] = unreachable(scene, postures[1])
     design = build_design(scene, example_pool.joints(), [p.chain for p in example_pool.postures])[0]

@@ -5,6 +5,7 @@ import pytest
 
 from posegen.robot import CollisionChecker, Projector, StanceSpace
 from posegen.route import blend_corners, corners, path_length, shortcut, through, vertical_paths
+from tests.conftest import DETOUR_ROWS
 
 
 @pytest.fixture(scope="module")
@@ -12,9 +13,10 @@ def detour(scene, example_pool):
     """Two approach poses joined through both lifts: a path with two corners."""
     space = StanceSpace(scene, CollisionChecker(scene, convex=True))
     projector = Projector(scene)
-    a, b = (vertical_paths(space, projector, np.array(p.joints), p.chain) for p in example_pool.postures[0:2])
+    postures = [example_pool.postures[i] for i in DETOUR_ROWS]
+    a, b = (vertical_paths(space, projector, np.array(p.joints), p.chain) for p in postures)
     path = through(space, [a.approach[0], a.clearance, b.clearance, b.approach[0]])
-    assert path is not None
+    assert path is not None, f"DETOUR_ROWS {DETOUR_ROWS}: no path through both lifts"
     return space, path
 
 
