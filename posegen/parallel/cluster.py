@@ -17,6 +17,7 @@ worker killed mid-run loses nothing: its tasks run again elsewhere, with the sam
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable, Generator, Iterable
 from typing import Any
@@ -30,6 +31,7 @@ from posegen import __version__
 from posegen.errors import BackendError
 from posegen.parallel.backend import WINDOW_PER_SLOT, Backend, ItemT, Job, ResultT, StateT, in_order
 
+LOG = logging.getLogger(__name__)
 CONNECT_TIMEOUT_S = 10.0
 WORKER_TIMEOUT_S = 30.0  # wait this long for a first worker to join
 RETRIES = 3  # reruns of a task whose worker died or failed
@@ -122,7 +124,10 @@ class DaskBackend(Backend):
         try:
             yield from in_order(submit, items, max(window or 0, WINDOW_PER_SLOT * self.slots))
         finally:
-            self.client.unregister_worker_plugin(plugin)
+            try:
+                self.client.unregister_worker_plugin(plugin)
+            except OSError as exc:  # a worker lost meanwhile (its tasks ran again elsewhere): the results stand
+                LOG.debug("unregistering %s: %s", plugin, exc)
 
     def close(self) -> None:
         """Disconnect from the scheduler (the cluster keeps running)."""

@@ -81,6 +81,7 @@ class CollisionChecker:
         self.geom = geom
         self._names = [str(o.name) for o in geom.geometryObjects]
         table_index = self._names.index(TABLE)
+        self._table_pairs = np.array([table_index in (p.first, p.second) for p in geom.collisionPairs], dtype=bool)
         self._exempt: dict[str | None, list[int]] = {None: []}
         for chain in scene.chains:
             touching = tuple(frame for kind in chain.kinds for frame in kind.carried_frames(chain))
@@ -92,7 +93,7 @@ class CollisionChecker:
             ]
         self._model_data = model.createData()
         self._fast: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]] = {}
-        self._fast_margin: dict[str | None, float] = {}
+        self._fast_margin: dict[str | None, tuple[float, float | None]] = {}
         self._screen: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]] = {}
         self._bounds: BoundingSpheres | None = None
 
@@ -224,41 +225,68 @@ class CollisionChecker:
                 )
         return found
 
-    def collides(self, q: FloatArray, contact_chain: str | None, margin_m: float) -> bool:
-        """Whether any active pair is closer than ``margin_m`` (a fast yes/no for planning).
+    def pair_margins(self, margin_m: float, table_margin_m: float | None = None) -> FloatArray:
+        """Each collision pair's margin (m): ``margin_m``, or the larger ``table_margin_m`` for the table's pairs.
+
+        Example:
+            >>> margins = checker.pair_margins(0.005, 0.03)  # (n_pairs,) m: 0.03 for a hand and the table
+
+        """
+        margins = np.full(len(self._table_pairs), margin_m)
+        if table_margin_m is not None:
+            margins[self._table_pairs] = max(margin_m, table_margin_m)
+        return margins
+
+    def collides(
+        self, q: FloatArray, contact_chain: str | None, margin_m: float, table_margin_m: float | None = None
+    ) -> bool:
+        """Whether any active pair is closer than its margin (a fast yes/no for planning).
 
         Only the pairs whose bounding-sphere bound (:mod:`posegen.robot.bounds`) is below
-        the margin are asked of coal; the others cannot be closer. Reuses one
+        their margin are asked of coal; the others cannot be closer. Reuses one
         GeometryData per contact chain: coal's warm starts could only change a verdict
         for a pair within numerical precision (1e-15 m) of the margin.
-        """
-        data, active = self._workspace(self._fast, contact_chain)
-        if self._fast_margin.get(contact_chain) != margin_m:
-            for request in data.collisionRequests:
-                request.security_margin = margin_m
-            self._fast_margin[contact_chain] = margin_m
-        pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
-        bounds = self._spheres().lower_bounds(data)
-        for k in np.flatnonzero((bounds < margin_m) & active).tolist():
-            if pin.computeCollision(self.geom, data, k):
-                return True
-        return False
-
-    def colliding_pairs(self, q: FloatArray, contact_chain: str | None, margin_m: float) -> list[Proximity]:
-        """Pairs closer than ``margin_m`` (coal collision queries with a security margin).
 
         Args:
             q: Full configuration, shape (nq,).
             contact_chain: The chain whose fingertips touch the table, or None.
-            margin_m: Security margin.
+            margin_m: Every pair's margin (m).
+            table_margin_m: A larger margin for the pairs of the robot and the table (m), or None.
+
+        """
+        data, active = self._workspace(self._fast, contact_chain)
+        margins = self.pair_margins(margin_m, table_margin_m)  # (n_pairs,) m
+        if self._fast_margin.get(contact_chain) != (margin_m, table_margin_m):
+            for request, margin in zip(data.collisionRequests, margins.tolist(), strict=True):
+                request.security_margin = margin
+            self._fast_margin[contact_chain] = (margin_m, table_margin_m)
+        pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
+        bounds = self._spheres().lower_bounds(data)
+        for k in np.flatnonzero((bounds < margins) & active).tolist():
+            if pin.computeCollision(self.geom, data, k):
+                return True
+        return False
+
+    def colliding_pairs(
+        self, q: FloatArray, contact_chain: str | None, margin_m: float, table_margin_m: float | None = None
+    ) -> list[Proximity]:
+        """Pairs closer than their margin (coal collision queries with a security margin).
+
+        Args:
+            q: Full configuration, shape (nq,).
+            contact_chain: The chain whose fingertips touch the table, or None.
+            margin_m: Security margin (m).
+            table_margin_m: A larger margin for the pairs of the robot and the table (m), or None.
 
         Returns:
             The offending pairs with their distance, closest first; empty if none.
 
         """
         data = self._fresh_data(contact_chain)
-        for request in data.collisionRequests:
-            request.security_margin = margin_m
+        for request, margin in zip(
+            data.collisionRequests, self.pair_margins(margin_m, table_margin_m).tolist(), strict=True
+        ):
+            request.security_margin = margin
         pin.computeCollisions(self.scene.model, self._model_data, self.geom, data, q, False)
         hits = [k for k, r in enumerate(data.collisionResults) if r.isCollision() and data.activeCollisionPairs[k]]
         if not hits:

@@ -161,7 +161,7 @@ class Config:
         if stance["root_rpy_deg"] is None:
             del stance["root_rpy_deg"]
         margins = dataclasses.asdict(self.margins)
-        for key, unset in (("joint_limit_rad_by_joint", {}), ("com_uncertainty_m", 0.0)):
+        for key, unset in (("joint_limit_rad_by_joint", {}), ("com_uncertainty_m", 0.0), ("table_clearance_m", 0.0)):
             if margins[key] == unset:
                 del margins[key]  # only what a config says: older artefacts stay identical
         robot = {"source": source, "locked_joints": dict(self.locked_joints)}
@@ -207,13 +207,19 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         raise ConfigError("robot.locked_joints: expected a mapping joint name -> angle (rad)")
     stance = read_stance(top.sub("stance"))
     chains = read_chains(top)
+    table, margins = read_table(top.sub("table"), chains), read_margins(top.sub("margins"))
+    if margins.table_clearance_m >= table.approach_standoff_m:
+        raise ConfigError(
+            f"margins.table_clearance_m: must be below table.approach_standoff_m ({table.approach_standoff_m} m), "
+            f"where free motions start, got {margins.table_clearance_m}"
+        )
     return Config(
         robot=source,
         locked_joints={str(k): float(v) for k, v in locked.items()},
         stance=stance,
         chains=chains,
-        table=read_table(top.sub("table"), chains),
-        margins=read_margins(top.sub("margins")),
+        table=table,
+        margins=margins,
         sampling=read_sampling(top.sub("sampling")),
         route=_section(top, "route", RouteConfig()),
         recording=_recording(top),

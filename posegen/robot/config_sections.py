@@ -35,6 +35,7 @@ class MarginConfig:
     zmp_m: float = 0.01  # the ZMP at the planned timing inside the support polygon by at least this
     com_uncertainty_m: float = 0.0  # the true CoM may lie this far from the model's (x and y): torques hold either way
     joint_limit_rad_by_joint: dict[str, float] = field(default_factory=dict)  # joint -> a larger margin, rad
+    table_clearance_m: float = 0.0  # in free motions every body stays this far above the table (0: collision_m)
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,7 @@ MARGIN_KEYS = (
     "effort_ratio",
     "zmp_m",
     "com_uncertainty_m",
+    "table_clearance_m",
 )  # the ``margins`` section's keys
 
 
@@ -97,6 +99,7 @@ def read_margins(mg: Reader) -> MarginConfig:
         zmp_m=mg.number("zmp_m", 0.01, minimum=0.0),
         com_uncertainty_m=mg.number("com_uncertainty_m", 0.0, minimum=0.0),
         joint_limit_rad_by_joint=_larger_margins(mg, mg.number("joint_limit_rad", minimum=0.0)),
+        table_clearance_m=mg.number("table_clearance_m", 0.0, minimum=0.0),
     )
 
 

@@ -72,16 +72,30 @@ class StanceSpace:
         bound = np.abs(torques) + self._statics.com_spread(joints)  # (nj,) N m
         return bool(np.all(bound[self._limited] <= self._allowed[self._limited]))
 
-    def is_valid(self, joints: FloatArray, contact_chain: str | None, collision_margin_m: float | None = None) -> bool:
+    def is_valid(
+        self,
+        joints: FloatArray,
+        contact_chain: str | None,
+        collision_margin_m: float | None = None,
+        near_table: bool = False,
+    ) -> bool:
         """Limits (with margin), CoM inside the polygon with margin, torques, no collision with margin.
 
         The holding torques are those of the hand unloaded (a state the planner moves
         through; a contact's go-to-contact is checked pressing, :meth:`holds_pressing`).
+        A free state (no ``contact_chain``, not ``near_table``) keeps every body
+        ``margins.table_clearance_m`` above the table: the true hand may be lower than the model's.
 
         Args:
             joints: (nj,) joint angles with both soles closed.
             contact_chain: Chain whose fingertips may touch the table, or None.
             collision_margin_m: Collision margin; None: the configured one.
+            near_table: A state of a vertical approach, which ends just above the table: the
+                collision margin only.
+
+        Example:
+            >>> space.is_valid(stop.approach[-1], None, near_table=True)  # 1 cm above the table
+            True
 
         """
         scene = self.scene
@@ -94,4 +108,5 @@ class StanceSpace:
         if not self.holds(joints, None):
             return False
         margin = margins.collision_m if collision_margin_m is None else collision_margin_m
-        return not self.checker.collides(q, contact_chain, margin)
+        free = contact_chain is None and not near_table and margins.table_clearance_m > 0
+        return not self.checker.collides(q, contact_chain, margin, margins.table_clearance_m if free else None)

@@ -71,7 +71,7 @@ def vertical_paths(space: StanceSpace, projector: Projector, joints: FloatArray,
     approach = tuple(path[h] for h in heights if h >= route.pre_contact_m - 1e-12)
     contact = tuple(path[h] for h in heights if h <= route.pre_contact_m + 1e-12)
     for state in approach:
-        if not space.is_valid(state, None):
+        if not space.is_valid(state, None, near_table=True):
             return None
     for state in contact:
         if not space.is_valid(state, chain, scene.contact_collision_margin_m):

@@ -3,7 +3,8 @@
 Kinematics by pinocchio from the stored joint angles alone (the floating base re-solved
 from the anchor sole); collisions by coal on the robot's original meshes, not the hulls
 the planner used, with the configured margin. Fingertips may touch the table only in
-contact segments, where the margin shrinks by the commanded overshoot. Collisions are
+contact segments, where the margin shrinks by the commanded overshoot; in free segments
+the table's pairs keep ``margins.table_clearance_m`` when the config sets it. Collisions are
 the costly part (about 1 ms a point): points are checked in chunks over worker
 processes, each loading the meshes once; the pair and its distance are measured only
 at the points found colliding.
@@ -21,12 +22,13 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from posegen.io import Segment
+from posegen.io import Segment, SegmentType
 from posegen.parallel import Backend, Job, as_backend, job_name
 from posegen.progress import Progress, ProgressCallback
 from posegen.robot import (
     SOLE_ANGLE_TOL_RAD,
     SOLE_POSITION_TOL_M,
+    TABLE,
     CollisionChecker,
     Config,
     FloatArray,
@@ -53,9 +55,10 @@ def _meshes(config: Config) -> tuple[Scene, CollisionChecker]:
     return scene, CollisionChecker(scene, convex=False)
 
 
-def collision_job(
-    scene: Scene,
-) -> Job[tuple[Scene, CollisionChecker], tuple[FloatArray, list[str | None], FloatArray], list[tuple[float, str]]]:
+Chunk = tuple[FloatArray, list[str | None], FloatArray, FloatArray]  # (k, nj) rad, chains, margins (k,) m, table's (k,)
+
+
+def collision_job(scene: Scene) -> Job[tuple[Scene, CollisionChecker], Chunk, list[tuple[float, str]]]:
     """The check's costly work: chunks of route points, each checked on a worker's meshes."""
     return Job(
         name=job_name("route-check", scene.config.to_dict(), scene.files.sha256()),
@@ -64,25 +67,28 @@ def collision_job(
     )
 
 
-def _collisions(
-    state: tuple[Scene, CollisionChecker], job: tuple[FloatArray, list[str | None], FloatArray]
-) -> list[tuple[float, str]]:
-    """(excess over the margin, detail) of each point of a chunk; excess <= 0 when clear."""
+def _collisions(state: tuple[Scene, CollisionChecker], job: Chunk) -> list[tuple[float, str]]:
+    """(excess over the margin, detail) of each point of a chunk; excess <= 0 when clear.
+
+    A point's table margin (nan: none) applies to the pairs of the robot and the table.
+    """
     scene, meshes = state
-    positions, chains, margins = job
     out = []
-    for joints, chain, margin in zip(positions, chains, margins, strict=True):
+    for joints, chain, margin, table in zip(*job, strict=True):
         q = scene.configuration(joints)
-        if not meshes.collides(q, chain, margin - STORAGE_TOL_M):
+        table_margin = None if np.isnan(table) else float(table) - STORAGE_TOL_M
+        if not meshes.collides(q, chain, margin - STORAGE_TOL_M, table_margin):
             out.append((-margin, ""))
             continue
-        hits = meshes.colliding_pairs(q, chain, margin - STORAGE_TOL_M)
+        hits = meshes.colliding_pairs(q, chain, margin - STORAGE_TOL_M, table_margin)
         if not hits:  # the fast check's warm start saw it within 1e-15 m of the margin: take the exact answer
             out.append((-margin, ""))
             continue
-        out.append(
-            (margin - hits[0].distance_m, f"{hits[0].pair[0]} - {hits[0].pair[1]} at {hits[0].distance_m:.4f} m")
-        )
+        excess = [
+            (table if TABLE in hit.pair and table_margin is not None else margin) - hit.distance_m for hit in hits
+        ]
+        worst = hits[int(np.argmax(excess))]
+        out.append((max(excess), f"{worst.pair[0]} - {worst.pair[1]} at {worst.distance_m:.4f} m"))
     return out
 
 
@@ -111,11 +117,15 @@ def check_poses(
     m = len(times)
     chains: list[str | None] = [None] * m
     margins = np.full(m, scene.margins.collision_m)
+    tables = np.full(m, np.nan)  # m: the table's margin of free points, if the config keeps them clear of it
+    clearance = scene.margins.table_clearance_m
     for seg in segments:
         if seg.type.in_contact:
             for k in range(seg.first_point, seg.last_point + 1):
                 chains[k] = seg.chain
                 margins[k] = scene.contact_collision_margin_m
+        elif seg.type is SegmentType.FREE and clearance > 0:
+            tables[seg.first_point : seg.last_point + 1] = clearance
     sole, com = np.full(m, -np.inf), np.full(m, -np.inf)
     sole_detail: dict[int, str] = {}
     com_value = np.full(m, np.nan)
@@ -133,10 +143,15 @@ def check_poses(
         sole_detail[int(k)] = f"{position_error:.2e} m, {angle_error:.2e} rad"
         com_value[k] = scene.com_margin(q, data)
         com[k] = scene.margins.com_m - STORAGE_TOL_M - com_value[k]
-    collision, collision_detail = _check_collisions(scene, positions, chains, margins, finite, workers, progress)
+    collision, collision_detail = _check_collisions(
+        scene, positions, chains, (margins, tables), finite, workers, progress
+    )
 
     def at(k: int) -> str:
         return f"point {k} (t {times[k]:.4f} s)"
+
+    def table_clause(k: int) -> str:
+        return "" if np.isnan(tables[k]) else f", {tables[k]} m from the table"
 
     return [
         worst_case(
@@ -157,8 +172,9 @@ def check_poses(
         worst_case(
             PoseInvariant.COLLISION,
             collision,
-            lambda k: f"{at(k)} {collision_detail[k]}; margin {margins[k]} m (meshes)",
-            "no pair closer than its margin (meshes)",
+            lambda k: f"{at(k)} {collision_detail[k]}; margin {margins[k]} m{table_clause(k)} (meshes)",
+            "no pair closer than its margin (meshes)"
+            + (f", free motions {clearance} m above the table" if clearance > 0 else ""),
         ),
     ]
 
@@ -167,17 +183,18 @@ def _check_collisions(
     scene: Scene,
     positions: FloatArray,
     chains: list[str | None],
-    margins: FloatArray,
+    margins: tuple[FloatArray, FloatArray],
     finite: np.ndarray,
     workers: int | Backend,
     progress: ProgressCallback,
 ) -> tuple[FloatArray, dict[int, str]]:
+    """Each point's excess over its margin (m; -inf: not checked) and the detail of those colliding."""
     points = np.flatnonzero(finite)
     jobs = [points[i : i + CHUNK] for i in range(0, len(points), CHUNK)]
     excess = np.full(len(positions), -np.inf)
     detail: dict[int, str] = {}
     backend = as_backend(workers)
-    requests = ((positions[idx], [chains[k] for k in idx], margins[idx]) for idx in jobs)
+    requests = ((positions[idx], [chains[k] for k in idx], margins[0][idx], margins[1][idx]) for idx in jobs)
     done = 0
     for idx, results in zip(jobs, backend.map(collision_job(scene), requests), strict=True):
         for k, (value, text) in zip(idx, results, strict=True):

@@ -115,6 +115,22 @@ def test_a_worker_killed_mid_run_changes_nothing(cluster, small_chunks, referenc
     assert pool.to_dict() == reference.to_dict()
 
 
+def test_a_plugin_the_lost_worker_cannot_unregister_does_not_fail_a_finished_map(cluster, monkeypatch):
+    """The scheduler's broadcast to a worker killed during the map fails at cleanup (seen under load): results stand."""
+    from distributed.comm.core import CommClosedError
+
+    from posegen.parallel.cluster import DaskBackend
+
+    def closed(name):
+        raise CommClosedError(f"in <TCP (closed) ConnectionPool.unregister_worker_plugin>: {name}: Stream is closed")
+
+    job = Job(name="squares", setup=_setup, run=_run)
+    with DaskBackend(cluster.scheduler_address) as backend:
+        monkeypatch.setattr(backend.client, "unregister_worker_plugin", closed)
+        results = list(backend.map(job, range(6)))
+    assert [r[0] for r in results] == [i * i for i in range(6)]
+
+
 def test_workers_of_another_version_are_refused(cluster, monkeypatch):
     from posegen.parallel import cluster as module
 

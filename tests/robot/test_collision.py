@@ -53,3 +53,24 @@ def test_fingertips_may_touch_the_table_only_in_contact(scene, checkers, small_p
     assert hulls.closest(q, posture.chain).distance_m >= scene.config.margins.collision_m
     closest = hulls.closest(q, None)  # same posture, but the contact is not exempted
     assert closest.distance_m < 1e-3 and TABLE in closest.pair
+
+
+def test_a_table_margin_widens_the_table_pairs_only(scene, checkers):
+    """Free motions keep the robot further from the table than from itself: the table's pairs get their own margin."""
+    hulls, _ = checkers
+    q = scene.configuration(scene.reference)
+    q[0] += 0.13  # toward the table: its nearest body about 3 cm away
+    distances = pair_distances(hulls, scene, q)
+    table = np.array([TABLE in hulls._pair_names(k) for k in range(hulls.n_pairs)])
+    near = float(distances[table].min())
+    assert 0.0 < near < 0.1 and distances[~table].min() > 0.0
+    margins = hulls.pair_margins(0.0, near + 0.002)
+    assert np.all(margins[table] == near + 0.002) and np.all(margins[~table] == 0.0)
+    assert np.array_equal(hulls.pair_margins(0.01, None), np.full(hulls.n_pairs, 0.01))
+    assert np.all(hulls.pair_margins(0.01, 0.002) == 0.01)  # never below the collision margin
+    assert not hulls.collides(q, None, 0.0)
+    assert not hulls.collides(q, None, 0.0, near - 0.002)
+    assert hulls.collides(q, None, 0.0, near + 0.002)
+    hits = hulls.colliding_pairs(q, None, 0.0, near + 0.002)
+    assert hits and all(TABLE in hit.pair for hit in hits) and hits[0].distance_m == pytest.approx(near, abs=1e-6)
+    assert not hulls.collides(q, None, 0.0)  # the margins set back for the next query

@@ -158,6 +158,22 @@ def test_a_joints_own_limit_margin_is_read_checked_and_kept(config):
         parse_config(dict(data, margins=dict(data["margins"], com_uncertainty_m=-0.01)))
 
 
+def test_the_table_clearance_is_kept_below_the_approach_standoff_and_saved_only_when_set():
+    data = raw()
+    standoff = data["table"]["approach_standoff_m"]
+    margins = {k: v for k, v in data["margins"].items() if k != "table_clearance_m"}
+    unset = parse_config(dict(data, margins=margins))
+    assert unset.margins.table_clearance_m == 0.0 and "table_clearance_m" not in unset.to_dict()["margins"]
+    kept = parse_config(dict(data, margins=dict(margins, table_clearance_m=standoff / 2)))
+    assert kept.to_dict()["margins"]["table_clearance_m"] == standoff / 2
+    assert parse_config(kept.to_dict()).margins.table_clearance_m == standoff / 2
+    message = rf"^margins\.table_clearance_m: must be below table\.approach_standoff_m \({standoff} m\), where free"
+    with pytest.raises(ConfigError, match=message):
+        parse_config(dict(data, margins=dict(margins, table_clearance_m=standoff)))
+    with pytest.raises(ConfigError, match=r"^margins\.table_clearance_m: must be >= 0"):
+        parse_config(dict(data, margins=dict(margins, table_clearance_m=-0.01)))
+
+
 @pytest.mark.parametrize(
     ("value", "message"),
     [

@@ -21,7 +21,7 @@ from posegen.io import (
     write_route,
     write_with_arrays,
 )
-from posegen.route import RouteInvariant, plan_route, route_artefact, verify_route
+from posegen.route import PoseInvariant, RouteInvariant, plan_route, route_artefact, verify_route
 
 ROWS = [4, 5]
 
@@ -292,3 +292,20 @@ def test_a_route_run_three_times_faster_asks_its_legs_for_more_than_they_have(sc
     at_speed = worst[LoadInvariant.TORQUE_AT_SPEED]
     assert not result.ok and at_speed.violations > 0
     assert "x its effort limit at speed (flat feet)" in at_speed.detail
+
+
+def test_a_free_motion_that_comes_down_to_the_table(scene, route_file, tmp_path):
+    """An approach relabelled free: its last points are 1 cm above the table, below the free motions' clearance."""
+
+    def edit(header):
+        seg = next(s for s in header["segments"] if s["type"] == SegmentType.APPROACH.value)
+        seg.update(type=SegmentType.FREE.value, chain=None)
+
+    clearance = scene.margins.table_clearance_m
+    assert clearance > scene.route.pre_contact_m  # TALOS's config
+    result, worst = verdict(scene, corrupted(route_file, tmp_path, edit_header=edit))
+    collision = worst[PoseInvariant.COLLISION]
+    assert not result.ok and collision.violations > 0
+    assert "table" in collision.detail and f"{clearance} m from the table (meshes)" in collision.detail
+    good, worst = verdict(scene, route_file)
+    assert good.ok and f"free motions {clearance} m above the table" in worst[PoseInvariant.COLLISION].detail

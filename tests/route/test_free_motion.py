@@ -3,10 +3,12 @@
 import threading
 
 import numpy as np
+import pinocchio as pin
 import pytest
+import yaml
 
 from posegen.errors import InfeasibleError
-from posegen.robot import CollisionChecker, Projector, StanceSpace
+from posegen.robot import TABLE, CollisionChecker, Projector, Scene, StanceSpace, parse_config
 from posegen.route import (
     Method,
     Planner,
@@ -25,7 +27,7 @@ from posegen.route import (
 )
 from posegen.route.free_motion import RAISE_FRACTIONS, VIA_CANDIDATES, _plan_ompl, stream_of
 from posegen.route.planner import _timed_transfer
-from tests.conftest import DETOUR_ROWS
+from tests.conftest import CONFIG, DETOUR_ROWS
 
 
 @pytest.fixture(scope="module")
@@ -77,6 +79,31 @@ def test_every_waypoint_is_valid_and_steps_are_small(scene, ends):
     assert np.array_equal(path[0], a.approach[0]) and np.array_equal(path[-1], b.approach[0])
     assert all(space.is_valid(q, None) for q in path)
     assert np.abs(np.diff(path, axis=0)).max() <= scene.route.waypoint_step_rad * (1 + 1e-6)
+
+
+def table_distance(checker, scene, joints):
+    """The smallest distance (m) of the robot to the table, every pair computed (no screening, no margins)."""
+    data = pin.GeometryData(checker.geom)
+    pin.computeDistances(scene.model, scene.model.createData(), checker.geom, data, scene.configuration(joints))
+    pairs = [k for k in range(checker.n_pairs) if TABLE in checker._pair_names(k)]
+    return min(data.distanceResults[k].min_distance for k in pairs)
+
+
+def test_free_states_keep_the_table_clearance_and_approach_states_need_not(scene, ends):
+    space, (a, b) = ends
+    clearance = scene.margins.table_clearance_m
+    assert clearance > scene.route.pre_contact_m  # TALOS's config: the last approach state is below the clearance
+    low = a.approach[-1]
+    assert table_distance(space.checker, scene, low) < clearance
+    assert space.is_valid(low, None, near_table=True) and not space.is_valid(low, None)
+    data = yaml.safe_load(CONFIG.read_text())
+    data["margins"].pop("table_clearance_m")
+    plain = StanceSpace(Scene(parse_config(data, str(CONFIG))), space.checker)
+    assert plain.is_valid(low, None)  # without the key: the collision margin only, as before
+    vias = via_sequences(a.clearance, b.clearance, start_posture(scene))
+    found = plan_free(space, a.approach[0], b.approach[0], vias, stream=0)
+    assert not isinstance(found, Unplanned)
+    assert min(table_distance(space.checker, scene, q) for q in found.waypoints) >= clearance
 
 
 def test_via_sequences_skip_missing_lifts_and_duplicates(scene):
