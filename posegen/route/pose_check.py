@@ -39,6 +39,7 @@ from posegen.robot import (
 
 STORAGE_TOL_M = 1e-6  # slack on the CoM margin and collision distances for float32 angles
 CHUNK = 250  # points per collision job
+Chunk = tuple[FloatArray, list[str | None], FloatArray, FloatArray]  # (k, nj) rad, chains, margins (k,) m, table's (k,)
 
 
 class PoseInvariant(str, enum.Enum):
@@ -53,9 +54,6 @@ def _meshes(config: Config) -> tuple[Scene, CollisionChecker]:
     """A worker's state: the scene and a collision checker on the original meshes."""
     scene = Scene(config)
     return scene, CollisionChecker(scene, convex=False)
-
-
-Chunk = tuple[FloatArray, list[str | None], FloatArray, FloatArray]  # (k, nj) rad, chains, margins (k,) m, table's (k,)
 
 
 def collision_job(scene: Scene) -> Job[tuple[Scene, CollisionChecker], Chunk, list[tuple[float, str]]]:
