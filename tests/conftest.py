@@ -39,8 +39,9 @@ EXAMPLE_POOL = ROOT / "plans" / "talos" / "pool.yaml"
 RADIUS_M = 0.01  # tip radius of the point contacts of point_config_data
 DETOUR_ROWS = (1, 6)
 """Two example-pool postures whose approach poses no straight line joins, with raised midpoints and more than one
-via path, the first found not the fastest. The route tests' fixtures assert each property, so that a regenerated
-example pool fails there, saying which; pick another pair then (``git log`` of this line shows how)."""
+via path, the first found not the fastest. tests/route/test_free_motion.py asserts each property (its fixtures, and
+its test of the fastest via path), so that a regenerated example pool fails there, saying which; pick another pair
+then, from the pairs of routable rows that have them all."""
 
 
 def routable_rows(scene: Scene, pool: Pool, first: int, count: int) -> list[int]:
