@@ -113,17 +113,8 @@ def check_poses(
 
     """
     m = len(times)
-    chains: list[str | None] = [None] * m
-    margins = np.full(m, scene.margins.collision_m)
-    tables = np.full(m, np.nan)  # m: the table's margin of free points, if the config keeps them clear of it
+    chains, margins, tables = _margins(scene, segments, m)
     clearance = scene.margins.table_clearance_m
-    for seg in segments:
-        if seg.type.in_contact:
-            for k in range(seg.first_point, seg.last_point + 1):
-                chains[k] = seg.chain
-                margins[k] = scene.contact_collision_margin_m
-        elif seg.type is SegmentType.FREE and clearance > 0:
-            tables[seg.first_point : seg.last_point + 1] = clearance
     sole, com = np.full(m, -np.inf), np.full(m, -np.inf)
     sole_detail: dict[int, str] = {}
     com_value = np.full(m, np.nan)
@@ -175,6 +166,22 @@ def check_poses(
             + (f", free motions {clearance} m above the table" if clearance > 0 else ""),
         ),
     ]
+
+
+def _margins(scene: Scene, segments: Sequence[Segment], m: int) -> tuple[list[str | None], FloatArray, FloatArray]:
+    """Each point's chain at the table (or None), collision margin (m,) m and table margin (m,) m (nan: none)."""
+    chains: list[str | None] = [None] * m
+    margins = np.full(m, scene.margins.collision_m)
+    tables = np.full(m, np.nan)  # the free points' table margin, if the config keeps them clear of it
+    clearance = scene.margins.table_clearance_m
+    for seg in segments:
+        if seg.type.in_contact:
+            for k in range(seg.first_point, seg.last_point + 1):
+                chains[k] = seg.chain
+                margins[k] = scene.contact_collision_margin_m
+        elif seg.type is SegmentType.FREE and clearance > 0:
+            tables[seg.first_point : seg.last_point + 1] = clearance
+    return chains, margins, tables
 
 
 def _check_collisions(
