@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from posegen.calibrate import read_calibration
@@ -356,6 +356,7 @@ def test_checkpoint_reader_on_damaged_files(scene, data):
 RECORD_FILES = ("calibration.yaml", "residuals.csv", "posterior.npz", "calibrated.yaml")
 
 
+@settings(suppress_health_check=[HealthCheck.too_slow])  # each draw copies four files (~0.1-0.3 s a draw in CI)
 @given(data=st.data())
 def test_calibration_folder_reader_on_damaged_files(calibration_folder, data):
     files = data.draw(one_file_damaged({name: (calibration_folder.path / name).read_bytes() for name in RECORD_FILES}))
@@ -367,7 +368,7 @@ def test_calibration_folder_reader_on_damaged_files(calibration_folder, data):
         assert all(len(c.joints) == len(record.joint_names) and np.all(np.isfinite(c.joints)) for c in record.contacts)
 
 
-@settings(deadline=None)  # in the whole suite on a slower machine an example took 286 ms against a 200 ms deadline
+@settings(deadline=None, suppress_health_check=[HealthCheck.too_slow])  # an example took 286 ms on a slower machine
 @given(data=st.data())
 def test_calibration_yaml_reader_of_follow_ups_on_mutated_files(calibration_folder, scene, data):
     """``select --given --calibration`` reads the model, the noise and the weakest chain of a calibration.yaml."""
