@@ -29,7 +29,7 @@ from posegen.robot.balance import (
 )
 from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
 from posegen.robot.chain_config import ChainConfig
-from posegen.robot.collision import TABLE, CollisionChecker, Proximity, Witness
+from posegen.robot.collision import TABLE, Collision, CollisionChecker, Proximity, Witness
 from posegen.robot.collision_geometry import (
     add_self_pairs,  # for the draft (robot init)
     carrying_links,  # for physics: the links a contact exempts, as the collision check has them
@@ -153,6 +153,7 @@ __all__ = [
     "CandidateConfig",
     "Capsule",
     "ChainConfig",
+    "Collision",
     "CollisionChecker",
     "CollisionConfig",
     "Config",

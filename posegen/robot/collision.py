@@ -37,6 +37,18 @@ class Proximity:
 
 
 @dataclass(frozen=True)
+class Collision(Proximity):
+    """A pair closer than its margin."""
+
+    margin_m: float  # the pair's margin (:meth:`CollisionChecker.pair_margins`)
+
+    @property
+    def excess_m(self) -> float:
+        """How far inside its margin the pair is (m, positive)."""
+        return self.margin_m - self.distance_m
+
+
+@dataclass(frozen=True)
 class Witness:
     """One collision pair's nearest points in a configuration (world frame)."""
 
@@ -269,7 +281,7 @@ class CollisionChecker:
 
     def colliding_pairs(
         self, q: FloatArray, contact_chain: str | None, margin_m: float, table_margin_m: float | None = None
-    ) -> list[Proximity]:
+    ) -> list[Collision]:
         """Pairs closer than their margin (coal collision queries with a security margin).
 
         Args:
@@ -279,13 +291,12 @@ class CollisionChecker:
             table_margin_m: A larger margin for the pairs of the robot and the table (m), or None.
 
         Returns:
-            The offending pairs with their distance, closest first; empty if none.
+            The offending pairs with their distance and margin, closest first; empty if none.
 
         """
         data = self._fresh_data(contact_chain)
-        for request, margin in zip(
-            data.collisionRequests, self.pair_margins(margin_m, table_margin_m).tolist(), strict=True
-        ):
+        margins = self.pair_margins(margin_m, table_margin_m).tolist()  # (n_pairs,) m
+        for request, margin in zip(data.collisionRequests, margins, strict=True):
             request.security_margin = margin
         pin.computeCollisions(self.scene.model, self._model_data, self.geom, data, q, False)
         hits = [k for k, r in enumerate(data.collisionResults) if r.isCollision() and data.activeCollisionPairs[k]]
@@ -295,5 +306,5 @@ class CollisionChecker:
         found = []
         for k in hits:
             result = pin.computeDistance(self.geom, data, k)
-            found.append(Proximity(distance_m=float(result.min_distance), pair=self._pair_names(k)))
+            found.append(Collision(float(result.min_distance), self._pair_names(k), margins[k]))
         return sorted(found, key=lambda p: p.distance_m)

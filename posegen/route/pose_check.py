@@ -28,7 +28,6 @@ from posegen.progress import Progress, ProgressCallback
 from posegen.robot import (
     SOLE_ANGLE_TOL_RAD,
     SOLE_POSITION_TOL_M,
-    TABLE,
     CollisionChecker,
     Config,
     FloatArray,
@@ -82,11 +81,8 @@ def _collisions(state: tuple[Scene, CollisionChecker], job: Chunk) -> list[tuple
         if not hits:  # the fast check's warm start saw it within 1e-15 m of the margin: take the exact answer
             out.append((-margin, ""))
             continue
-        excess = [
-            (table if TABLE in hit.pair and table_margin is not None else margin) - hit.distance_m for hit in hits
-        ]
-        worst = hits[int(np.argmax(excess))]
-        out.append((max(excess), f"{worst.pair[0]} - {worst.pair[1]} at {worst.distance_m:.4f} m"))
+        worst = max(hits, key=lambda hit: hit.excess_m)  # each pair's own margin: the checker's rule
+        out.append((worst.excess_m + STORAGE_TOL_M, f"{worst.pair[0]} - {worst.pair[1]} at {worst.distance_m:.4f} m"))
     return out
 
 

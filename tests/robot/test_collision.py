@@ -73,4 +73,5 @@ def test_a_table_margin_widens_the_table_pairs_only(scene, checkers):
     assert hulls.collides(q, None, 0.0, near + 0.002)
     hits = hulls.colliding_pairs(q, None, 0.0, near + 0.002)
     assert hits and all(TABLE in hit.pair for hit in hits) and hits[0].distance_m == pytest.approx(near, abs=1e-6)
+    assert all(hit.margin_m == near + 0.002 and hit.excess_m == near + 0.002 - hit.distance_m for hit in hits)
     assert not hulls.collides(q, None, 0.0)  # the margins set back for the next query

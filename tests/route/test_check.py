@@ -309,3 +309,19 @@ def test_a_free_motion_that_comes_down_to_the_table(scene, route_file, tmp_path)
     assert "table" in collision.detail and f"{clearance} m from the table (meshes)" in collision.detail
     good, worst = verdict(scene, route_file)
     assert good.ok and f"free motions {clearance} m above the table" in worst[PoseInvariant.COLLISION].detail
+
+
+def test_a_table_margin_below_the_collision_margin_is_judged_as_the_checker_found_it(scene, example_pool):
+    """The table's pairs keep the larger margin (:meth:`CollisionChecker.pair_margins`), in the reported excess too."""
+    from posegen.robot import TABLE
+    from posegen.route.pose_check import _collisions, _meshes
+
+    state = _meshes(scene.config)
+    joints = np.array(example_pool.postures[0].joints)  # a hand on the table
+    margin, table = 0.004, 0.001
+    hits = state[1].colliding_pairs(scene.configuration(joints), None, margin, table)  # no chain: fingertips count
+    assert any(TABLE in hit.pair for hit in hits) and all(hit.margin_m == margin for hit in hits)
+    [(excess, detail)] = _collisions(state, (joints[None], [None], np.array([margin]), np.array([table])))
+    nearest = hits[0]
+    assert TABLE in nearest.pair and nearest.pair[0] in detail
+    assert excess == pytest.approx(margin - nearest.distance_m, abs=1e-9)  # not table - distance: 3 mm less
