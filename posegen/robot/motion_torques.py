@@ -92,8 +92,16 @@ class MotionTorques:
         """The joint torques (nj,) N m of a point, its motion's time stretched by ``stretch`` (inf: at rest)."""
         forces = load.static + load.dynamic / stretch**2  # (nv,)
         total = load.base @ forces[:6]  # the floor's wrench on the robot, world, about the origin
-        soles = split_wrench(total, list(load.poses), self._centre, self._half, load.normal_map)
-        return np.asarray((forces - load.contact.T @ np.concatenate(soles))[self.velocity])
+        return np.asarray((forces - load.contact.T @ self.sole_wrenches(load, total))[self.velocity])
+
+    def sole_wrenches(self, load: PointLoad, total: FloatArray) -> FloatArray:
+        """(12,) both soles' wrenches (LOCAL, stacked) sharing the floor's wrench ``total`` (6,) at a point's posture.
+
+        Example:
+            >>> soles = torques.sole_wrenches(load, load.base @ load.static[:6])  # at rest
+
+        """
+        return np.concatenate(split_wrench(total, list(load.poses), self._centre, self._half, load.normal_map))
 
     def spreads(self, q: FloatArray) -> FloatArray:
         """(m, nj) N m: each point's torques' spread over the CoM's uncertainty (:meth:`Statics.com_spread`)."""

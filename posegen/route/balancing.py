@@ -19,7 +19,9 @@ ground projection on a fast reach. Two pieces keep it inside:
   flat feet share it (:mod:`posegen.robot.motion_torques`): a fast weight transfer loads
   one leg past what it holds at rest; where a joint passes half the static margin (0.95 of
   its effort for ``margins.effort_ratio`` 0.9, or its ratio at rest plus 0.02, if more),
-  the segment is slowed down uniformly the same way.
+  the segment is timed again with the torques as a toppra constraint too
+  (:func:`slowed_locally`: slow only where a joint binds), and that timing checked; a
+  uniform slow-down, the same way as the ZMP's, is kept where it is faster.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ import toppra.constraint
 from posegen.errors import InfeasibleError
 from posegen.robot import Balance, FloatArray, MotionTorques, Scene, stretch_for_margin, torque_stretch
 from posegen.route.timing import Timed, parameterize
+from posegen.route.torque_constraint import TorqueConstraint
 
 LOG = logging.getLogger(__name__)
 
@@ -104,6 +107,8 @@ def timed_in_balance(
     toppra times the path within the joint limits first; only when that timing misses
     the ZMP's margin is it timed again with :class:`ZmpConstraint` (its inverse dynamics
     at every grid point cost 3-4 times the plain timing), and then checked (:func:`balanced`).
+    Where the torques at speed pass their ratio, it is timed again with them as a
+    constraint too (:func:`slowed_locally`).
 
     Args:
         scene: Scene.
@@ -124,10 +129,53 @@ def timed_in_balance(
     timed = parameterize(waypoints, velocity_limit, acceleration_limit)
     if len(timed.times) < 2:
         return timed
+    constraints: list[toppra.constraint.Constraint] = []
     wrenches = balance.floor_wrenches(timed.positions, timed.velocities, timed.accelerations, [None] * len(timed.times))
     if stretch_for_margin(scene.support_polygon, wrenches, scene.margins.zmp_m) != 1.0:
-        timed = balanced(scene, balance, parameterize(waypoints, velocity_limit, acceleration_limit, [zmp]))
-    return timed if torques is None else within_torques(scene, torques, timed)
+        constraints.append(zmp)
+        timed = balanced(scene, balance, parameterize(waypoints, velocity_limit, acceleration_limit, constraints))
+    if torques is None:
+        return timed
+    uniform = within_torques(scene, torques, timed)
+    if uniform is timed or len(timed.times) < 3:
+        return timed
+    try:
+        local = slowed_locally(
+            scene, balance, torques, waypoints, velocity_limit, acceleration_limit, constraints, timed
+        )
+    except InfeasibleError:  # the linearised split admits no timing: keep the uniform one
+        return uniform
+    LOG.debug("torques at speed: %.3f s slowed locally, %.3f s uniformly", local.times[-1], uniform.times[-1])
+    return local if local.times[-1] < uniform.times[-1] else uniform
+
+
+def slowed_locally(
+    scene: Scene,
+    balance: Balance,
+    torques: MotionTorques,
+    waypoints: FloatArray,
+    velocity_limit: FloatArray,
+    acceleration_limit: FloatArray,
+    constraints: list[toppra.constraint.Constraint],
+    missed: Timed,
+) -> Timed:
+    """A path timed again with its torques at speed as a toppra constraint, then checked as any timing is.
+
+    Slower only where a joint binds, not the whole transfer: the constraint's split is
+    linearised at ``missed``, the timing whose torques passed their ratio
+    (:class:`posegen.route.torque_constraint.TorqueConstraint`). The result is then
+    checked exactly, ZMP (:func:`balanced`) and torques (:func:`within_torques`).
+
+    Raises:
+        InfeasibleError: toppra finds no timing with the linearised torques.
+
+    Example:
+        >>> local = slowed_locally(scene, balance, torques, path, limit, accelerations, [], timed)
+
+    """
+    constraint = TorqueConstraint(scene, torques, missed)
+    local = parameterize(waypoints, velocity_limit, acceleration_limit, [*constraints, constraint])
+    return within_torques(scene, torques, balanced(scene, balance, local))
 
 
 def balanced(scene: Scene, balance: Balance, timed: Timed) -> Timed:

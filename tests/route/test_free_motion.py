@@ -202,7 +202,7 @@ def test_a_path_toppra_cannot_time_is_a_planning_failure_not_a_crash(detour, exa
 
     monkeypatch.setattr(timing_module, "parameterize", first_fails)
     transfer = plan_transfer(planner, (a, b))  # two via paths: the second is timed
-    assert not isinstance(transfer, Unplanned) and len(calls) in (2, 3)  # the second: again with the ZMP, if needed
+    assert not isinstance(transfer, Unplanned) and 2 <= len(calls) <= 4  # the 2nd; again with ZMP, torques if needed
 
     def never(*args, **kwargs):
         raise InfeasibleError("toppra found no parameterisation of a path of 9 waypoints")
