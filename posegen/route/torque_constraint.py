@@ -10,9 +10,9 @@ The torques are planned within the static margin (``margins.effort_ratio``, 0.9)
 0.95 the check at speed allows (:func:`posegen.robot.allowed_ratios`): a transfer timed
 this way is fast wherever no joint binds, and it leaves the controllers the whole margin
 where one does (planned to 0.95, the route was faster still: docs/physics.md has what the
-free-standing rehearsals made of both). A point that
-asks more at rest (the flat feet's split is not the least-size one the pool checked) may
-add ``REST_ADDED`` to it (half what the check at speed lets it add).
+free-standing rehearsals made of both). A point that asks more at rest (the flat feet's
+split is not the least-size one the pool checked) may add ``REST_ADDED`` to it (half what
+the check at speed lets it add).
 
 The joint torques of a point are affine in the floor's wrench but for the soles' split of
 it, which is piecewise smooth (:func:`posegen.robot.sole_split.split_wrench`): the split is
@@ -45,10 +45,10 @@ def path_parameter(positions: FloatArray) -> FloatArray:
 
 
 class TorqueConstraint(toppra.constraint.SecondOrderConstraint):
-    """toppra constraint: each joint's torque at speed within its allowed ratio (flat feet, split linearised).
+    """toppra constraint: each joint's torque at speed within the static margin (flat feet, split linearised).
 
     Example:
-        >>> constraint = TorqueConstraint(scene, MotionTorques(scene), timed)  # timed: the uniform timing that missed
+        >>> constraint = TorqueConstraint(scene, MotionTorques(scene), timed)  # timed: the timing that missed
         >>> parameterize(waypoints, velocity_limit, acceleration_limit, [constraint])
 
     """
