@@ -49,6 +49,16 @@ def hold(position: FloatArray, duration_s: float) -> Timed:
     return Timed(np.array([0.0, duration_s]), positions, zeros, zeros.copy())
 
 
+def path_parameter(positions: FloatArray) -> FloatArray:
+    """(m,) the path parameter of waypoints (m, nj): their cumulative joint-space distance (rad).
+
+    Example:
+        >>> s = path_parameter(np.array([[0.0, 0.0], [0.3, 0.4]]))  # [0.0, 0.5]
+
+    """
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))])
+
+
 def parameterize(
     waypoints: FloatArray,
     velocity_limit: FloatArray,
@@ -84,7 +94,7 @@ def parameterize(
     if len(positions) == 1:
         zeros = np.zeros_like(positions)
         return Timed(np.array([0.0]), positions, zeros, zeros.copy())
-    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))])
+    s = path_parameter(positions)
     if len(positions) == 2:  # no spline: the rest-to-rest time of the slowest joint (bang-bang)
         distance = np.abs(positions[1] - positions[0])
         v, a = SAFETY * np.minimum(vlim[0], vlim[1]), SAFETY * acceleration_limit

@@ -32,16 +32,11 @@ import numpy as np
 import toppra.constraint
 
 from posegen.robot import FloatArray, MotionTorques, PointLoad, Scene, effort_ratios_at
-from posegen.route.timing import Timed
+from posegen.route.timing import Timed, path_parameter
 
 SPLIT_STEP_N = 1e-3  # finite-difference step of the split's Jacobian (N, N m)
 TORQUE_SLACK = 0.01  # planned this fraction of the effort inside the static margin (grid, linearisation)
 REST_ADDED = 0.01  # a point asking more at rest may add this (half what the check at speed lets it add)
-
-
-def path_parameter(positions: FloatArray) -> FloatArray:
-    """(m,) the path parameter of waypoints (m, nj): their cumulative joint-space distance, as toppra's path uses."""
-    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))])
 
 
 class TorqueConstraint(toppra.constraint.SecondOrderConstraint):

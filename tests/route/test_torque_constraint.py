@@ -9,8 +9,8 @@ import toppra
 from posegen.errors import InfeasibleError
 from posegen.robot import Balance, MotionTorques, stretch_for_margin, torque_stretch
 from posegen.route.balancing import ZmpConstraint, slowed_locally, timed_in_balance, within_torques
-from posegen.route.timing import parameterize
-from posegen.route.torque_constraint import TorqueConstraint, path_parameter
+from posegen.route.timing import parameterize, path_parameter
+from posegen.route.torque_constraint import TorqueConstraint
 
 WAYPOINTS = 10
 
