@@ -9,11 +9,15 @@ the contact frame's origin in world axes.
 A contact of the route runs, in route time:
 
 * **approach** (the route's): the hand gives way to any force above ``GUARD_FORCE_N``,
-  at up to ``GUARD_SPEED_M_S`` (a table higher than planned is met, not pushed);
+  at up to ``GUARD_SPEED_M_S``, the plan's descent undone while it does (a table higher
+  than planned is met, not pushed);
 * **go-to-contact and hold**: force control along the table normal to the target force
-  ``force_n``: ``dz/dt = K_FORCE (f - force_n)`` within ``MAX_SPEED_M_S`` once
-  touching (still within ``FORCE_BAND`` of the target: the contact is measured with the
-  joints still), ``SEARCH_SPEED_M_S`` down before (a table lower than planned is searched
+  ``force_n``: once touching, ``dz/dt = K_FORCE (f - force_n)``, down at most
+  ``MAX_SPEED_M_S``, up (pressed harder than the target) at up to ``GUARD_SPEED_M_S``
+  (still within ``FORCE_BAND`` of the target: the contact is measured with the joints
+  still), and the plan's own descent undone (a guarded move: the go-to-contact descends
+  at up to about 0.1 m/s, and a table met before its end was pressed at that speed, up to 380 N);
+  ``SEARCH_SPEED_M_S`` down before touching (a table lower than planned is searched
   for, below the route's overshoot); the route waits at the end of its go-to-contact
   until ``SETTLE_S`` after the force first reached its band (``REACHED``;
   ``SEARCH_TIMEOUT_S`` at most), so that the
@@ -153,6 +157,7 @@ class HandControl:
         self._steps = 0
         self._current_t = np.nan  # the route time of _current_of: chain -> its contact then
         self._current_of: dict[str, ContactTimes | None] = {}
+        self._planned_z: dict[str, float] = {}  # chain -> its contact frame's planned height at the last step, m
 
     def _current(self, chain: str, t: float) -> ContactTimes | None:
         """The contact of ``chain`` whose time (tare to free) holds ``t``, if any (kept for the last ``t`` asked)."""
@@ -263,10 +268,26 @@ class HandControl:
             wrench = self.robot.at_contact(chain, compensated - hand.tare)
             self.wrenches[chain] = wrench
             rate = self._twist(chain, contact, t, wrench, hand)
+            rate[2] += self._undone_descent(chain, t, float(planned[chain][2, 3]), dt_s)
             hand.offset += rate * dt_s
             hand.offset[:3] = saturate(hand.offset[:3], MAX_OFFSET_M)
             out[chain] = rate + (K_HOLD_PER_S * self._errors[chain] if hold else 0.0)
         return out
+
+    def _undone_descent(self, chain: str, t: float, planned_z_m: float, dt_s: float) -> float:
+        """The plan's descent (m/s, >= 0) a hand on the table undoes: it goes no deeper than its force control.
+
+        On the table: touching in the go-to-contact, pushed past the guard in the approach.
+        Both descend at up to 0.1-0.2 m/s; a table met before their end would otherwise be
+        pressed at that speed less the admittance's.
+        """
+        last = self._planned_z.get(chain, planned_z_m)
+        self._planned_z[chain] = planned_z_m
+        phase, force = self.phase(chain, t), float(self.wrenches[chain][2])
+        touching = (phase == Phase.PRESS and force > TOUCH_FORCE_N) or (
+            phase == Phase.APPROACH and force > GUARD_FORCE_N
+        )
+        return max(last - planned_z_m, 0.0) / dt_s if touching else 0.0
 
     @staticmethod
     def _error(planned: FloatArray, offset: FloatArray, estimated: FloatArray) -> FloatArray:
@@ -310,7 +331,7 @@ class HandControl:
         error = wrench[2] - target_n
         if abs(error) <= band * target_n:  # close enough: the hand stays still (a contact is measured still)
             return twist
-        twist[2] = min(max(K_FORCE * error, -speed), speed)
+        twist[2] = min(max(K_FORCE * error, -speed), max(speed, GUARD_SPEED_M_S))  # gives way as fast as a guard
         torque = np.where(np.abs(wrench[3:5]) > TORQUE_BAND_NM, wrench[3:5], 0.0)
         turn = saturate(K_TORQUE * torque, MAX_TURN_RAD_S)
         blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD

@@ -11,6 +11,7 @@ from posegen.physics.contact_control import (
     FORCE_BAND,
     GUARD_FORCE_N,
     GUARD_SPEED_M_S,
+    K_FORCE,
     MAX_SPEED_M_S,
     SEARCH_SPEED_M_S,
     SEARCH_TIMEOUT_S,
@@ -107,4 +108,42 @@ def test_a_free_hand_that_meets_the_table_gives_way_fast(
     light = np.array([0, 0, 0.5 * GUARD_FORCE_N, 0, 0, 0])
     assert not np.any(hands._twist(contact.chain, contact, free, light, hand))  # below the guard: held
     pressing = 0.5 * (contact.press_s + contact.hold_s)
-    assert hands._twist(contact.chain, contact, pressing, struck, hand)[2] == MAX_SPEED_M_S  # in contact: slow
+    assert hands._twist(contact.chain, contact, pressing, struck, hand)[2] == GUARD_SPEED_M_S  # too hard: as fast
+
+
+def test_a_pressing_hand_gives_way_faster_than_it_presses(
+    route_file: Path, scene: Scene, tools: dict[str, Tool]
+) -> None:
+    robot = NominalRobot(scene, tools)
+    contact = contact_times(read_route(route_file))[0]
+    hands = HandControl(robot, (contact,), force_n=30.0)
+    offset = np.zeros(6)
+    light = hands._give_way(np.array([0, 0, 5.0, 0, 0, 0]), 30.0, offset)
+    assert light[2] == -MAX_SPEED_M_S  # touching too lightly: down at the contact's speed
+    for force in (50.0, 80.0, 150.0):  # too hard: up, in proportion, up to the guard's speed
+        expected = min(K_FORCE * (force - 30.0), GUARD_SPEED_M_S)
+        assert hands._give_way(np.array([0, 0, force, 0, 0, 0]), 30.0, offset)[2] == expected
+    assert K_FORCE * (150.0 - 30.0) > GUARD_SPEED_M_S > MAX_SPEED_M_S  # the 150 N case saturates
+
+
+def test_a_touching_hand_undoes_the_plan_s_descent(route_file: Path, scene: Scene, tools: dict[str, Tool]) -> None:
+    robot = NominalRobot(scene, tools)
+    contact = contact_times(read_route(route_file))[0]
+    hands = HandControl(robot, (contact,), force_n=30.0)
+    chain, dt_s = contact.chain, 0.004
+    pressing = 0.5 * (contact.press_s + contact.hold_s)
+    hands.wrenches[chain] = np.array([0, 0, 20.0, 0, 0, 0])  # touching
+    assert hands._undone_descent(chain, pressing, 0.8, dt_s) == 0.0  # the first step: no earlier height
+    assert np.isclose(hands._undone_descent(chain, pressing, 0.7996, dt_s), 0.1)  # 0.4 mm in 4 ms: 0.1 m/s undone
+    assert hands._undone_descent(chain, pressing, 0.7998, dt_s) == 0.0  # the plan rising: left as planned
+    hands.wrenches[chain] = np.zeros(6)  # not touching: the plan's descent looks for the table
+    assert hands._undone_descent(chain, pressing, 0.7994, dt_s) == 0.0
+    hands.wrenches[chain] = np.array([0, 0, 20.0, 0, 0, 0])
+    before = contact.approach_s - 0.05  # free: the plan (a force there is the guard's)
+    assert hands.phase(chain, before) == Phase.FREE
+    assert hands._undone_descent(chain, before, 0.7990, dt_s) == 0.0
+    approach = 0.5 * (contact.approach_s + contact.press_s)
+    assert hands.phase(chain, approach) == Phase.APPROACH
+    assert np.isclose(hands._undone_descent(chain, approach, 0.7986, dt_s), 0.1)  # pushed past the guard: undone
+    hands.wrenches[chain] = np.array([0, 0, 0.5 * GUARD_FORCE_N, 0, 0, 0])
+    assert hands._undone_descent(chain, approach, 0.7982, dt_s) == 0.0  # below the guard: the approach goes on
