@@ -29,6 +29,12 @@ from posegen.physics.tool import Tool
 from posegen.robot import Scene
 
 
+def _first_contact(route_file: Path, scene: Scene, tools: dict[str, Tool]) -> tuple[ContactTimes, HandControl]:
+    """The route's first contact and hands controlling it alone, at a 30 N target."""
+    contact = contact_times(read_route(route_file))[0]
+    return contact, HandControl(NominalRobot(scene, tools), (contact,), force_n=30.0)
+
+
 def test_contact_times_are_the_route_s_segments(route_file: Path) -> None:
     route = read_route(route_file)
     times = contact_times(route)
@@ -40,9 +46,7 @@ def test_contact_times_are_the_route_s_segments(route_file: Path) -> None:
 
 
 def test_a_hand_searches_presses_and_turns_flush(route_file: Path, scene: Scene, tools: dict[str, Tool]) -> None:
-    robot = NominalRobot(scene, tools)
-    contact = contact_times(read_route(route_file))[0]
-    hands = HandControl(robot, (contact,), force_n=30.0)
+    contact, hands = _first_contact(route_file, scene, tools)
     t = 0.5 * (contact.press_s + contact.hold_s)
     assert hands.phase(contact.chain, t) == Phase.PRESS
     offset = np.zeros(6)
@@ -57,16 +61,14 @@ def test_a_hand_searches_presses_and_turns_flush(route_file: Path, scene: Scene,
 
 
 def test_the_route_waits_for_the_force_then_goes_on(route_file: Path, scene: Scene, tools: dict[str, Tool]) -> None:
-    robot = NominalRobot(scene, tools)
-    contact = contact_times(read_route(route_file))[0]
-    hands = HandControl(robot, (contact,), force_n=30.0)
+    contact, hands = _first_contact(route_file, scene, tools)
     before, after, dt = contact.hold_s - 0.001, contact.hold_s + 0.001, 0.002
     assert hands.holds_back(before, after, dt)  # no force yet
     hands.wrenches[contact.chain] = np.array([0, 0, 29.0, 0, 0, 0])
     waits = sum(hands.holds_back(before, after, dt) for _ in range(1000))
     assert waits == round(SETTLE_S / dt) - 1  # settles, then goes on
     assert not hands.holds_back(before + 1.0, after + 1.0, dt)  # elsewhere: never
-    other = HandControl(robot, (contact,), force_n=30.0)
+    other = HandControl(hands.robot, (contact,), force_n=30.0)
     assert abs(sum(other.holds_back(before, after, dt) for _ in range(5000)) - SEARCH_TIMEOUT_S / dt) <= 1
 
 
@@ -97,9 +99,7 @@ def test_a_release_takes_the_force_off_over_half_of_it(route_file: Path, scene: 
 def test_a_free_hand_that_meets_the_table_gives_way_fast(
     route_file: Path, scene: Scene, tools: dict[str, Tool]
 ) -> None:
-    robot = NominalRobot(scene, tools)
-    contact = contact_times(read_route(route_file))[0]
-    hands = HandControl(robot, (contact,), force_n=30.0)
+    contact, hands = _first_contact(route_file, scene, tools)
     hand = hands.hands[contact.chain]
     free = contact.approach_s - 0.05
     assert hands.phase(contact.chain, free) == Phase.FREE
@@ -114,9 +114,7 @@ def test_a_free_hand_that_meets_the_table_gives_way_fast(
 def test_a_pressing_hand_gives_way_faster_than_it_presses(
     route_file: Path, scene: Scene, tools: dict[str, Tool]
 ) -> None:
-    robot = NominalRobot(scene, tools)
-    contact = contact_times(read_route(route_file))[0]
-    hands = HandControl(robot, (contact,), force_n=30.0)
+    _, hands = _first_contact(route_file, scene, tools)
     offset = np.zeros(6)
     light = hands._give_way(np.array([0, 0, 5.0, 0, 0, 0]), 30.0, offset)
     assert light[2] == -MAX_SPEED_M_S  # touching too lightly: down at the contact's speed
@@ -127,9 +125,7 @@ def test_a_pressing_hand_gives_way_faster_than_it_presses(
 
 
 def test_a_touching_hand_undoes_the_plan_s_descent(route_file: Path, scene: Scene, tools: dict[str, Tool]) -> None:
-    robot = NominalRobot(scene, tools)
-    contact = contact_times(read_route(route_file))[0]
-    hands = HandControl(robot, (contact,), force_n=30.0)
+    contact, hands = _first_contact(route_file, scene, tools)
     chain, dt_s = contact.chain, 0.004
     pressing = 0.5 * (contact.press_s + contact.hold_s)
     hands.wrenches[chain] = np.array([0, 0, 20.0, 0, 0, 0])  # touching
