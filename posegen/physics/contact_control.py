@@ -9,8 +9,8 @@ the contact frame's origin in world axes.
 A contact of the route runs, in route time:
 
 * **approach** (the route's): the hand gives way to any force above ``GUARD_FORCE_N``,
-  at up to ``GUARD_SPEED_M_S``, the plan's descent undone while it does (a table higher
-  than planned is met, not pushed);
+  at up to ``GUARD_SPEED_M_S``, the plan's descent undone while the table's normal force
+  is above it (a table higher than planned is met, not pushed);
 * **go-to-contact and hold**: force control along the table normal to the target force
   ``force_n``: once touching, ``dz/dt = K_FORCE (f - force_n)``, down at most
   ``MAX_SPEED_M_S``, up (pressed harder than the target) at up to ``GUARD_SPEED_M_S``
@@ -277,7 +277,8 @@ class HandControl:
     def _undone_descent(self, chain: str, t: float, planned_z_m: float, dt_s: float) -> float:
         """The plan's descent (m/s, >= 0) a hand on the table undoes: it goes no deeper than its force control.
 
-        On the table: touching in the go-to-contact, pushed past the guard in the approach.
+        On the table: touching in the go-to-contact, a normal force above the guard's in the
+        approach (the guard's give-way itself answers the force's size, any direction).
         Both descend at up to 0.1-0.2 m/s; a table met before their end would otherwise be
         pressed at that speed less the admittance's.
         """
