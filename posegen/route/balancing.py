@@ -35,7 +35,7 @@ import toppra.constraint
 from posegen.errors import InfeasibleError
 from posegen.robot import Balance, FloatArray, MotionTorques, Scene, stretch_for_margin, torque_stretch
 from posegen.route.timing import Timed, parameterize
-from posegen.route.torque_constraint import TorqueConstraint
+from posegen.route.torque_constraint import TimedLoads, TorqueConstraint
 
 LOG = logging.getLogger(__name__)
 
@@ -136,12 +136,13 @@ def timed_in_balance(
         timed = balanced(scene, balance, parameterize(waypoints, velocity_limit, acceleration_limit, constraints))
     if torques is None:
         return timed
-    uniform = within_torques(scene, torques, timed)
+    loaded = TimedLoads.of(torques, timed)
+    uniform = within_torques(scene, torques, loaded)
     if uniform is timed or len(timed.times) < 3:
         return timed
     try:
         local = slowed_locally(
-            scene, balance, torques, waypoints, velocity_limit, acceleration_limit, constraints, timed
+            scene, balance, torques, waypoints, velocity_limit, acceleration_limit, constraints, loaded
         )
     except InfeasibleError:  # the linearised split admits no timing: keep the uniform one
         return uniform
@@ -157,7 +158,7 @@ def slowed_locally(
     velocity_limit: FloatArray,
     acceleration_limit: FloatArray,
     constraints: list[toppra.constraint.Constraint],
-    missed: Timed,
+    missed: TimedLoads,
 ) -> Timed:
     """A path timed again with its torques at speed as a toppra constraint, then checked as any timing is.
 
@@ -170,12 +171,13 @@ def slowed_locally(
         InfeasibleError: toppra finds no timing with the linearised torques.
 
     Example:
-        >>> local = slowed_locally(scene, balance, torques, path, limit, accelerations, [], timed)
+        >>> missed = TimedLoads.of(torques, timed)
+        >>> local = slowed_locally(scene, balance, torques, path, limit, accelerations, [], missed)
 
     """
     constraint = TorqueConstraint(scene, torques, missed)
     local = parameterize(waypoints, velocity_limit, acceleration_limit, [*constraints, constraint])
-    return within_torques(scene, torques, balanced(scene, balance, local))
+    return within_torques(scene, torques, TimedLoads.of(torques, balanced(scene, balance, local)))
 
 
 def balanced(scene: Scene, balance: Balance, timed: Timed) -> Timed:
@@ -208,7 +210,7 @@ def balanced(scene: Scene, balance: Balance, timed: Timed) -> Timed:
     return Timed(timed.times * stretch, timed.positions, timed.velocities / stretch, timed.accelerations / stretch**2)
 
 
-def within_torques(scene: Scene, torques: MotionTorques, timed: Timed) -> Timed:
+def within_torques(scene: Scene, torques: MotionTorques, loaded: TimedLoads) -> Timed:
     """``timed`` slowed down uniformly just enough to keep every joint torque at speed within its allowed ratio.
 
     The torques hold the points at their speed, the floor's wrench shared as flat feet share
@@ -218,17 +220,17 @@ def within_torques(scene: Scene, torques: MotionTorques, timed: Timed) -> Timed:
 
     Args:
         scene: Scene.
-        torques: The workspace.
-        timed: A rest-to-rest segment.
+        torques: The workspace the loads were computed on.
+        loaded: A rest-to-rest segment and its points' loads.
 
     Example:
-        >>> timed = within_torques(scene, MotionTorques(scene), timed)
+        >>> timed = within_torques(scene, torques, TimedLoads.of(torques, timed))
 
     """
+    timed = loaded.timed
     if len(timed.times) < 2:
         return timed
-    loads = torques.loads(timed.positions, timed.velocities, timed.accelerations)
-    stretch = torque_stretch(scene, torques, loads, torques.spreads(timed.positions))
+    stretch = torque_stretch(scene, torques, loaded.loads, loaded.spreads)
     if stretch == 1.0:
         return timed
     LOG.debug("slowed by %.3f to keep the torques at speed within the effort limits", stretch)

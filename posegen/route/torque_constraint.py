@@ -26,6 +26,7 @@ slows it uniformly where the linearisation or the grid left a torque past its ra
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -39,19 +40,40 @@ TORQUE_SLACK = 0.01  # planned this fraction of the effort inside the static mar
 REST_ADDED = 0.01  # a point asking more at rest may add this (half what the check at speed lets it add)
 
 
+@dataclass(frozen=True)
+class TimedLoads:
+    """A timing with what its points ask of the robot: computed once, for the check and the constraint alike.
+
+    Example:
+        >>> loaded = TimedLoads.of(MotionTorques(scene), timed)
+        >>> len(loaded.loads) == len(timed.times)
+        True
+
+    """
+
+    timed: Timed
+    loads: list[PointLoad]  # one per point (:meth:`MotionTorques.loads`)
+    spreads: FloatArray  # (m, nj) N m, each point's torques' spread over the CoM's uncertainty
+
+    @classmethod
+    def of(cls, torques: MotionTorques, timed: Timed) -> TimedLoads:
+        """The loads and spreads of ``timed``'s points, on the workspace ``torques``."""
+        loads = torques.loads(timed.positions, timed.velocities, timed.accelerations)
+        return cls(timed, loads, torques.spreads(timed.positions))
+
+
 class TorqueConstraint(toppra.constraint.SecondOrderConstraint):
     """toppra constraint: each joint's torque at speed within the static margin (flat feet, split linearised).
 
     Example:
-        >>> constraint = TorqueConstraint(scene, MotionTorques(scene), timed)  # timed: the timing that missed
+        >>> constraint = TorqueConstraint(scene, torques, TimedLoads.of(torques, timed))  # the timing that missed
         >>> parameterize(waypoints, velocity_limit, acceleration_limit, [constraint])
 
     """
 
-    def __init__(self, scene: Scene, torques: MotionTorques, reference: Timed) -> None:
+    def __init__(self, scene: Scene, torques: MotionTorques, reference: TimedLoads) -> None:
         self.torques = torques
-        loads = torques.loads(reference.positions, reference.velocities, reference.accelerations)
-        spreads = torques.spreads(reference.positions)  # (m, nj) N m
+        loads, spreads = reference.loads, reference.spreads  # spreads (m, nj) N m
         effort = scene.effort_limit  # (nj,) N m
         self._finite = np.flatnonzero(np.isfinite(effort))
         at_rest = effort_ratios_at(scene, torques, loads, spreads, np.inf)  # (m, nj)
@@ -59,7 +81,7 @@ class TorqueConstraint(toppra.constraint.SecondOrderConstraint):
         limit = planned * np.where(np.isfinite(effort), effort, 0.0) - spreads  # (m, nj) N m
         self._limit = limit[:, self._finite]  # (m, nf)
         self._linear = [self._split_map(load) for load in loads]  # the split linearised at each reference point
-        self._s = path_parameter(reference.positions)  # (m,)
+        self._s = path_parameter(reference.timed.positions)  # (m,)
         nf = len(self._finite)
         matrix = np.vstack([np.eye(nf), -np.eye(nf)])  # (2 nf, nf): tau <= limit, -tau <= limit
         super().__init__(self._unused, lambda _q: matrix, lambda _q: np.zeros(2 * nf), len(scene.joint_names))

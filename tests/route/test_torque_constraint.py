@@ -10,7 +10,7 @@ from posegen.errors import InfeasibleError
 from posegen.robot import Balance, MotionTorques, stretch_for_margin, torque_stretch
 from posegen.route.balancing import ZmpConstraint, slowed_locally, timed_in_balance, within_torques
 from posegen.route.timing import parameterize, path_parameter
-from posegen.route.torque_constraint import TorqueConstraint
+from posegen.route.torque_constraint import TimedLoads, TorqueConstraint
 
 WAYPOINTS = 10
 
@@ -30,7 +30,8 @@ def fast(scene, example_pool):
         if torque_stretch(scene, torques, loads, torques.spreads(timed.positions)) < 1.2:
             continue
         try:
-            local = slowed_locally(scene, balance, torques, path, velocity, acceleration, [], timed)
+            missed = TimedLoads.of(torques, timed)
+            local = slowed_locally(scene, balance, torques, path, velocity, acceleration, [], missed)
         except InfeasibleError:
             continue
         return torques, balance, velocity, acceleration, path, timed, local
@@ -39,7 +40,7 @@ def fast(scene, example_pool):
 
 def test_the_affine_torques_are_the_exact_ones_at_the_reference_timing(scene, fast):
     torques, _, _, _, _, timed, _ = fast
-    constraint = TorqueConstraint(scene, torques, timed)
+    constraint = TorqueConstraint(scene, torques, TimedLoads.of(torques, timed))
     s = path_parameter(timed.positions)
     path = toppra.SplineInterpolator(s, timed.positions)
     a, b, c, nearest = constraint.affine(path, s)
@@ -64,7 +65,7 @@ def test_a_motion_is_slowed_only_where_its_torques_bind(scene, fast):
     assert stretch_for_margin(scene.support_polygon, wrenches, scene.margins.zmp_m) == 1.0
     steps = np.diff(local.times) / np.diff(timed.times)  # (m - 1,) how much slower each step is than unconstrained
     assert steps.max() > 1.2 * steps.min()  # slower where they bind, not by one factor throughout
-    uniform = within_torques(scene, torques, timed)
+    uniform = within_torques(scene, torques, TimedLoads.of(torques, timed))
     zmp = ZmpConstraint(scene, balance, scene.margins.zmp_m + 0.002)
     chosen = timed_in_balance(scene, balance, zmp, path, velocity, acceleration, torques)
     assert chosen.times[-1] == min(local.times[-1], uniform.times[-1])  # the faster of the two
