@@ -26,11 +26,10 @@ def fast(scene, example_pool):
     for i, j in itertools.combinations(range(8), 2):
         path = np.linspace(example_pool.postures[i].joints, example_pool.postures[j].joints, WAYPOINTS)
         timed = parameterize(path, velocity, acceleration)
-        loads = torques.loads(timed.positions, timed.velocities, timed.accelerations)
-        if torque_stretch(scene, torques, loads, torques.spreads(timed.positions)) < 1.2:
+        missed = TimedLoads.of(torques, timed)
+        if torque_stretch(scene, torques, missed.loads, missed.spreads) < 1.2:
             continue
         try:
-            missed = TimedLoads.of(torques, timed)
             local = slowed_locally(scene, balance, torques, path, velocity, acceleration, [], missed)
         except InfeasibleError:
             continue
