@@ -53,6 +53,13 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
 * **Body attitude.** The base's roll and pitch, as the IMU reads them, are slowly
   levelled to the plan's by turning both soles alike relative to the base
   (``K_ATTITUDE``): the true legs tilt the body where the nominal ones would not.
+* **Soles on their edges.** While a loaded sole's centre of pressure lies within
+  ``EDGE_M`` of its rectangle's border (:func:`on_edge`), the CoM's shift along the floor
+  and the levelling rest; the admittance turns that sole flat first. A sole pivoting on
+  its edge is not moved by the legs: moving it relative to the base turns the whole robot
+  about the edge, and the CoM stays where the floor's support puts it. Integrated, the
+  shift and the turn wind the legs up (hip and ankle rolls 0.3-0.6 rad off the plan, the
+  base 10 deg off level, the CoM unmoved), until the next motion tips the robot over.
 
 The output is each sole's twist relative to the base; :mod:`posegen.physics.offsets`
 turns it into leg joint offsets.
@@ -93,6 +100,7 @@ REST_DCM_M = 0.01  # during a hold the stabilizer rests while the DCM is this cl
 REST_MARGIN_M = 0.01  # and the measured ZMP this far inside the support polygon
 TORQUE_RATIO = 0.95  # the desired ZMP's split asks no joint for more of its effort (or than the reference's asks)
 TORQUE_STEPS = 6  # bisection steps between the reference ZMP and the desired one
+EDGE_M = 0.005  # a loaded sole's centre of pressure this close to its rectangle's border: the sole is on its edge
 POLYGON_EVERY = 25  # control steps between two computations of the support polygon (the soles barely move)
 
 
@@ -177,6 +185,24 @@ def clamp_into(hull: Hull, point: FloatArray, margin_m: float) -> FloatArray:
     return np.asarray(centre + low * (point - centre))
 
 
+def on_edge(wrench: FloatArray, rectangle: Hull, load_n: float) -> bool:
+    """Whether a sole carrying its wrench (6,) (force N, torque N m, its frame) stands on its edge.
+
+    It does when it carries at least ``LIGHT_SHARE`` of the soles' vertical load ``load_n``
+    and its centre of pressure lies within ``EDGE_M`` of its ``rectangle`` (its frame, m).
+
+    Example:
+        >>> sole = Hull.of(np.array([[-0.1, -0.067], [-0.1, 0.067], [0.1, 0.067], [0.1, -0.067]]))
+        >>> on_edge(np.array([0, 0, 700.0, -0.065 * 700.0, 0, 0]), sole, 900.0)  # pressed at y = -0.065 m
+        True
+
+    """
+    if wrench[2] < LIGHT_SHARE * load_n:
+        return False
+    pressure = np.array([-wrench[4], wrench[3]]) / wrench[2]  # (2,) m, the sole's frame
+    return rectangle.margin(pressure) < EDGE_M
+
+
 def tilt_error(measured: FloatArray, planned: FloatArray) -> FloatArray:
     """(2,) rad: the roll and pitch (world x, y) that turn the planned orientation (3, 3) into the measured one."""
     error = measured @ planned.T
@@ -198,6 +224,7 @@ class Stabilizer:
         self._limit = TORQUE_RATIO * np.nan_to_num(scene.effort_limit, nan=np.inf)  # (nj,) N m
         self.margin_m = scene.margins.zmp_m  # the reference ZMP is kept this far inside the polygon
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
+        self._rectangle = Hull.of(np.array([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))  # a sole, its frame
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
         self._com: FloatArray | None = None
         self._hull: Hull | None = None
@@ -267,6 +294,8 @@ class Stabilizer:
         level = np.zeros(3)  # turning both soles by the base's tilt, relative to it, turns the base back
         tilt = beyond(tilt_error(*attitude), ATTITUDE_BAND_RAD)
         level[:2] = saturate(K_ATTITUDE_PER_S * tilt, MAX_TURN_RAD_S)
+        if any(on_edge(wrench, self._rectangle, float(total[2])) for wrench in soles.wrenches):
+            shift[:2], level[:2] = 0.0, 0.0  # the admittance turns the sole flat first
         return [
             _sole_twist(pose, wrench, share, shift, level, float(total[2]))
             for pose, wrench, share in zip(robot.sole_poses, soles.wrenches, shares, strict=True)

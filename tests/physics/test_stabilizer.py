@@ -144,3 +144,45 @@ def test_the_desired_zmp_asks_no_leg_past_its_limit(scene: Scene, tools: dict[st
     assert torques_at(further)[worst] > limit[worst]  # the largest step within the limit (bisection, 1/64)
     stabilizer._limit = np.full(len(scene.joint_names), np.inf)
     assert np.allclose(stabilizer._within_torques(total_at(reference), reference, desired)[0], desired)
+
+
+def test_a_sole_on_its_edge_is_told_by_its_centre_of_pressure(scene: Scene) -> None:
+    from posegen.physics.stabilizer import EDGE_M, LIGHT_SHARE, on_edge
+
+    (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
+    rectangle = Hull.of(np.array([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))
+
+    def at(x: float, y: float, force: float = 700.0) -> np.ndarray:  # the floor's wrench, its centre of pressure
+        return np.array([0.0, 0.0, force, y * force, -x * force, 0.0])
+
+    centre = (0.5 * (x0 + x1), 0.5 * (y0 + y1))
+    assert not on_edge(at(*centre), rectangle, 900.0)
+    assert on_edge(at(centre[0], y0 + 0.5 * EDGE_M), rectangle, 900.0)  # its outer side
+    assert on_edge(at(x1 - 0.5 * EDGE_M, centre[1]), rectangle, 900.0)  # its toe
+    assert not on_edge(at(centre[0], y0 + 2.0 * EDGE_M), rectangle, 900.0)
+    light = 0.5 * LIGHT_SHARE * 900.0
+    assert not on_edge(at(centre[0], y0, light), rectangle, 900.0)  # a light sole may stand on its edge
+
+
+def test_a_sole_on_its_edge_rests_the_com_shift_and_the_levelling(scene: Scene, tools: dict[str, Tool]) -> None:
+    """The CoM 5 cm off its reference and the base tilted: with both soles flat, both move alike along the
+    floor and turn alike; with a loaded sole on its edge, neither (its admittance alone acts)."""
+    import pinocchio as pin
+
+    from posegen.physics.stabilizer import MAX_COM_SPEED, SoleReadings, Stabilizer
+
+    robot = NominalRobot(scene, tools)
+    robot.update(scene.reference)
+    weight = robot.mass_kg * 9.81
+    com = robot.com()[:2]
+    planned = Reference(com + np.array([0.05, 0.0]), np.zeros(2), com + np.array([0.05, 0.0]), float(robot.q[2]))
+    tilted = (pin.rpy.rpyToMatrix(0.05, 0.0, 0.0), np.eye(3))
+    flat = SoleReadings(tuple(np.array([0.0, 0.0, 0.5 * weight, 0.0, 0.0, 0.0]) for _ in robot.soles))
+    twists = Stabilizer(scene, robot).step(flat, {}, tilted, planned, 0.004)
+    assert np.allclose(twists[0][:2], twists[1][:2]) and twists[0][0] == pytest.approx(-MAX_COM_SPEED)
+    assert twists[0][3] != 0.0 and twists[0][3] == pytest.approx(twists[1][3])  # both turn with the base's tilt
+    y0 = scene.stance.foot_y_m[0]
+    edge = np.array([0.0, 0.0, 0.5 * weight, y0 * 0.5 * weight, 0.0, 0.0])  # the second sole on its outer side
+    twists = Stabilizer(scene, robot).step(SoleReadings((flat.wrenches[0], edge)), {}, tilted, planned, 0.004)
+    assert np.allclose([t[:2] for t in twists], 0.0, atol=1e-12)  # no shift (no horizontal force to give way to)
+    assert twists[0][3] == pytest.approx(0.0, abs=1e-12)  # the flat sole does not turn with the base either
