@@ -29,6 +29,7 @@ import numpy as np
 import yaml
 
 from posegen.model import ContactModel, Contacts, FloorModel, measurement_provenance, read_measurements
+from posegen.physics.true_robot import plane_offsets
 from posegen.robot import FloatArray, Scene, load_config, offset_matrix, scene_for
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -64,8 +65,7 @@ def planes(scene: Scene, model: ContactModel, x_true: FloatArray, contacts: Cont
         plane = anchor_plane
         if scene.chain(chain).sole_frame != scene.stance.sole_frames[0]:
             plane = np.linalg.inv(first[k] @ np.linalg.inv(second[k])) @ plane  # into the second sole's frame
-        normal, point = plane[:3, 2], plane[:3, 3]
-        out[k] = (normal @ point / normal[2], -np.arcsin(normal[1]), np.arctan2(normal[0], normal[2]))
+        out[k] = plane_offsets(plane)
     return out
 
 

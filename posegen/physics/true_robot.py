@@ -113,6 +113,21 @@ def draw_true_robot(scene: Scene, session: str, perturbation: Perturbation, seed
     )
 
 
+def plane_offsets(plane: FloatArray) -> tuple[float, float, float]:
+    """A plane's height z (m, along the frame's z at its origin), roll and pitch (rad), from a frame on it (4, 4).
+
+    The inverse of :func:`posegen.robot.offset_matrix` up to the frame's place and yaw in the
+    plane: ``offset_matrix(*plane_offsets(frame))`` lies on the same plane.
+
+    Example:
+        >>> tuple(round(v, 9) for v in plane_offsets(offset_matrix(0.68, 0.01, -0.02)))
+        (0.68, 0.01, -0.02)
+
+    """
+    normal, point = plane[:3, 2], plane[:3, 3]
+    return float(normal @ point / normal[2]), float(-np.arcsin(normal[1])), float(np.arctan2(normal[0], normal[2]))
+
+
 def as_stood(robot: TrueRobot, soles: tuple[FloatArray, ...]) -> FloatArray:
     """The true parameters (nx,) with the plane and the floor constants as the robot stood when the route started.
 
@@ -128,16 +143,9 @@ def as_stood(robot: TrueRobot, soles: tuple[FloatArray, ...]) -> FloatArray:
     """
     model, x = robot.model, robot.x.copy()
     anchor_inverse = np.linalg.inv(soles[0])
-    plane = anchor_inverse @ robot.table_top
-    normal, point = plane[:3, 2], plane[:3, 3]
-    contact = model.contact
-    values = {
-        "z": float(normal @ point / normal[2]),
-        "roll": float(-np.arcsin(normal[1])),
-        "pitch": float(np.arctan2(normal[0], normal[2])),
-    }
-    for name, value in values.items():
-        x[contact.column(Parameter.plane(robot.session, name))] = value
+    values = plane_offsets(anchor_inverse @ robot.table_top)
+    for name, value in zip(("z", "roll", "pitch"), values, strict=True):
+        x[model.contact.column(Parameter.plane(robot.session, name))] = value
     relative = anchor_inverse @ soles[1]
     x[model.floor_columns(robot.session)] = (relative[0, 3], relative[1, 3], np.arctan2(relative[1, 0], relative[0, 0]))
     return x
