@@ -21,8 +21,18 @@ A contact of the route runs, in route time:
   for, below the route's overshoot); the route waits at the end of its go-to-contact
   until ``SETTLE_S`` after the force first reached its band (``REACHED``;
   ``SEARCH_TIMEOUT_S`` at most), so that the
-  hold lasts the planned time in contact; in contact the hand also turns to zero roll and pitch torque
-  about the contact frame's origin, so the fingertips settle flush and share the load;
+  hold lasts the planned time in contact; in contact a hand that touches with a point also
+  turns to zero roll and pitch torque about its contact frame's origin;
+* **flush** (a hand that touches the table with fingertips): the hand turns about its
+  contact origin, by the roll and pitch torque there (low-passed over ``TORQUE_FILTER_S``:
+  the sensor reads 0.1-0.2 N m of noise), until the centre of pressure lies
+  a few millimetres inside the fingertips' polygon (:mod:`posegen.physics.fingertips`), every tip
+  loaded; then it stays as it is. Through the hold it does not turn, and the route does not
+  wait for it (a wait of its own, with the force on, tipped the standing robot on routes it
+  otherwise completes: the arm pushes on the table the longer). The true hand meets the table
+  turned by up to 5 deg from where the nominal model puts it: pressed down, it rests on two
+  tips, its contact frame tilted 1-2 deg on average against the table, and the calibration
+  reads that tilt as the kinematics' (a flush contact pins the frame's roll and pitch);
 * an arm whose joint loop is at its effort limit (its tracking error past the loop's
   saturation) neither presses further nor turns: the admittance does not wind up;
 * **release**: the target force falls to zero over the first ``UNLOAD_SHARE`` of the route's
@@ -47,6 +57,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.io import Route, SegmentType
+from posegen.physics.fingertips import TORQUE_FILTER_S, flush_turn, loads_every_tip, tip_polygon
 from posegen.physics.nominal import NominalRobot
 from posegen.physics.shaping import beyond, saturate
 from posegen.robot import FloatArray
@@ -133,6 +144,7 @@ class _Hand:
     tare_sum: FloatArray
     tare_count: int
     offset: FloatArray  # (6,) the twist integrated so far (world axes; angles small)
+    torque: FloatArray  # (2,) N m, the roll and pitch torques at the contact origin, low-passed (world axes)
 
 
 class HandControl:
@@ -148,7 +160,8 @@ class HandControl:
         self.robot = robot
         self.force_n = force_n
         self.contacts = {c: [k for k in contacts if k.chain == c] for c in robot.tools}
-        self.hands = {c: _Hand(np.zeros(6), np.zeros(6), 0, np.zeros(6)) for c in robot.tools}
+        self.hands = {c: _Hand(np.zeros(6), np.zeros(6), 0, np.zeros(6), np.zeros(2)) for c in robot.tools}
+        self.tips = {c: tip_polygon(robot.scene, c) for c in robot.tools}  # chain -> its fingertips' polygon
         self.wrenches: dict[str, FloatArray] = {c: np.zeros(6) for c in robot.tools}  # the last, at the contact
         self.waited_s: dict[str, float] = {}  # contact label -> how long the route waited for it
         self.saturated: dict[str, bool] = {}  # chain -> an arm joint lags its command past its effort limit
@@ -267,7 +280,11 @@ class HandControl:
                 hand.tare_sum, hand.tare_count = np.zeros(6), 0
             wrench = self.robot.at_contact(chain, compensated - hand.tare)
             self.wrenches[chain] = wrench
+            hand.torque += dt_s / (TORQUE_FILTER_S + dt_s) * (wrench[3:5] - hand.torque)
             rate = self._twist(chain, contact, t, wrench, hand)
+            if self.tips[chain] is not None and self.phase(chain, t) == Phase.PRESS:
+                flush = self._flush(chain, wrench[2], hand.torque)
+                rate[3:5] = 0.0 if self.saturated.get(chain, False) else self._settle_flush(contact, t, hand, flush)
             rate[2] += self._undone_descent(chain, t, float(planned[chain][2, 3]), dt_s)
             hand.offset += rate * dt_s
             hand.offset[:3] = saturate(hand.offset[:3], MAX_OFFSET_M)
@@ -297,6 +314,28 @@ class HandControl:
         return np.concatenate(
             [planned[:3, 3] + offset[:3] - estimated[:3, 3], pin.log3(target_rotation @ estimated[:3, :3].T)]
         )
+
+    def _flush(self, chain: str, force_n: float, torque: FloatArray) -> bool:
+        """Whether every fingertip carries load (a hand not touching, or touching with a point, is flush).
+
+        ``force_n`` the table's normal force on the hand, ``torque`` (2,) N m its roll and pitch
+        torques at the contact origin (world axes, turned into the contact frame's here).
+        """
+        tips = self.tips[chain]
+        if tips is None or force_n <= TOUCH_FORCE_N:
+            return True
+        axes = self.robot.pose(self.robot.contact_frames[chain])[:2, :2]  # the frame's yaw (its tilt is small)
+        return loads_every_tip(tips, force_n, axes.T @ torque)
+
+    @staticmethod
+    def _settle_flush(contact: ContactTimes | None, t: float, hand: _Hand, flush: bool) -> FloatArray:
+        """The roll and pitch rates (2,) rad/s of a pressing hand with fingertips: toward flush, still once flush.
+
+        Still through the hold (a contact is measured with every joint still).
+        """
+        if flush or (contact is not None and t >= contact.hold_s):
+            return np.zeros(2)
+        return flush_turn(hand.torque, hand.offset[3:5])
 
     def _twist(self, chain: str, contact: ContactTimes | None, t: float, wrench: FloatArray, hand: _Hand) -> FloatArray:
         phase = self.phase(chain, t)

@@ -12,9 +12,11 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
   ``p_d = p_ref + (1 + K_DCM / omega) (xi - xi_ref)``, kept ``ZMP_MARGIN_M`` inside the
   support polygon, with ``xi_ref = c_ref + c_ref' / omega``. The references are the
   plan's: its CoM and CoM velocity, and its ZMP (the commanded motion's, from the whole
-  robot's inverse dynamics); with the hands pushing on the table (as planned), the ZMP
-  they move away from the hands, held the config's ZMP margin inside the polygon by moving
-  the CoM toward them (:func:`references`).
+  robot's inverse dynamics), moved with the soles from where the plan puts them to where
+  the robot believes it stands (:func:`follow_feet`: the true legs put the second sole 1-5
+  cm from its plan, and the plan may lay its ZMP 2 cm inside that sole's edge); with the
+  hands pushing on the table (as planned), the ZMP they move away from the hands, held the
+  config's ZMP margin inside the polygon by moving the CoM toward them (:func:`references`).
 * **Foot admittance** (foot damping control). The desired ZMP's wrench is shared by the
   soles as flat feet share it (:meth:`NominalRobot.sole_split`); each sole moves, relative
   to the base, at ``v = K (w - w_share)`` in its frame, along its normal, about its
@@ -73,6 +75,7 @@ import numpy as np
 
 from posegen.physics.nominal import GRAVITY, NominalRobot
 from posegen.physics.shaping import beyond, saturate
+from posegen.physics.stance import follow_feet
 from posegen.robot import FloatArray, Scene, convex_hull_clockwise
 
 K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
@@ -226,6 +229,8 @@ class Stabilizer:
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
         self._rectangle = Hull.of(np.array([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))  # a sole, its frame
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
+        self._planned_soles = [scene.sole_poses[f] for f in scene.stance.sole_frames]  # (4, 4) each, stance order
+        self._foot_centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # in a sole's frame
         self._com: FloatArray | None = None
         self._hull: Hull | None = None
         self._steps = 0
@@ -276,6 +281,7 @@ class Stabilizer:
         """
         robot = self.robot
         self._steps += 1
+        planned = self._as_stood(planned)
         zmp, reference = references(robot, hand_wrenches, planned, self._polygon(), self.margin_m)
         self.zmp_desired = self._desired_zmp(zmp, reference, planned.com_velocity, dt_s)
         total = robot.soles_total(soles.wrenches)
@@ -300,6 +306,13 @@ class Stabilizer:
             _sole_twist(pose, wrench, share, shift, level, float(total[2]))
             for pose, wrench, share in zip(robot.sole_poses, soles.wrenches, shares, strict=True)
         ]
+
+    def _as_stood(self, planned: Reference) -> Reference:
+        """The plan's CoM and ZMP moved with the soles to where the robot believes they stand."""
+        soles = tuple(zip(self._planned_soles, self.robot.sole_poses, strict=True))
+        first, second = soles  # a stance has two soles
+        com, zmp = (follow_feet(point, (first, second), self._foot_centre) for point in (planned.com, planned.zmp))
+        return Reference(com, planned.com_velocity, zmp, planned.pelvis_z)
 
     def _split_at(self, total: FloatArray, zmp: FloatArray) -> tuple[list[FloatArray], FloatArray]:
         """The soles' shares (6,) LOCAL each of the total wrench (6,) moved to the ZMP (2,), and their torques (nj,)."""

@@ -24,6 +24,7 @@ from posegen.physics.contact_control import (
     contact_times,
     unload_s,
 )
+from posegen.physics.fingertips import FLUSH_MARGIN_M, K_FLUSH, MAX_FLUSH_TILT_RAD
 from posegen.physics.nominal import NominalRobot
 from posegen.physics.tool import Tool
 from posegen.robot import Scene
@@ -143,3 +144,92 @@ def test_a_touching_hand_undoes_the_plan_s_descent(route_file: Path, scene: Scen
     assert np.isclose(hands._undone_descent(chain, approach, 0.7986, dt_s), 0.1)  # pushed past the guard: undone
     hands.wrenches[chain] = np.array([0, 0, 0.5 * GUARD_FORCE_N, 0, 0, 0])
     assert hands._undone_descent(chain, approach, 0.7982, dt_s) == 0.0  # below the guard: the approach goes on
+
+
+def test_a_hand_is_flush_when_its_centre_of_pressure_loads_every_tip(
+    route_file: Path, scene: Scene, tools: dict[str, Tool]
+) -> None:
+    contact, hands = _first_contact(route_file, scene, tools)
+    chain = contact.chain
+    hands.robot.update(scene.reference)
+    axes = hands.robot.pose(hands.robot.contact_frames[chain])[:2, :2]
+    polygon = hands.tips[chain]
+    assert polygon is not None
+
+    def torque_at(pressure: np.ndarray, force: float) -> np.ndarray:  # world axes, the force at ``pressure``
+        local = np.array([pressure[1], -pressure[0]]) * force
+        return axes @ local
+
+    assert hands._flush(chain, 30.0, torque_at(np.zeros(2), 30.0))
+    tip = polygon.vertices[0]
+    edge = 0.5 * (polygon.vertices[0] + polygon.vertices[1])  # two tips carry it all
+    assert not hands._flush(chain, 30.0, torque_at(edge, 30.0))
+    assert not hands._flush(chain, 30.0, torque_at(tip, 30.0))
+    inside = edge * (1.0 - 2.0 * FLUSH_MARGIN_M / polygon.margin(np.zeros(2)))  # toward the origin
+    assert polygon.margin(inside) > FLUSH_MARGIN_M and hands._flush(chain, 30.0, torque_at(inside, 30.0))
+    assert hands._flush(chain, 1.0, torque_at(edge, 30.0))  # not touching: nothing to settle
+
+
+def test_a_pressing_hand_turns_flush_then_holds_still(route_file: Path, scene: Scene, tools: dict[str, Tool]) -> None:
+    contact, hands = _first_contact(route_file, scene, tools)
+    hand = hands.hands[contact.chain]
+    pressing = 0.5 * (contact.press_s + contact.hold_s)
+    hand.torque = np.array([0.4, -0.2])
+    turn = hands._settle_flush(contact, pressing, hand, flush=False)
+    assert np.allclose(turn, K_FLUSH * hand.torque)  # as the torque says (the sign _give_way turns by)
+    assert not np.any(hands._settle_flush(contact, pressing, hand, flush=True))
+    assert not np.any(hands._settle_flush(contact, contact.hold_s, hand, flush=False))  # the hold: still
+    hand.offset = np.array([0, 0, 0, MAX_FLUSH_TILT_RAD, 0.0, 0])
+    blocked = hands._settle_flush(contact, pressing, hand, flush=False)
+    assert blocked[0] == 0.0 and blocked[1] == turn[1]  # no further than its bound
+
+
+def _sensor_reading(hands: HandControl, chain: str, contact_wrench: np.ndarray) -> np.ndarray:
+    """The wrist sensor's reading (6,) that gives ``contact_wrench`` (world axes at the contact origin), tool's weight
+    included: what :meth:`NominalRobot.at_contact` undoes."""
+    robot = hands.robot
+    sensor = robot.data.oMf[robot.wrench_frames[chain]]
+    lever = robot.data.oMf[robot.contact_frames[chain]].translation - sensor.translation
+    force = contact_wrench[:3]
+    torque = contact_wrench[3:] + np.cross(lever, force)
+    return np.concatenate([sensor.rotation.T @ force, sensor.rotation.T @ torque]) + robot.tool_wrench(chain)
+
+
+def test_a_hand_on_two_tips_turns_until_the_third_carries_load(
+    route_file: Path, scene: Scene, tools: dict[str, Tool]
+) -> None:
+    """Through :meth:`HandControl.step`: a hand pressed on the edge between two fingertips turns toward the third
+    (the roll and pitch that unload the edge), one whose every tip carries load does not turn, nor does any hand in
+    its hold."""
+    contact, hands = _first_contact(route_file, scene, tools)
+    chain = contact.chain
+    route = read_route(route_file)
+    at_hold = route.positions[np.searchsorted(route.times, contact.hold_s)]
+    joints = at_hold[route.joint_columns(scene.joint_names, str(route_file))]  # the hand flush on the table
+    hands.robot.update(joints)
+    polygon = hands.tips[chain]
+    assert polygon is not None
+    axes = hands.robot.pose(hands.robot.contact_frames[chain])[:3, :3]
+    planned = {c: hands.robot.pose(hands.robot.contact_frames[c]) for c in hands.hands}
+    force = 30.0
+
+    def run(pressure: np.ndarray, t: float, steps: int = 60) -> np.ndarray:
+        """The hand's roll and pitch offset (2,) rad after ``steps`` periods pressed at ``pressure`` (contact x, y)."""
+        local = np.array([pressure[1] * force, -pressure[0] * force, 0.0])  # the torque at the contact origin
+        wrench = np.concatenate([axes @ np.array([0, 0, force]), axes @ local])
+        wrists = {c: _sensor_reading(hands, c, wrench if c == chain else np.zeros(6)) for c in hands.hands}
+        hands.hands[chain].offset[:] = 0.0
+        hands.hands[chain].torque[:] = 0.0
+        for _ in range(steps):
+            hands.step(t, wrists, planned, joints, 0.004)
+        return hands.hands[chain].offset[3:5].copy()
+
+    pressing = 0.5 * (contact.press_s + contact.hold_s)
+    edge = 0.5 * (polygon.vertices[0] + polygon.vertices[1])  # two tips carry it all
+    turned = run(edge, pressing)
+    local = np.array([edge[1], -edge[0]])  # the torque's direction at the contact origin (contact axes)
+    assert np.linalg.norm(turned) > 0.01  # about 0.2 rad/s for 0.24 s, less the filter's lag
+    assert (axes[:2, :2].T @ turned) @ local > 0.99 * np.linalg.norm(turned) * np.linalg.norm(local)  # toward the third
+    assert polygon.margin(0.5 * edge) > 2 * FLUSH_MARGIN_M
+    assert not np.any(run(0.5 * edge, pressing))  # every tip loaded, off centre: still
+    assert not np.any(run(edge, contact.hold_s + 0.01))  # the hold: still

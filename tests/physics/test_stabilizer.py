@@ -186,3 +186,37 @@ def test_a_sole_on_its_edge_rests_the_com_shift_and_the_levelling(scene: Scene, 
     twists = Stabilizer(scene, robot).step(SoleReadings((flat.wrenches[0], edge)), {}, tilted, planned, 0.004)
     assert np.allclose([t[:2] for t in twists], 0.0, atol=1e-12)  # no shift (no horizontal force to give way to)
     assert twists[0][3] == pytest.approx(0.0, abs=1e-12)  # the flat sole does not turn with the base either
+
+
+def test_the_plan_s_balance_follows_the_second_sole_to_where_it_stands(scene: Scene, tools: dict[str, Tool]) -> None:
+    """The robot believes its second sole 3 cm from the plan's: a planned CoM under that sole's centre becomes one
+    under its believed centre, and the desired ZMP (the DCM on its reference) lies there too; under the anchor sole
+    nothing moves."""
+    from posegen.physics.stabilizer import SoleReadings, Stabilizer
+
+    robot = NominalRobot(scene, tools)
+    robot.update(scene.reference)
+    stabilizer = Stabilizer(scene, robot)
+    (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
+    centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])
+    anchor, second = (scene.sole_poses[f] for f in scene.stance.sole_frames)
+    planned_centre = second[:2, :3] @ centre + second[:2, 3]
+    moved = robot.sole_poses[1].copy()
+    moved[:2, 3] += [-0.02, 0.025]  # where the encoders say the second sole stands
+    robot.sole_poses[1] = moved
+    believed_centre = moved[:2, :3] @ centre + moved[:2, 3]
+    reference = Reference(planned_centre, np.zeros(2), planned_centre, float(robot.q[2]))
+    stood = stabilizer._as_stood(reference)
+    assert np.allclose(stood.com, believed_centre, atol=2e-4) and np.allclose(stood.zmp, stood.com)
+    under_anchor = anchor[:2, :3] @ centre + anchor[:2, 3]
+    kept = stabilizer._as_stood(Reference(under_anchor, np.zeros(2), under_anchor, float(robot.q[2])))
+    assert np.allclose(kept.com, under_anchor, atol=2e-4)
+    stabilizer.com_bias = reference.com - robot.com()[:2]  # the robot's CoM where the plan puts it
+    weight = robot.mass_kg * 9.81
+    flat = SoleReadings(tuple(np.array([0.0, 0.0, 0.5 * weight, 0.0, 0.0, 0.0]) for _ in robot.soles))
+    stabilizer.step(flat, {}, (np.eye(3), np.eye(3)), reference, 0.004)
+    assert np.linalg.norm(stabilizer.zmp_desired - believed_centre) > 0.02  # the CoM 3 cm off the stood reference
+    stabilizer.com_bias = believed_centre - robot.com()[:2]  # the robot's CoM over where that sole stands
+    stabilizer._com = None
+    stabilizer.step(flat, {}, (np.eye(3), np.eye(3)), reference, 0.004)
+    assert np.allclose(stabilizer.zmp_desired, believed_centre, atol=1e-3)
