@@ -55,16 +55,12 @@ def planes(scene: Scene, model: ContactModel, x_true: FloatArray, contacts: Cont
     """(n, 3) the true plane (z m, roll, pitch rad) in each contact's own sole frame."""
     session = contacts.sessions[0]
     anchor_plane = offset_matrix(*x_true[model.plane_columns(session)])
-    floor = FloorModel(model)
-    first, second = (
-        leg.products(contacts.joints, x_true[None][:, floor._columns[leg.chain]], legs_only=True)[0]
-        for leg in floor.legs
-    )
+    seconds = FloorModel(model).second_sole_frames(x_true[None], contacts.joints)[0]  # (n, 4, 4) in the anchor's
     out = np.zeros((len(contacts), 3))
     for k, chain in enumerate(contacts.chains):
         plane = anchor_plane
         if scene.chain(chain).sole_frame != scene.stance.sole_frames[0]:
-            plane = np.linalg.inv(first[k] @ np.linalg.inv(second[k])) @ plane  # into the second sole's frame
+            plane = np.linalg.inv(seconds[k]) @ plane  # into the second sole's frame
         out[k] = plane_offsets(plane)
     return out
 

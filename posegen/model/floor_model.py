@@ -59,9 +59,24 @@ class FloorModel:
 
     def measure_batch(self, thetas: FloatArray, joints: FloatArray) -> FloatArray:
         """:meth:`measure` of F parameter vectors (F, p) at joints (n, nj), or each one's own (F, n, nj). (F, n, 6)."""
-        first, second = (leg.products(joints, thetas[:, self._columns[leg.chain]], legs_only=True) for leg in self.legs)
-        frames = first @ rigid_inverses(second)  # (F, n, 4, 4) second sole in the first
+        frames = self.second_sole_frames(thetas, joints)
         return _pose_measurement(frames.reshape(-1, 4, 4)).reshape(*frames.shape[:2], 6)
+
+    def second_sole_frames(self, thetas: FloatArray, joints: FloatArray) -> FloatArray:
+        """The second sole's pose (4, 4) in the first sole's frame, per parameter vector and posture. (F, n, 4, 4).
+
+        Args:
+            thetas: F parameter vectors (F, p).
+            joints: Joint angles (n, nj) rad, or each parameter vector's own (F, n, nj).
+
+        Example:
+            >>> frames = FloorModel(model).second_sole_frames(model.nominal()[None], contacts.joints)
+            >>> frames[0, :, 2, 3]  # the second sole's height above the first's floor, m: about 0
+            array([...])
+
+        """
+        first, second = (leg.products(joints, thetas[:, self._columns[leg.chain]], legs_only=True) for leg in self.legs)
+        return np.asarray(first @ rigid_inverses(second))
 
     def derivatives(self, theta: FloatArray, joints: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The measurement (n, 6), its derivatives w.r.t. the parameters (n, 6, p) and the joints (n, 6, nj)."""

@@ -29,6 +29,8 @@ def test_closed_stance_is_flat_and_where_the_reference_puts_it(scene, floor):
     assert meas[:, 2:5] == pytest.approx(0.0, abs=1e-9)
     assert meas[:, 0] == pytest.approx(relative[0, 3], abs=1e-9)
     assert meas[:, 1] == pytest.approx(relative[1, 3], abs=1e-9)
+    frames = floor.second_sole_frames(floor.contacts.nominal()[None], np.array(closed))  # (1, 4, 4, 4)
+    assert frames.shape == (1, 4, 4, 4) and np.allclose(frames[0], relative, atol=1e-9)  # the whole pose
 
 
 def test_derivatives_against_finite_differences(scene, floor):
