@@ -34,7 +34,9 @@ A contact of the route runs, in route time:
   tips, its contact frame tilted 1-2 deg on average against the table, and the calibration
   reads that tilt as the kinematics' (a flush contact pins the frame's roll and pitch);
 * an arm whose joint loop is at its effort limit (its tracking error past the loop's
-  saturation) neither presses further nor turns: the admittance does not wind up;
+  saturation) neither presses further nor turns, nor, away from the table, holds its
+  hand's pose in the world: neither loop winds up (the pose loop, integrating a shoulder's
+  lag of 0.06-0.35 rad, turned the torso 0.9 rad off its plan in 4 s);
 * **release**: the target force falls to zero over the first ``UNLOAD_SHARE`` of the route's
   release (``UNLOAD_S`` at least; :func:`unload_s`), then the hand's offset fades back to the
   plan over the rest of the release. The floor takes back the hand's load gradually: a hand
@@ -288,7 +290,8 @@ class HandControl:
             rate[2] += self._undone_descent(chain, t, float(planned[chain][2, 3]), dt_s)
             hand.offset += rate * dt_s
             hand.offset[:3] = saturate(hand.offset[:3], MAX_OFFSET_M)
-            out[chain] = rate + (K_HOLD_PER_S * self._errors[chain] if hold else 0.0)
+            held = hold and not self.saturated.get(chain, False)  # anti-windup: a lagging arm holds no pose
+            out[chain] = rate + (K_HOLD_PER_S * self._errors[chain] if held else 0.0)
         return out
 
     def _undone_descent(self, chain: str, t: float, planned_z_m: float, dt_s: float) -> float:

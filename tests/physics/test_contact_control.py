@@ -233,3 +233,30 @@ def test_a_hand_on_two_tips_turns_until_the_third_carries_load(
     assert polygon.margin(0.5 * edge) > 2 * FLUSH_MARGIN_M
     assert not np.any(run(0.5 * edge, pressing))  # every tip loaded, off centre: still
     assert not np.any(run(edge, contact.hold_s + 0.01))  # the hold: still
+
+
+def test_away_from_the_table_a_hand_holds_its_pose_unless_its_arm_lags(
+    route_file: Path, scene: Scene, tools: dict[str, Tool]
+) -> None:
+    """Free, each hand is driven back to its planned pose in the world; a chain whose arm lags its command past
+    its effort limit is not (its lag would wind the loop up into the torso and the other arm)."""
+    from posegen.physics.contact_control import K_HOLD_PER_S, POSE_BAND
+
+    contact, hands = _first_contact(route_file, scene, tools)
+    hands.robot.update(scene.reference)
+    free = contact.approach_s - 0.5
+    assert not hands.in_contact(free)
+    planned = {}
+    for c in hands.hands:
+        pose = hands.robot.pose(hands.robot.contact_frames[c]).copy()
+        pose[2, 3] += 0.01  # planned 1 cm above where the commanded angles put it
+        planned[c] = pose
+    wrists = {c: _sensor_reading(hands, c, np.zeros(6)) for c in hands.hands}
+    out = hands.step(free, wrists, planned, scene.reference, 0.004)
+    for c in hands.hands:
+        assert np.isclose(out[c][2], K_HOLD_PER_S * (0.01 - POSE_BAND[2])) and np.allclose(out[c][3:], 0.0, atol=1e-9)
+    hands.saturated[contact.chain] = True
+    out = hands.step(free, wrists, planned, scene.reference, 0.004)
+    assert not np.any(out[contact.chain])  # the lagging arm: no pose loop
+    other = next(c for c in hands.hands if c != contact.chain)
+    assert np.isclose(out[other][2], K_HOLD_PER_S * (0.01 - POSE_BAND[2]))  # the other: as before (beyond its band)
