@@ -61,7 +61,7 @@ import pinocchio as pin
 from posegen.io import Route, SegmentType
 from posegen.physics.fingertips import TORQUE_FILTER_S, flush_turn, loads_every_tip, tip_polygon
 from posegen.physics.nominal import NominalRobot
-from posegen.physics.shaping import beyond, saturate
+from posegen.physics.shaping import beyond, bounded_rate, saturate
 from posegen.robot import FloatArray
 
 K_FORCE = 3e-3  # m/s per N of normal force error
@@ -73,7 +73,7 @@ MAX_TILT_RAD = 0.05  # the hand turns at most this far from the plan
 SEARCH_SPEED_M_S = 0.02
 MAX_SPEED_M_S = 0.02
 GUARD_SPEED_M_S = 0.1  # a hand that meets the table unplanned gives way this fast at most (the arm moves on)
-MAX_TURN_RAD_S = 0.2
+MAX_TURN_RAD_S = 0.2  # a hand turns at most this fast (its admittance, settling flush)
 GUARD_FORCE_N = 10.0
 TOUCH_FORCE_N = 3.0  # in contact: above this normal force
 UNLOAD_S = 0.1  # s, the shortest unloading
@@ -338,7 +338,7 @@ class HandControl:
         """
         if flush or (contact is not None and t >= contact.hold_s):
             return np.zeros(2)
-        return flush_turn(hand.torque, hand.offset[3:5])
+        return flush_turn(hand.torque, hand.offset[3:5], MAX_TURN_RAD_S)
 
     def _twist(self, chain: str, contact: ContactTimes | None, t: float, wrench: FloatArray, hand: _Hand) -> FloatArray:
         phase = self.phase(chain, t)
@@ -376,7 +376,5 @@ class HandControl:
             return twist
         twist[2] = min(max(K_FORCE * error, -speed), max(speed, GUARD_SPEED_M_S))  # gives way as fast as a guard
         torque = np.where(np.abs(wrench[3:5]) > TORQUE_BAND_NM, wrench[3:5], 0.0)
-        turn = saturate(K_TORQUE * torque, MAX_TURN_RAD_S)
-        blocked = np.abs(offset[3:5]) >= MAX_TILT_RAD
-        twist[3:5] = np.where(blocked & (np.sign(turn) == np.sign(offset[3:5])), 0.0, turn)
+        twist[3:5] = bounded_rate(K_TORQUE * torque, MAX_TURN_RAD_S, offset[3:5], MAX_TILT_RAD)
         return twist

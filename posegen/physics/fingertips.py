@@ -16,14 +16,13 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.physics.geometry import tip_points
-from posegen.physics.shaping import saturate
+from posegen.physics.shaping import bounded_rate
 from posegen.physics.stabilizer import Hull
-from posegen.robot import FloatArray, Scene
+from posegen.robot import FloatArray, Scene, centre_of_pressure
 
 K_FLUSH = 0.15  # rad/s per N m of roll or pitch torque about the contact origin, while a tip carries no load
 FLUSH_MARGIN_M = 0.005  # the centre of pressure this far inside the fingertips' polygon: every tip carries load
 MAX_FLUSH_TILT_RAD = 0.1  # a hand turns at most this far from the plan to settle flush
-MAX_FLUSH_TURN_RAD_S = 0.2
 TORQUE_FILTER_S = 0.02  # low-pass of the roll and pitch torques a hand settles flush by (the sensor's noise)
 
 
@@ -57,21 +56,19 @@ def loads_every_tip(polygon: Hull, force_n: float, torque_nm: FloatArray) -> boo
         True
 
     """
-    pressure = np.array([-torque_nm[1], torque_nm[0]]) / force_n  # (2,) m
-    return polygon.margin(pressure) >= FLUSH_MARGIN_M
+    return polygon.margin(centre_of_pressure(force_n, torque_nm)) >= FLUSH_MARGIN_M
 
 
-def flush_turn(torque_nm: FloatArray, tilt_rad: FloatArray) -> FloatArray:
+def flush_turn(torque_nm: FloatArray, tilt_rad: FloatArray, max_rate_rad_s: float) -> FloatArray:
     """The roll and pitch rates (2,) rad/s that unload the edge a hand rests on, no further than its bound.
 
     ``torque_nm`` (2,) the roll and pitch torques about the contact origin (world axes), ``tilt_rad``
-    (2,) how far the hand has turned from its plan already (``MAX_FLUSH_TILT_RAD`` at most).
+    (2,) how far the hand has turned from its plan already (``MAX_FLUSH_TILT_RAD`` at most),
+    ``max_rate_rad_s`` the hand's fastest turn.
 
     Example:
-        >>> flush_turn(np.array([0.4, -0.2]), np.zeros(2))  # K_FLUSH x the torque
+        >>> flush_turn(np.array([0.4, -0.2]), np.zeros(2), 0.2)  # K_FLUSH x the torque
         array([ 0.06, -0.03])
 
     """
-    turn = saturate(K_FLUSH * np.asarray(torque_nm, dtype=float), MAX_FLUSH_TURN_RAD_S)
-    blocked = np.abs(tilt_rad) >= MAX_FLUSH_TILT_RAD
-    return np.asarray(np.where(blocked & (np.sign(turn) == np.sign(tilt_rad)), 0.0, turn))
+    return bounded_rate(K_FLUSH * np.asarray(torque_nm, dtype=float), max_rate_rad_s, tilt_rad, MAX_FLUSH_TILT_RAD)

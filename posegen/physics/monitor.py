@@ -16,7 +16,7 @@ import numpy as np
 from posegen.physics.builder import Layout
 from posegen.physics.geometry import ShapeRole
 from posegen.physics.sensors import sensor_wrench
-from posegen.robot import FloatArray, convex_hull_clockwise, cross, polygon_margin
+from posegen.robot import FloatArray, centre_of_pressure, convex_hull_clockwise, cross, polygon_margin
 
 _CODES = {role: k for k, role in enumerate(ShapeRole)}
 _TIP, _BODY = _CODES[ShapeRole.TIP], _CODES[ShapeRole.BODY]
@@ -100,7 +100,7 @@ class Monitor:
                 corners.extend((self._corners @ rotation.T + origin)[:, :2])
         if total[2] <= 1.0 or not corners:
             return -np.inf
-        zmp = np.array([-total[4] / total[2], total[3] / total[2]])
+        zmp = centre_of_pressure(total[2], total[3:5])
         return float(polygon_margin(convex_hull_clockwise(np.array(corners)), zmp))
 
     def _contacts(self, data: mujoco.MjData, index: int, time_s: float) -> None:

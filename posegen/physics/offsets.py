@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from posegen.model import ChainModel
+from posegen.physics.lapack import solve
 from posegen.physics.nominal import NominalRobot
 from posegen.physics.shaping import clamp
 from posegen.robot import FloatArray, Scene
@@ -96,12 +97,12 @@ class JointOffsets:
         rows = jacobian.shape[0]  # jacobian (6k, n)
         if jacobian.shape[1] < rows:
             gram = jacobian.T @ jacobian + self._damping(len(joints))
-            return np.asarray(scale * np.linalg.solve(gram, jacobian.T @ twist))
+            return np.asarray(scale * solve(gram, jacobian.T @ twist))
         gram = jacobian @ jacobian.T + self._damping(rows)
         if not decay:
-            return np.asarray(scale * (jacobian.T @ np.linalg.solve(gram, twist)))
+            return np.asarray(scale * (jacobian.T @ solve(gram, twist)))
         decaying = self.dq[joints] / scale / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
-        return np.asarray(scale * (jacobian.T @ np.linalg.solve(gram, twist + jacobian @ decaying) - decaying))
+        return np.asarray(scale * (jacobian.T @ solve(gram, twist + jacobian @ decaying) - decaying))
 
     def step(
         self,

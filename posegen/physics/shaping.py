@@ -1,4 +1,4 @@
-"""How the controllers shape their signals: a deadband and a saturation.
+"""How the controllers shape their signals: a deadband, a saturation, a rate stopped at its bound.
 
 The controllers run at every control period on arrays of 1 to 6 values, where
 ``np.clip`` costs several microseconds a call: these are written with the ufuncs
@@ -43,3 +43,19 @@ def saturate(values: FloatArray, limit: FloatArray | float) -> FloatArray:
 
     """
     return clamp(values, -limit, limit)
+
+
+def bounded_rate(rate: FloatArray, limit: float, value: FloatArray, bound: float) -> FloatArray:
+    """``rate`` held within ``[-limit, limit]``, and zero where it would carry ``value`` past ``[-bound, bound]``.
+
+    A value at its bound may still move back (the rates that integrate an angle or an
+    offset kept within its bound).
+
+    Example:
+        >>> bounded_rate(np.array([0.3, 0.3, -0.1]), 0.2, np.array([0.0, 0.05, 0.05]), 0.05)
+        array([ 0.2,  0. , -0.1])
+
+    """
+    saturated = saturate(rate, limit)
+    blocked = np.abs(value) >= bound
+    return np.asarray(np.where(blocked & (np.sign(saturated) == np.sign(value)), 0.0, saturated))

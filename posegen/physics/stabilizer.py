@@ -13,7 +13,7 @@ of that ZMP, so the ankles lean the body until the floor's wrench is the desired
   support polygon, with ``xi_ref = c_ref + c_ref' / omega``. The references are the
   plan's: its CoM and CoM velocity, and its ZMP (the commanded motion's, from the whole
   robot's inverse dynamics), moved with the soles from where the plan puts them to where
-  the robot believes it stands (:func:`follow_feet`: the true legs put the second sole 1-5
+  the robot believes it stands (:class:`PlannedFeet`: the true legs put the second sole 1-5
   cm from its plan, and the plan may lay its ZMP 2 cm inside that sole's edge); with the
   hands pushing on the table (as planned), the ZMP they move away from the hands, held the
   config's ZMP margin inside the polygon by moving the CoM toward them (:func:`references`).
@@ -75,8 +75,8 @@ import numpy as np
 
 from posegen.physics.nominal import GRAVITY, NominalRobot
 from posegen.physics.shaping import beyond, saturate
-from posegen.physics.stance import follow_feet
-from posegen.robot import FloatArray, Scene, convex_hull_clockwise
+from posegen.physics.stance import PlannedFeet
+from posegen.robot import FloatArray, Scene, centre_of_pressure, convex_hull_clockwise
 
 K_DCM_PER_S = 2.0  # DCM error -> desired ZMP
 VELOCITY_FILTER_S = 0.02  # low-pass of the CoM velocity estimate
@@ -202,8 +202,7 @@ def on_edge(wrench: FloatArray, rectangle: Hull, load_n: float) -> bool:
     """
     if wrench[2] < LIGHT_SHARE * load_n:
         return False
-    pressure = np.array([-wrench[4], wrench[3]]) / wrench[2]  # (2,) m, the sole's frame
-    return rectangle.margin(pressure) < EDGE_M
+    return rectangle.margin(centre_of_pressure(wrench[2], wrench[3:5])) < EDGE_M  # the sole's frame
 
 
 def tilt_error(measured: FloatArray, planned: FloatArray) -> FloatArray:
@@ -229,8 +228,8 @@ class Stabilizer:
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
         self._rectangle = Hull.of(np.array([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))  # a sole, its frame
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
-        self._planned_soles = [scene.sole_poses[f] for f in scene.stance.sole_frames]  # (4, 4) each, stance order
-        self._foot_centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # in a sole's frame
+        first, second = (scene.sole_poses[f] for f in scene.stance.sole_frames)  # (4, 4) each; a stance has two
+        self._feet = PlannedFeet((first, second), np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0]))
         self._com: FloatArray | None = None
         self._hull: Hull | None = None
         self._steps = 0
@@ -285,7 +284,7 @@ class Stabilizer:
         zmp, reference = references(robot, hand_wrenches, planned, self._polygon(), self.margin_m)
         self.zmp_desired = self._desired_zmp(zmp, reference, planned.com_velocity, dt_s)
         total = robot.soles_total(soles.wrenches)
-        measured = np.array([-total[4], total[3]]) / max(float(total[2]), 1.0)  # the ZMP (2,), floor at z = 0
+        measured = centre_of_pressure(max(float(total[2]), 1.0), total[3:5])  # the ZMP (2,), floor at z = 0
         if not any(float(w[2]) > 0.0 for w in hand_wrenches.values()):
             expected = robot.com()[:2] + self.com_bias + planned.zmp - planned.com  # the plan's motion at our CoM
             self.com_bias += dt_s / BIAS_S * (measured - expected)
@@ -309,9 +308,8 @@ class Stabilizer:
 
     def _as_stood(self, planned: Reference) -> Reference:
         """The plan's CoM and ZMP moved with the soles to where the robot believes they stand."""
-        soles = tuple(zip(self._planned_soles, self.robot.sole_poses, strict=True))
-        first, second = soles  # a stance has two soles
-        com, zmp = (follow_feet(point, (first, second), self._foot_centre) for point in (planned.com, planned.zmp))
+        first, second = self.robot.sole_poses  # (4, 4) each, where the robot believes they stand
+        com, zmp = (self._feet.follow(point, (first, second)) for point in (planned.com, planned.zmp))
         return Reference(com, planned.com_velocity, zmp, planned.pelvis_z)
 
     def _split_at(self, total: FloatArray, zmp: FloatArray) -> tuple[list[FloatArray], FloatArray]:

@@ -10,7 +10,7 @@ smallest change of the planned angles.
 
 The plan's balance (its CoM and ZMP on the floor) is laid out around the soles where the
 plan puts them; the robot stands with its second sole where its legs put it, centimetres
-away (:func:`follow_feet` moves the plan's floor points with the soles).
+away (:class:`PlannedFeet` moves the plan's floor points with the soles).
 """
 
 from __future__ import annotations
@@ -20,9 +20,8 @@ import numpy as np
 
 from posegen.errors import InfeasibleError
 from posegen.physics.builder import Layout
+from posegen.physics.lapack import Factored
 from posegen.robot import FloatArray, Scene
-
-Sole = tuple[FloatArray, FloatArray]  # a sole's pose (4, 4) where the plan puts it, and where the robot stands on it
 
 TOLERANCE = 1e-9  # m and rad
 ITERATIONS = 50
@@ -79,32 +78,36 @@ def put_down(
     raise InfeasibleError(f"the true robot's {scene.second_sole} cannot be laid flat on the floor at the route's start")
 
 
-def follow_feet(point: FloatArray, soles: tuple[Sole, Sole], centre: FloatArray) -> FloatArray:
-    """A point (2,) m of the plan's floor, moved with the soles from where the plan puts them to where they stand.
+class PlannedFeet:
+    """The two soles where the plan puts them; :meth:`follow` moves the plan's floor points with them.
 
-    Each sole's motion on the floor (its planned pose to its standing one, (4, 4) each) moves
-    the point; it moves by the blend of the two, by how far along it lies from the first
-    sole's centre to the second's (0 at the first, 1 at the second, clipped): a ZMP the plan
-    puts under one foot stays under that foot, and one the plan puts midway stays midway.
-    A balance is a place relative to the feet: the plan's CoM 2 cm inside the second sole's
-    outer edge is 2 cm inside wherever that sole stands.
-
-    Args:
-        point: (2,) m, world x and y.
-        soles: The two soles, each (planned, standing) (4, 4) world poses.
-        centre: (3,) m, the foot rectangle's centre in a sole's frame.
+    Each sole's motion on the floor (its planned pose to its standing one) moves a point;
+    the point moves by the blend of the two, by how far along it lies from the first sole's
+    centre to the second's (0 at the first, 1 at the second, clipped): a ZMP the plan puts
+    under one foot stays under that foot, and one the plan puts midway stays midway. A
+    balance is a place relative to the feet: the plan's CoM 2 cm inside the second sole's
+    outer edge is 2 cm inside wherever that sole stands. The planned poses are factored
+    once (the controllers move two points every control period).
 
     Example:
         >>> moved = np.eye(4); moved[:2, 3] = [0.0, -0.05]  # the second sole 3.5 cm inward of its plan
         >>> planned = np.eye(4); planned[:2, 3] = [0.0, -0.085]
-        >>> follow_feet(np.array([0.0, -0.085]), ((np.eye(4), np.eye(4)), (planned, moved)), np.zeros(3))
+        >>> PlannedFeet((np.eye(4), planned), np.zeros(3)).follow(np.array([0.0, -0.085]), (np.eye(4), moved))
         array([ 0.  , -0.05])
 
     """
-    (first, _), (second, _) = soles
-    start, end = (pose[:2, :3] @ centre + pose[:2, 3] for pose in (first, second))  # the planned centres (2,)
-    axis = end - start
-    along = float(np.clip((point - start) @ axis / max(float(axis @ axis), 1e-12), 0.0, 1.0))
-    on_floor = np.array([point[0], point[1], 0.0, 1.0])
-    moved = [(standing @ np.linalg.solve(planned, on_floor))[:2] for planned, standing in soles]  # (2,) each
-    return np.asarray((1.0 - along) * moved[0] + along * moved[1])
+
+    def __init__(self, planned: tuple[FloatArray, FloatArray], centre: FloatArray) -> None:
+        """Both soles' planned world poses (4, 4); ``centre`` (3,) m, the foot rectangle's centre in a sole frame."""
+        start, end = (pose[:2, :3] @ centre + pose[:2, 3] for pose in planned)  # the planned centres (2,)
+        self._start = start
+        self._axis = end - start
+        self._length_sq = max(float(self._axis @ self._axis), 1e-12)
+        self._planned = tuple(Factored(pose) for pose in planned)
+
+    def follow(self, point: FloatArray, standing: tuple[FloatArray, FloatArray]) -> FloatArray:
+        """The point (2,) m (world x and y) moved with the soles to where they stand ((4, 4) world poses each)."""
+        along = float(np.clip((point - self._start) @ self._axis / self._length_sq, 0.0, 1.0))
+        on_floor = np.array([point[0], point[1], 0.0, 1.0])
+        moved = [(pose @ planned.solve(on_floor))[:2] for planned, pose in zip(self._planned, standing, strict=True)]
+        return np.asarray((1.0 - along) * moved[0] + along * moved[1])

@@ -22,6 +22,7 @@ from posegen.robot.additions import (  # for the draft (robot init)
 from posegen.robot.balance import (
     Balance,
     FloorWrenches,
+    centre_of_pressure,
     centres_of_pressure,
     pressed_zmp_margin,
     stretch_for_margin,
@@ -200,6 +201,7 @@ __all__ = [
     "assess",
     "bare_links",
     "carrying_links",
+    "centre_of_pressure",
     "centres_of_pressure",
     "check_for_planning",
     "contact_in_table",

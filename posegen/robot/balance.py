@@ -158,8 +158,25 @@ def pressed_zmp_margin(scene: Scene, com_m: FloatArray, mass_kg: float, hand_m: 
     return float(zmp_margins(scene.support_polygon, wrench)[0])
 
 
+def centre_of_pressure(force_n: float, torque_nm: FloatArray) -> FloatArray:
+    """(2,) m: where a push ``force_n`` (N, > 0) along a plane's normal acts, from its torques about the origin.
+
+    ``torque_nm`` (2,) N m the push's torques about the plane's x and y axes (a wrench's
+    ``[3:5]``), in the plane's frame: the point ``p`` with ``tau = p x f`` on the plane ``z = 0``.
+
+    Example:
+        >>> centre_of_pressure(100.0, np.array([2.0, -1.0]))  # 1 cm ahead, 2 cm to the left
+        array([0.01, 0.02])
+
+    """
+    return np.array([-torque_nm[1], torque_nm[0]]) / force_n
+
+
 def centres_of_pressure(wrenches: FloatArray, floor_z_m: float = 0.0) -> FloatArray:
-    """The floor point (m, 2) about which each floor wrench (m, 6) has no horizontal moment, m (nan if lifted)."""
+    """The floor point (m, 2) about which each floor wrench (m, 6) has no horizontal moment, m (nan if lifted).
+
+    :func:`centre_of_pressure` for many wrenches, on a floor at any height.
+    """
     force, moment = wrenches[:, :3], wrenches[:, 3:]
     with np.errstate(divide="ignore", invalid="ignore"):
         x = (floor_z_m * force[:, 0] - moment[:, 1]) / force[:, 2]

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from posegen.robot.balance import centre_of_pressure
 from posegen.robot.geometry import FloatArray
 from posegen.robot.statics import MOMENT_ARM_M
 
@@ -102,7 +103,7 @@ def split_wrench(
     centres: list[FloatArray] = [pose[:3, :3] @ centre + pose[:3, 3] for pose in poses]
     if force[2] <= 1e-9:
         return _shared(total, 0.5, centres, np.zeros(2), poses)
-    zmp = np.array([-moment[1], moment[0]]) / force[2]
+    zmp = centre_of_pressure(force[2], moment[:2])
     span = centres[1][:2] - centres[0][:2]
     low, high = _feasible(zmp, centres, poses, half)
     if low <= high:

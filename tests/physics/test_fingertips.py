@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from posegen.physics.contact_control import MAX_TURN_RAD_S
 from posegen.physics.fingertips import (
     FLUSH_MARGIN_M,
     K_FLUSH,
     MAX_FLUSH_TILT_RAD,
-    MAX_FLUSH_TURN_RAD_S,
     flush_turn,
     loads_every_tip,
     tip_polygon,
@@ -57,10 +57,10 @@ def test_the_centre_of_pressure_tells_whether_every_tip_carries_load(scene: Scen
 
 def test_the_flush_turn_follows_the_torque_up_to_its_bounds() -> None:
     torque = np.array([0.4, -0.2])
-    assert np.allclose(flush_turn(torque, np.zeros(2)), K_FLUSH * torque)
-    fast = flush_turn(np.array([10.0, 0.0]), np.zeros(2))
-    assert np.isclose(np.linalg.norm(fast), MAX_FLUSH_TURN_RAD_S)
-    bound = flush_turn(torque, np.array([MAX_FLUSH_TILT_RAD, -MAX_FLUSH_TILT_RAD]))
+    assert np.allclose(flush_turn(torque, np.zeros(2), MAX_TURN_RAD_S), K_FLUSH * torque)
+    fast = flush_turn(np.array([10.0, 0.0]), np.zeros(2), MAX_TURN_RAD_S)
+    assert np.isclose(np.linalg.norm(fast), MAX_TURN_RAD_S)
+    bound = flush_turn(torque, np.array([MAX_FLUSH_TILT_RAD, -MAX_FLUSH_TILT_RAD]), MAX_TURN_RAD_S)
     assert bound[0] == 0.0 and bound[1] == 0.0  # both at their bound, turning further: stopped
-    back = flush_turn(-torque, np.array([MAX_FLUSH_TILT_RAD, -MAX_FLUSH_TILT_RAD]))
+    back = flush_turn(-torque, np.array([MAX_FLUSH_TILT_RAD, -MAX_FLUSH_TILT_RAD]), MAX_TURN_RAD_S)
     assert np.allclose(back, -K_FLUSH * torque)  # turning back: free

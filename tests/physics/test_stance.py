@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from posegen.physics.stance import follow_feet
+from posegen.physics.stance import PlannedFeet
 
 
 def _sole(x: float, y: float, yaw: float) -> np.ndarray:
@@ -19,6 +19,12 @@ CENTRE = np.array([-0.0055, 0.0, 0.0])  # TALOS's foot rectangle centre in its s
 ANCHOR = _sole(-0.009, 0.085, 0.0)
 PLANNED = _sole(-0.009, -0.085, 0.0)
 STANDING = _sole(-0.036, -0.036, 0.04)  # the second sole 5 cm inward of its plan, turned 2.3 deg
+
+
+def follow_feet(point: np.ndarray, soles: tuple[tuple[np.ndarray, np.ndarray], ...], centre: np.ndarray) -> np.ndarray:
+    """The point moved by the soles, each (planned, standing)."""
+    (first, first_standing), (second, second_standing) = soles
+    return PlannedFeet((first, second), centre).follow(point, (first_standing, second_standing))
 
 
 def _centre(pose: np.ndarray) -> np.ndarray:
