@@ -147,15 +147,15 @@ def _set_touches(geom: mujoco.MjsGeom, touches: Touches) -> None:
 
 def _sole_shapes(spec: mujoco.MjSpec, scene: Scene) -> list[Shape]:
     """A box under each sole frame: the foot rectangle, its bottom face on the sole frame."""
-    (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
+    centre, half = scene.stance.foot_centre_m, scene.stance.foot_half_m
     shapes = []
     for sole in scene.stance.sole_frames:
         link = _link_of_frame(scene.model, sole)
         name = f"sole:{sole}"
         geom = spec.body(link).add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX)
-        geom.size = [(x1 - x0) / 2, (y1 - y0) / 2, SOLE_THICKNESS_M / 2]
+        geom.size = [*half, SOLE_THICKNESS_M / 2]
         in_link = _frame_in_link(scene, sole)
-        geom.pos = in_link.act(np.array([(x0 + x1) / 2, (y0 + y1) / 2, SOLE_THICKNESS_M / 2]))
+        geom.pos = in_link.act(np.array([*centre, SOLE_THICKNESS_M / 2]))
         geom.quat = pin.Quaternion(in_link.rotation).coeffs()[[3, 0, 1, 2]]
         _set_touches(geom, Touches.FLOOR)
         geom.solref = FLOOR_SOLREF

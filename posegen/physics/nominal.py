@@ -49,9 +49,8 @@ class NominalRobot:
         self.contact_frames = {c.name: scene.frame_id(c.frame(c.contact_kind)) for c in scene.chains}
         self.wrench_frames = {c: scene.frame_id(t.frame) for c, t in tools.items()}
         self.mass_kg = float(pin.computeTotalMass(self.model))
-        (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
-        self._foot_centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # in a sole frame
-        self._foot_half = np.array([(x1 - x0) / 2, (y1 - y0) / 2])
+        self._foot_centre = np.array([*scene.stance.foot_centre_m, 0.0])  # in a sole frame
+        self._foot_half = np.array(scene.stance.foot_half_m)
         self._normal_map: FloatArray | None = None  # the least-size split's, renewed every SPLIT_EVERY updates
         self._updates = 0
         # computed at most once per update, when first asked (update() forgets them)

@@ -229,7 +229,7 @@ class Stabilizer:
         self._rectangle = Hull.of(np.array([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))  # a sole, its frame
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
         first, second = (scene.sole_poses[f] for f in scene.stance.sole_frames)  # (4, 4) each; a stance has two
-        self._feet = PlannedFeet((first, second), np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0]))
+        self._feet = PlannedFeet((first, second), np.array([*scene.stance.foot_centre_m, 0.0]))
         self._com: FloatArray | None = None
         self._hull: Hull | None = None
         self._steps = 0

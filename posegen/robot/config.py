@@ -67,6 +67,18 @@ class StanceConfig:
     reference_joints: dict[str, float] = dataclasses.field(default_factory=dict)  # rad, overriding the state
     root_rpy_deg: tuple[float, float, float] | None = None  # root orientation at the reference (a y-up model)
 
+    @property
+    def foot_centre_m(self) -> tuple[float, float]:
+        """The sole rectangle's centre (x, y), m, in the sole frame."""
+        (x0, x1), (y0, y1) = self.foot_x_m, self.foot_y_m
+        return (x0 + x1) / 2, (y0 + y1) / 2
+
+    @property
+    def foot_half_m(self) -> tuple[float, float]:
+        """The sole rectangle's half sizes (x, y), m."""
+        (x0, x1), (y0, y1) = self.foot_x_m, self.foot_y_m
+        return (x1 - x0) / 2, (y1 - y0) / 2
+
 
 @dataclass(frozen=True)
 class RouteConfig:

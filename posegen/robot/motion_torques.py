@@ -70,9 +70,8 @@ class MotionTorques:
         self.statics = Statics(scene)
         self.soles = [scene.frame_id(frame) for frame in scene.stance.sole_frames]
         self.velocity = scene.velocity_indices()
-        (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
-        self._centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])  # the foot rectangle's centre, sole frame
-        self._half = np.array([(x1 - x0) / 2, (y1 - y0) / 2])
+        self._centre = np.array([*scene.stance.foot_centre_m, 0.0])  # the foot rectangle's centre, sole frame
+        self._half = np.array(scene.stance.foot_half_m)
 
     def load(self, joints: FloatArray, velocity: FloatArray, acceleration: FloatArray) -> PointLoad:
         """One point's load: joints (nj,) rad, velocity (nj,) rad/s, acceleration (nj,) rad/s^2."""

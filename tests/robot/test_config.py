@@ -200,3 +200,11 @@ def test_a_joints_own_margin_bounds_the_plan(scene):
     posture = scene.reference.copy()
     posture[knee] = scene.lower[knee] + own - 0.01  # 0.01 rad inside its own margin, far outside the common one
     assert float(scene.limit_margin(posture)) == pytest.approx(scene.margins.joint_limit_rad - 0.01)
+
+
+def test_the_foot_rectangle_s_centre_and_half_sizes(config):
+    (x0, x1), (y0, y1) = config.stance.foot_x_m, config.stance.foot_y_m
+    cx, cy = config.stance.foot_centre_m
+    hx, hy = config.stance.foot_half_m
+    assert (cx - hx, cx + hx) == pytest.approx((x0, x1)) and (cy - hy, cy + hy) == pytest.approx((y0, y1))
+    assert hx > 0 and hy > 0
