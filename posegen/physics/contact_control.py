@@ -36,7 +36,8 @@ A contact of the route runs, in route time:
 * an arm whose joint loop is at its effort limit (its tracking error past the loop's
   saturation) neither presses further nor turns, nor, away from the table, holds its
   hand's pose in the world: neither loop winds up (the pose loop, integrating a shoulder's
-  lag of 0.06-0.35 rad, turned the torso 0.9 rad off its plan in 4 s);
+  lag of 0.06-0.35 rad, turned the torso 0.9 rad off its plan in 4 s); away from the table
+  the other hand's twist does not move that arm either (:class:`JointOffsets`);
 * **release**: the target force falls to zero over the first ``UNLOAD_SHARE`` of the route's
   release (``UNLOAD_S`` at least; :func:`unload_s`), then the hand's offset fades back to the
   plan over the rest of the release. The floor takes back the hand's load gradually: a hand

@@ -104,6 +104,10 @@ class JointOffsets:
         decaying = self.dq[joints] / scale / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
         return np.asarray(scale * (jacobian.T @ solve(gram, twist + jacobian @ decaying) - decaying))
 
+    def _upper_of(self, chains: list[str]) -> list[int]:
+        """The joints that move these chains' hands: the torso's and their own arms'."""
+        return sorted(set(self.shared).union(*(self.arms[chain] for chain in chains)))
+
     def step(
         self,
         soles: list[FloatArray],
@@ -111,6 +115,7 @@ class JointOffsets:
         planned: FloatArray,
         dt_s: float,
         decay: bool = True,
+        lagging: frozenset[str] = frozenset(),
     ) -> FloatArray:
         """Advance the offset by one control period; the robot updated at the encoders' angles.
 
@@ -121,6 +126,9 @@ class JointOffsets:
             dt_s: Control period, s.
             decay: Let the arms' unused offsets decay (not while a hand is at the table: a
                 contact is measured with every joint still).
+            lagging: Chains whose arm lags its command at its effort limit. Away from the
+                table (``decay``) such an arm is left as it is: its hand holds no pose, and
+                the other hand's twist moves the torso and its own arm only.
 
         Returns:
             The joint offset (nj,) rad to add to the planned angles.
@@ -130,10 +138,12 @@ class JointOffsets:
         for frame, leg, twist in zip(robot.soles, self.legs, soles, strict=True):
             if twist.any():
                 self.dq[leg] += dt_s * self._solve([frame], leg, twist)
-        twist = np.concatenate([hands[chain] for chain in self.arms])
-        if twist.any() or (decay and self.dq[self.upper].any()):
-            frames = [robot.contact_frames[chain] for chain in self.arms]
-            self.dq[self.upper] += dt_s * self._solve(frames, self.upper, twist, decay)
+        chains = [chain for chain in self.arms if not (decay and chain in lagging)]
+        joints = self.upper if len(chains) == len(self.arms) else self._upper_of(chains)
+        twist = np.concatenate([hands[chain] for chain in chains]) if chains else np.zeros(0)
+        if chains and (twist.any() or (decay and self.dq[joints].any())):
+            frames = [robot.contact_frames[chain] for chain in chains]
+            self.dq[joints] += dt_s * self._solve(frames, joints, twist, decay)
         commanded = planned + self.dq
         self._at_limit = self._movable & ((commanded < self._lower) | (commanded > self._upper))
         self.dq = np.where(self._movable, clamp(commanded, self._lower, self._upper) - planned, 0.0)

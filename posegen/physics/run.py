@@ -129,9 +129,9 @@ class Run:
         pushes = {c: np.array([0.0, 0.0, self.hands.planned_push(c, t_route), 0.0, 0.0, 0.0]) for c in wrists}
         holding = self.hands.holding(t_route)
         feet = self.stabilizer.step(soles, pushes, attitude, reference, self.period_s, holding)
-        offset = self.offsets.step(
-            feet, hands, plan.positions[index], self.period_s, not self.hands.in_contact(t_route)
-        )
+        lagging = frozenset(chain for chain, lags in self.hands.saturated.items() if lags)
+        free = not self.hands.in_contact(t_route)
+        offset = self.offsets.step(feet, hands, plan.positions[index], self.period_s, free, lagging)
         target = plan.positions[index] + offset
         if sample % FEED_FORWARD_EVERY == 0:  # the posture's statics change slowly
             self._torque = self.robot.static_torques({})

@@ -188,6 +188,20 @@ def clamp_into(hull: Hull, point: FloatArray, margin_m: float) -> FloatArray:
     return np.asarray(centre + low * (point - centre))
 
 
+def is_light(wrench: FloatArray, load_n: float) -> bool:
+    """Whether a sole's wrench (6,) carries less than ``LIGHT_SHARE`` of the soles' vertical load ``load_n`` (N).
+
+    A light sole cannot make the torque a share asks of it (its centre of pressure would
+    leave its rectangle): it neither turns nor stands on its edge.
+
+    Example:
+        >>> is_light(np.array([0, 0, 50.0, 0, 0, 0]), 900.0)
+        True
+
+    """
+    return bool(wrench[2] < LIGHT_SHARE * load_n)
+
+
 def on_edge(wrench: FloatArray, rectangle: Hull, load_n: float) -> bool:
     """Whether a sole carrying its wrench (6,) (force N, torque N m, its frame) stands on its edge.
 
@@ -200,7 +214,7 @@ def on_edge(wrench: FloatArray, rectangle: Hull, load_n: float) -> bool:
         True
 
     """
-    if wrench[2] < LIGHT_SHARE * load_n:
+    if is_light(wrench, load_n):
         return False
     return rectangle.margin(centre_of_pressure(wrench[2], wrench[3:5])) < EDGE_M  # the sole's frame
 
@@ -354,7 +368,7 @@ def _sole_twist(
     ``load`` the soles' total vertical force, N.
     """
     excess = beyond((wrench - share) * ADMITTED, BAND)  # along the normal, about the horizontal axes
-    if wrench[2] < LIGHT_SHARE * load:
+    if is_light(wrench, load):
         excess[3:] = 0.0
     local = np.concatenate([K_FOOT_SHEAR * excess[:2], K_FOOT_FORCE * excess[2:3], K_FOOT_TORQUE * excess[3:]])
     local = saturate(local, MAX_FOOT_SPEED)

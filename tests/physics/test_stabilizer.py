@@ -147,7 +147,7 @@ def test_the_desired_zmp_asks_no_leg_past_its_limit(scene: Scene, tools: dict[st
 
 
 def test_a_sole_on_its_edge_is_told_by_its_centre_of_pressure(scene: Scene) -> None:
-    from posegen.physics.stabilizer import EDGE_M, LIGHT_SHARE, on_edge
+    from posegen.physics.stabilizer import EDGE_M, LIGHT_SHARE, is_light, on_edge
 
     (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
     rectangle = Hull.of(np.array([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))
@@ -162,6 +162,7 @@ def test_a_sole_on_its_edge_is_told_by_its_centre_of_pressure(scene: Scene) -> N
     assert not on_edge(at(centre[0], y0 + 2.0 * EDGE_M), rectangle, 900.0)
     light = 0.5 * LIGHT_SHARE * 900.0
     assert not on_edge(at(centre[0], y0, light), rectangle, 900.0)  # a light sole may stand on its edge
+    assert is_light(at(*centre, light), 900.0) and not is_light(at(*centre, LIGHT_SHARE * 900.0), 900.0)
 
 
 def test_a_sole_on_its_edge_rests_the_com_shift_and_the_levelling(scene: Scene, tools: dict[str, Tool]) -> None:
