@@ -39,7 +39,7 @@ from posegen.calibrate.record import (
 from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulated_recording import hermite
-from posegen.calibrate.simulation import Perturbation, perturbed_robot, simulate, true_parameters
+from posegen.calibrate.simulation import Perturbation, floor_constants, perturbed_robot, simulate, true_parameters
 from posegen.calibrate.summary import (
     CalibrationSummary,
     ChosenModel,
@@ -145,6 +145,7 @@ __all__ = [
     "estimate",
     "file_lines",
     "fit",
+    "floor_constants",
     "format_table",
     "held_out_residuals",
     "held_out_x",

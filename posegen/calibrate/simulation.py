@@ -99,8 +99,22 @@ def true_parameters(model: CalibrationModel, perturbation: Perturbation, seed: i
     scene = model.scene
     relative = np.linalg.inv(scene.sole_poses[scene.anchor_sole]) @ scene.sole_poses[scene.second_sole]
     for session in model.sessions:
-        x[model.floor_columns(session)] = (relative[0, 3], relative[1, 3], np.arctan2(relative[1, 0], relative[0, 0]))
+        x[model.floor_columns(session)] = floor_constants(relative)
     return x
+
+
+def floor_constants(relative: FloatArray) -> tuple[float, float, float]:
+    """A session's floor constants: the second sole's x, y (m) and yaw (rad) in the anchor sole's frame.
+
+    Args:
+        relative: The second sole's pose (4, 4) in the anchor sole's frame (both flat on the floor).
+
+    Example:
+        >>> floor_constants(np.array([[0, -1, 0, 0.01], [1, 0, 0, -0.2], [0, 0, 1, 0], [0, 0, 0, 1.0]]))
+        (0.01, -0.2, 1.5707963267948966)
+
+    """
+    return float(relative[0, 3]), float(relative[1, 3]), float(np.arctan2(relative[1, 0], relative[0, 0]))
 
 
 def contact_offsets(planned: Contacts, perturbation: Perturbation, seed: int) -> FloatArray:

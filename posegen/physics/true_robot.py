@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from posegen.calibrate import Perturbation, calibrated_robot, perturbed_robot
+from posegen.calibrate import Perturbation, calibrated_robot, floor_constants, perturbed_robot
 from posegen.model import CalibrationModel, Parameter
 from posegen.robot import FloatArray, Scene, offset_matrix, parse_config, with_declared_frames
 
@@ -146,6 +146,5 @@ def as_stood(robot: TrueRobot, soles: tuple[FloatArray, ...]) -> FloatArray:
     values = plane_offsets(anchor_inverse @ robot.table_top)
     for name, value in zip(("z", "roll", "pitch"), values, strict=True):
         x[model.contact.column(Parameter.plane(robot.session, name))] = value
-    relative = anchor_inverse @ soles[1]
-    x[model.floor_columns(robot.session)] = (relative[0, 3], relative[1, 3], np.arctan2(relative[1, 0], relative[0, 0]))
+    x[model.floor_columns(robot.session)] = floor_constants(anchor_inverse @ soles[1])
     return x

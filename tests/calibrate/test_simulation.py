@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from posegen.calibrate import Perturbation, Settings, calibrate, simulate
-from posegen.calibrate.simulation import contact_offsets
+from posegen.calibrate.simulation import contact_offsets, floor_constants
 from posegen.model import Contacts, Kind, planned_kinds
 
 
@@ -184,3 +184,11 @@ def test_a_posture_left_out_says_why(scene):
     assert contact.startswith("the contact stays 2.00 mm, 0.06 deg off its table")
     joints[4] = scene.upper[4] + 0.3
     assert left_out_reason(scene, joints, np.zeros(9)) == f"joint {scene.joint_names[4]} past its limit by 0.3000 rad"
+
+
+@pytest.mark.parametrize(("x", "y", "yaw"), [(0.0, -0.2, 0.0), (0.03, 0.19, 0.1), (-0.01, 0.2, 3.0), (0.0, 0.2, -2.5)])
+def test_the_floor_constants_are_the_second_sole_s_place_and_yaw(x, y, yaw):
+    relative = np.eye(4)  # the second sole in the anchor's frame: turned by yaw about z, then placed
+    relative[:2, :2] = [[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]]
+    relative[:2, 3] = x, y
+    np.testing.assert_allclose(floor_constants(relative), (x, y, yaw), atol=1e-15)
