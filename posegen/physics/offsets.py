@@ -16,6 +16,7 @@ solves (the others take its share). Locked joints never move.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from posegen.model import ChainModel
 from posegen.physics.lapack import solve
@@ -74,6 +75,7 @@ class JointOffsets:
         self._movable[[j for leg in self.legs for j in leg] + self.upper] = True
         self._at_limit = np.zeros(len(scene.joint_names), dtype=bool)
         self._dampings: dict[int, FloatArray] = {}
+        self._indices: dict[tuple[int, ...], NDArray[np.intp]] = {}
 
     def moving(self, chain: str) -> list[int]:
         """The joints that move a chain's hand: its arm's and the torso's."""
@@ -85,13 +87,22 @@ class JointOffsets:
             self._dampings[size] = DAMPING * np.eye(size)
         return self._dampings[size]
 
+    def _index(self, joints: list[int]) -> NDArray[np.intp]:
+        """The joints (scene indices) as an index array, made once per list (numpy indexes faster with one)."""
+        key = tuple(joints)
+        index = self._indices.get(key)
+        if index is None:
+            index = self._indices[key] = np.array(joints, dtype=np.intp)
+        return index
+
     def _solve(self, frames: list[int], joints: list[int], twist: FloatArray, decay: bool = True) -> FloatArray:
         """Joint rates (len(joints),) that move frames by ``twist`` (6 per frame,) relative to the base.
 
         Damped least squares; a redundant chain's offset that moves no task decays toward zero
         (its self-motion would otherwise drift).
         """
-        scale = np.where(self._at_limit[joints], 1.0 / np.sqrt(AT_LIMIT_WEIGHT), 1.0) * self._scale[joints]  # (n,)
+        index = self._index(joints)
+        scale = np.where(self._at_limit[index], 1.0 / np.sqrt(AT_LIMIT_WEIGHT), 1.0) * self._scale[index]  # (n,)
         blocks = [self.robot.joint_jacobian(f, joints) for f in frames]
         jacobian = (blocks[0] if len(blocks) == 1 else np.vstack(blocks)) * scale
         rows = jacobian.shape[0]  # jacobian (6k, n)
@@ -101,7 +112,7 @@ class JointOffsets:
         gram = jacobian @ jacobian.T + self._damping(rows)
         if not decay:
             return np.asarray(scale * (jacobian.T @ solve(gram, twist)))
-        decaying = self.dq[joints] / scale / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
+        decaying = self.dq[index] / scale / NULL_DECAY_S  # its part no task needs decays: -(I - J+ J) dq / T
         return np.asarray(scale * (jacobian.T @ solve(gram, twist + jacobian @ decaying) - decaying))
 
     def _upper_of(self, chains: list[str]) -> list[int]:
@@ -137,13 +148,14 @@ class JointOffsets:
         robot = self.robot
         for frame, leg, twist in zip(robot.soles, self.legs, soles, strict=True):
             if twist.any():
-                self.dq[leg] += dt_s * self._solve([frame], leg, twist)
+                self.dq[self._index(leg)] += dt_s * self._solve([frame], leg, twist)
         chains = [chain for chain in self.arms if not (decay and chain in lagging)]
         joints = self.upper if len(chains) == len(self.arms) else self._upper_of(chains)
         twist = np.concatenate([hands[chain] for chain in chains]) if chains else np.zeros(0)
-        if chains and (twist.any() or (decay and self.dq[joints].any())):
+        index = self._index(joints)
+        if chains and (twist.any() or (decay and self.dq[index].any())):
             frames = [robot.contact_frames[chain] for chain in chains]
-            self.dq[joints] += dt_s * self._solve(frames, joints, twist, decay)
+            self.dq[index] += dt_s * self._solve(frames, joints, twist, decay)
         commanded = planned + self.dq
         self._at_limit = self._movable & ((commanded < self._lower) | (commanded > self._upper))
         self.dq = np.where(self._movable, clamp(commanded, self._lower, self._upper) - planned, 0.0)

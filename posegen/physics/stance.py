@@ -107,7 +107,7 @@ class PlannedFeet:
 
     def follow(self, point: FloatArray, standing: tuple[FloatArray, FloatArray]) -> FloatArray:
         """The point (2,) m (world x and y) moved with the soles to where they stand ((4, 4) world poses each)."""
-        along = float(np.clip((point - self._start) @ self._axis / self._length_sq, 0.0, 1.0))
+        along = min(max(float((point - self._start) @ self._axis / self._length_sq), 0.0), 1.0)  # np.clip's numbers
         on_floor = np.array([point[0], point[1], 0.0, 1.0])
         moved = [(pose @ planned.solve(on_floor))[:2] for planned, pose in zip(self._planned, standing, strict=True)]
         return np.asarray((1.0 - along) * moved[0] + along * moved[1])

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 import coal
 import numpy as np
 import pinocchio as pin
-from scipy.spatial import ConvexHull, QhullError
 
 from posegen.robot.geometry import FloatArray
 
@@ -94,6 +93,8 @@ def enclosure_of(geom: pin.GeometryModel, joint: int) -> Enclosure:
 
 def _facets(obj: pin.GeometryObject) -> tuple[FloatArray, ...]:
     """The facets of one object's hull (none for a shape without volume points)."""
+    from scipy.spatial import ConvexHull, QhullError  # here: scipy.spatial takes 0.2 s to import, pools never ask
+
     points = object_points(obj)
     if len(points) < 4:
         return ()

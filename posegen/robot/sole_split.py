@@ -63,19 +63,26 @@ def least_size_share(total: FloatArray, poses: list[FloatArray], normal_map: Flo
 def _feasible(
     zmp: FloatArray, centres: list[FloatArray], poses: list[FloatArray], half: FloatArray
 ) -> tuple[float, float]:
-    """The shares ``a`` (low, high) whose offset ``e(a)`` keeps both centres of pressure inside (low > high: none)."""
-    span = centres[1][:2] - centres[0][:2]
-    base = zmp - centres[0][:2]  # e(a) = base - a span
+    """The shares ``a`` (low, high) whose offset ``e(a)`` keeps both centres of pressure inside (low > high: none).
+
+    Python floats: on 2-vectors numpy's calls cost more than the arithmetic (the same numbers).
+    """
+    (start_x, start_y), (end_x, end_y) = centres[0][:2].tolist(), centres[1][:2].tolist()
+    span_x, span_y = end_x - start_x, end_y - start_y
+    base_x, base_y = float(zmp[0]) - start_x, float(zmp[1]) - start_y  # e(a) = base - a span
+    limits = (half - COP_MARGIN_M).tolist()
     low, high = 0.0, 1.0
     for pose in poses:
-        for axis, limit in zip(pose[:2, :2].T, half - COP_MARGIN_M, strict=True):  # the sole's x and y in the world
-            at_zero, slope = float(axis @ base), -float(axis @ span)  # e(a) . axis = at_zero + a slope
+        (xx, yx), (xy, yy) = pose[:2, :2].tolist()  # the sole's x (xx, xy) and y (yx, yy) in the world
+        for axis_x, axis_y, limit in ((xx, xy, limits[0]), (yx, yy, limits[1])):
+            at_zero = axis_x * base_x + axis_y * base_y  # e(a) . axis = at_zero + a slope
+            slope = -(axis_x * span_x + axis_y * span_y)
             if abs(slope) < 1e-12:
                 if abs(at_zero) > limit:
                     return 1.0, 0.0
                 continue
-            ends = sorted(((-limit - at_zero) / slope, (limit - at_zero) / slope))
-            low, high = max(low, ends[0]), min(high, ends[1])
+            first, second = (-limit - at_zero) / slope, (limit - at_zero) / slope
+            low, high = max(low, min(first, second)), min(high, max(first, second))
     return low, high
 
 
@@ -116,15 +123,31 @@ def split_wrench(
 def _shared(
     total: FloatArray, share: float, centres: list[FloatArray], offset: FloatArray, poses: list[FloatArray]
 ) -> list[FloatArray]:
-    """Both soles' wrenches (6,) LOCAL: shares (1 - share, share) of every force, pressure at centre + offset."""
-    force, moment = total[:3], total[3:]
+    """Both soles' wrenches (6,) LOCAL: shares (1 - share, share) of every force, pressure at centre + offset.
+
+    Python floats: on 3-vectors numpy's calls cost more than the arithmetic (the same numbers).
+    """
+    force_x, force_y, force_z, _, _, moment_z = total.tolist()
+    offset_x, offset_y = offset.tolist()
     shares = (1.0 - share, share)
-    points = [np.array([c[0] + offset[0], c[1] + offset[1], 0.0]) for c in centres]  # the centres of pressure
-    yaw = moment[2] - sum(s * (p[0] * force[1] - p[1] * force[0]) for s, p in zip(shares, points, strict=True))
+    points = [(float(c[0]) + offset_x, float(c[1]) + offset_y) for c in centres]  # the centres of pressure, z = 0
+    yaw = moment_z - sum(s * (x * force_y - y * force_x) for s, (x, y) in zip(shares, points, strict=True))
     out = []
-    for part_share, point, pose in zip(shares, points, poses, strict=True):
-        part = part_share * force
-        torque = cross(point - pose[:3, 3], part)
-        torque[2] += part_share * yaw
-        out.append(np.concatenate([pose[:3, :3].T @ part, pose[:3, :3].T @ torque]))
+    for part_share, (x, y), pose in zip(shares, points, poses, strict=True):
+        (r00, r01, r02, origin_x), (r10, r11, r12, origin_y), (r20, r21, r22, origin_z) = pose[:3].tolist()
+        fx, fy, fz = part_share * force_x, part_share * force_y, part_share * force_z  # its force
+        lx, ly, lz = x - origin_x, y - origin_y, 0.0 - origin_z  # the lever from the sole's origin
+        tx, ty, tz = ly * fz - lz * fy, lz * fx - lx * fz, lx * fy - ly * fx + part_share * yaw  # its torque
+        out.append(
+            np.array(
+                [
+                    r00 * fx + r10 * fy + r20 * fz,  # the rotation's transpose: world -> sole
+                    r01 * fx + r11 * fy + r21 * fz,
+                    r02 * fx + r12 * fy + r22 * fz,
+                    r00 * tx + r10 * ty + r20 * tz,
+                    r01 * tx + r11 * ty + r21 * tz,
+                    r02 * tx + r12 * ty + r22 * tz,
+                ]
+            )
+        )
     return out

@@ -62,3 +62,50 @@ def test_the_split_keeps_the_given_wrench() -> None:
     shares = split_wrench(total, poses, np.zeros(3), np.array([0.1, 0.06]))
     back = sum(np.concatenate([w[:3], w[3:] + np.cross(p[:3, 3], w[:3])]) for w, p in zip(shares, poses, strict=True))
     assert np.allclose(back, total)
+
+
+def _reference_split(total: np.ndarray, poses: list[np.ndarray], centre: np.ndarray, half: np.ndarray) -> list:
+    """The split written with numpy on whole vectors, as the module's docstring states it."""
+    centres = [p[:3, :3] @ centre + p[:3, 3] for p in poses]
+    force, moment = total[:3], total[3:]
+    zmp = np.array([-moment[1], moment[0]]) / force[2]
+    span, base = centres[1][:2] - centres[0][:2], zmp - centres[0][:2]
+    low, high = 0.0, 1.0
+    for pose in poses:
+        for axis, limit in zip(pose[:2, :2].T, half - COP_MARGIN_M, strict=True):
+            ends = sorted(((-limit - axis @ base) / -(axis @ span), (limit - axis @ base) / -(axis @ span)))
+            low, high = max(low, ends[0]), min(high, ends[1])
+    if low <= high:
+        share = min(max(least_size_share(total, poses), low), high)
+    else:
+        share = min(max(float(base @ span / (span @ span)), 0.0), 1.0)
+    offset = zmp - (centres[0][:2] + share * span)
+    points = [np.array([c[0] + offset[0], c[1] + offset[1], 0.0]) for c in centres]
+    parts = (1.0 - share, share)
+    yaw = moment[2] - sum(s * np.cross(p, force)[2] for s, p in zip(parts, points, strict=True))
+    out = []
+    for s, point, pose in zip(parts, points, poses, strict=True):
+        torque = np.cross(point - pose[:3, 3], s * force) + np.array([0.0, 0.0, s * yaw])
+        out.append(np.concatenate([pose[:3, :3].T @ (s * force), pose[:3, :3].T @ torque]))
+    return out
+
+
+def test_the_split_on_floats_gives_the_whole_vector_formulas_numbers() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        poses = []
+        for _ in range(2):
+            pose = np.eye(4)
+            yaw, tilt = rng.normal(0.0, 0.3), rng.normal(0.0, 0.05, 2)
+            rz = np.array([[np.cos(yaw), -np.sin(yaw), 0.0], [np.sin(yaw), np.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+            rx = np.array(
+                [[1.0, 0.0, 0.0], [0.0, np.cos(tilt[0]), -np.sin(tilt[0])], [0.0, np.sin(tilt[0]), np.cos(tilt[0])]]
+            )
+            pose[:3, :3], pose[:3, 3] = rz @ rx, rng.normal(0.0, 0.1, 3)
+            poses.append(pose)
+        centre, half = np.array([rng.normal(0.0, 0.02), rng.normal(0.0, 0.01), 0.0]), np.array([0.1, 0.065])
+        total = rng.normal(0.0, 50.0, 6)
+        total[2] = 400.0 + abs(total[2]) * 10.0
+        expected = _reference_split(total, poses, centre, half)
+        for got, want in zip(split_wrench(total, poses, centre, half), expected, strict=True):
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-9)
