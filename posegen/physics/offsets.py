@@ -150,12 +150,13 @@ class JointOffsets:
             if twist.any():
                 self.dq[self._index(leg)] += dt_s * self._solve([frame], leg, twist)
         chains = [chain for chain in self.arms if not (decay and chain in lagging)]
-        joints = self.upper if len(chains) == len(self.arms) else self._upper_of(chains)
-        twist = np.concatenate([hands[chain] for chain in chains]) if chains else np.zeros(0)
-        index = self._index(joints)
-        if chains and (twist.any() or (decay and self.dq[index].any())):
-            frames = [robot.contact_frames[chain] for chain in chains]
-            self.dq[index] += dt_s * self._solve(frames, joints, twist, decay)
+        if chains:  # both arms lagging away from the table: the hands' solve rests
+            joints = self.upper if len(chains) == len(self.arms) else self._upper_of(chains)
+            twist = np.concatenate([hands[chain] for chain in chains])
+            index = self._index(joints)
+            if twist.any() or (decay and self.dq[index].any()):
+                frames = [robot.contact_frames[chain] for chain in chains]
+                self.dq[index] += dt_s * self._solve(frames, joints, twist, decay)
         commanded = planned + self.dq
         self._at_limit = self._movable & ((commanded < self._lower) | (commanded > self._upper))
         self.dq = np.where(self._movable, clamp(commanded, self._lower, self._upper) - planned, 0.0)

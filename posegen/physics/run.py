@@ -104,6 +104,7 @@ class Run:
         self.wrists = {c: np.zeros((samples, 6)) for c in self.layout.wrists}
         self.route_index = np.zeros(samples, dtype=np.int64)
         self._torque: FloatArray = np.zeros(len(scene.joint_names))
+        self._moving = {chain: np.array(self.offsets.moving(chain), dtype=np.intp) for chain in self.offsets.arms}
 
     def _control(self, sample: int, index: int) -> None:
         """Read the sensors of ``sample``, record them, and set the joint loops' commands at the plan's ``index``."""
@@ -120,8 +121,8 @@ class Run:
         planned = {chain: poses[index] for chain, poses in plan.hands.items()}
         commanded = plan.positions[index] + self.offsets.dq  # within the joint limits
         lag = np.abs(commanded - encoders)
-        for chain in self.offsets.arms:
-            self.hands.saturated[chain] = bool(np.any(lag[self.offsets.moving(chain)] > LAGGING_RAD))
+        for chain, moving in self._moving.items():
+            self.hands.saturated[chain] = bool((lag[moving] > LAGGING_RAD).any())
         hands = self.hands.step(t_route, wrists, planned, commanded, self.period_s)
         soles = SoleReadings(self.sensors.soles(data))
         attitude = (imu, plan.base_rotation[index])
