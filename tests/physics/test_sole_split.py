@@ -101,7 +101,10 @@ def test_the_split_on_floats_gives_the_whole_vector_formulas_numbers() -> None:
             rx = np.array(
                 [[1.0, 0.0, 0.0], [0.0, np.cos(tilt[0]), -np.sin(tilt[0])], [0.0, np.sin(tilt[0]), np.cos(tilt[0])]]
             )
-            pose[:3, :3], pose[:3, 3] = rz @ rx, rng.normal(0.0, 0.1, 3)
+            ry = np.array(
+                [[np.cos(tilt[1]), 0.0, np.sin(tilt[1])], [0.0, 1.0, 0.0], [-np.sin(tilt[1]), 0.0, np.cos(tilt[1])]]
+            )
+            pose[:3, :3], pose[:3, 3] = rz @ ry @ rx, rng.normal(0.0, 0.1, 3)
             poses.append(pose)
         centre, half = np.array([rng.normal(0.0, 0.02), rng.normal(0.0, 0.01), 0.0]), np.array([0.1, 0.065])
         total = rng.normal(0.0, 50.0, 6)
