@@ -90,6 +90,7 @@ from posegen.robot.geometry import (
     FloatArray,
     Indices,
     convex_hull_clockwise,
+    cross,
     flatten_on_floor,
     polygon_margin,
     tilt_angles,
@@ -99,7 +100,7 @@ from posegen.robot.motion_torques import MotionTorques, PointLoad, allowed_ratio
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for, scene_for_postures
 from posegen.robot.separation import Separation, SeparationRows
-from posegen.robot.sole_split import COP_MARGIN_M, cross, least_size_map, least_size_share, split_wrench
+from posegen.robot.sole_split import COP_MARGIN_M, least_size_map, least_size_share, split_wrench
 from posegen.robot.stance_space import StanceSpace
 from posegen.robot.statics import (
     MOMENT_ARM_M,

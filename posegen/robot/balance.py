@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from posegen.robot.geometry import FloatArray, polygon_margin
+from posegen.robot.geometry import FloatArray, cross, polygon_margin
 from posegen.robot.scene import Scene
 
 MIN_NORMAL_N = 1e-6  # a floor force below this lifts the feet: the centre of pressure is undefined
@@ -153,7 +153,7 @@ def pressed_zmp_margin(scene: Scene, com_m: FloatArray, mass_kg: float, hand_m: 
     weight = -mass_kg * np.array(scene.model.gravity.linear, dtype=float)  # the floor's share before the hand's
     hand = force_n * np.array(scene.table_pose, dtype=float)[:3, 2]
     force = weight - hand
-    moment = np.cross(com_m, weight) - np.cross(hand_m, hand)
+    moment = cross(com_m, weight) - cross(hand_m, hand)
     wrench = np.concatenate([force, moment])[None, :]
     return float(zmp_margins(scene.support_polygon, wrench)[0])
 

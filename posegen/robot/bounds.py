@@ -52,11 +52,15 @@ class BoundingSpheres:
         to_box = fixed[first] | fixed[second]
         self._spheres = np.flatnonzero(~to_box)  # pair indices, sphere-sphere
         self._a, self._b = first[~to_box], second[~to_box]
+        self._radii_a, self._radii_b = self._radii[self._a], self._radii[self._b]  # (sphere pairs,) m
         self._boxes = [int(b) for b in np.flatnonzero(fixed)]
         box_pairs = np.flatnonzero(to_box)
         box_of = np.where(fixed[first[box_pairs]], first[box_pairs], second[box_pairs])
         other = np.where(fixed[first[box_pairs]], second[box_pairs], first[box_pairs])
-        self._against = {b: (box_pairs[box_of == b], other[box_of == b]) for b in self._boxes}
+        # per box: its pairs, the other geometry of each, and that geometry's radius (m)
+        self._against = {
+            b: (box_pairs[box_of == b], other[box_of == b], self._radii[other[box_of == b]]) for b in self._boxes
+        }
         self._moving = np.flatnonzero(~fixed)
         self._n_pairs = len(first)
 
@@ -67,17 +71,19 @@ class BoundingSpheres:
             data: Geometry data after ``pin.updateGeometryPlacements``.
 
         """
-        placements = [data.oMg[int(k)] for k in range(len(self._radii))]
-        rotations = np.array([m.rotation for m in placements])  # (g, 3, 3)
-        origins = np.array([m.translation for m in placements])  # (g, 3)
+        # one 4x4 per geometry read from pinocchio (a rotation and a translation apiece cost twice that)
+        frames = np.array([m.homogeneous for m in data.oMg])  # (g, 4, 4)
+        rotations = np.ascontiguousarray(frames[:, :3, :3])  # (g, 3, 3)
+        origins = frames[:, :3, 3]  # (g, 3)
         centres = np.einsum("gij,gj->gi", rotations, self._centres) + origins  # (g, 3) world
         bounds = np.empty(self._n_pairs)
-        gap = centres[self._a] - centres[self._b]
-        bounds[self._spheres] = np.sqrt((gap * gap).sum(axis=1)) - self._radii[self._a] - self._radii[self._b]
+        gap = np.take(centres, self._a, axis=0) - np.take(centres, self._b, axis=0)
+        square = gap * gap
+        bounds[self._spheres] = np.sqrt(square[:, 0] + square[:, 1] + square[:, 2]) - self._radii_a - self._radii_b
         for box in self._boxes:
-            pairs, other = self._against[box]
-            local = (centres[other] - origins[box]) @ rotations[box]  # (m, 3) in the box frame
+            pairs, other, radii = self._against[box]
+            local = (np.take(centres, other, axis=0) - origins[box]) @ rotations[box]  # (m, 3) in the box frame
             excess = np.abs(local) - self._half[box]
             outside = np.sqrt((np.maximum(excess, 0.0) ** 2).sum(axis=1))
-            bounds[pairs] = outside + np.minimum(excess.max(axis=1), 0.0) - self._radii[other]
+            bounds[pairs] = outside + np.minimum(excess.max(axis=1), 0.0) - radii
         return bounds

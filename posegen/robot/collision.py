@@ -7,7 +7,7 @@ the original meshes for the independent re-check of ``posegen check``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import coal
@@ -24,8 +24,37 @@ TABLE = "table"
 FLOOR = "floor"
 FLOOR_SIZE_M = 20.0
 FLOOR_THICKNESS_M = 0.1
-_DEFAULT_GJK_GUESS = np.array([1.0, 0.0, 0.0])  # coal's defaults: what a fresh GeometryData starts from
-_DEFAULT_SUPPORT_GUESS = np.zeros(2, dtype=np.int32)
+_DEFAULT_GJK_GUESS = (1.0, 0.0, 0.0)  # coal's defaults: what a fresh GeometryData starts from
+_DEFAULT_SUPPORT_GUESS = (0, 0)
+NEAR_M = 0.02  # pairs within this of a check's margin by their bound are sorted first; the rest only if reached
+
+
+class _Screen:
+    """A geometry workspace for exact distances from coal's default guesses, and its active pairs.
+
+    coal writes each query's final guesses back into the pair's request (a warm start for
+    the next query); they are set back to the defaults before every query, so an answer
+    depends on the placement alone. They are written in place, through views of the
+    requests' own vectors made once: assigning new vectors cost 2.6 us a query, more
+    than the 1.7 us of a typical TALOS query itself.
+
+    The workspace remembers the configuration it is placed at and, once asked, its pairs'
+    bounds: a pool's sample checked and then separated asks both twice at one posture.
+    """
+
+    def __init__(self, data: pin.GeometryData) -> None:
+        self.data = data
+        self.active = np.array(data.activeCollisionPairs, dtype=bool)  # (pairs,)
+        self._guesses = [(r.cached_gjk_guess, r.cached_support_func_guess) for r in data.distanceRequests]
+        self.placed: FloatArray | None = None  # (nq,) the configuration the geometry is placed at
+        self.bounds: FloatArray | None = None  # (pairs,) m, read-only: its pairs' lower bounds, once computed
+
+    def distance(self, geom: pin.GeometryModel, k: int) -> coal.DistanceResult:
+        """Pair ``k``'s exact distance from coal's default guesses (an answer of the placement alone)."""
+        guess, support = self._guesses[k]  # views of the request's vectors: (3,) and (2,)
+        guess[0], guess[1], guess[2] = _DEFAULT_GJK_GUESS
+        support[0], support[1] = _DEFAULT_SUPPORT_GUESS
+        return pin.computeDistance(geom, self.data, k)
 
 
 @dataclass(frozen=True)
@@ -106,7 +135,7 @@ class CollisionChecker:
         self._model_data = model.createData()
         self._fast: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]] = {}
         self._fast_margin: dict[str | None, tuple[float, float | None]] = {}
-        self._screen: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]] = {}
+        self._screen: dict[str | None, _Screen] = {}
         self._bounds: BoundingSpheres | None = None
 
     def _fresh_data(self, contact_chain: str | None) -> pin.GeometryData:
@@ -157,12 +186,12 @@ class CollisionChecker:
             margin_m: Stop at the first pair closer than this (m).
 
         """
-        data, bounds = self._screened(q, contact_chain)
+        screen, bounds = self._screened(q, contact_chain)
         best, best_pair = np.inf, -1
-        for k in np.argsort(bounds, kind="stable").tolist():
+        for k in _by_bound(bounds, margin_m + NEAR_M):
             if bounds[k] >= best:
                 break
-            distance = float(self._distance(data, k).min_distance)
+            distance = float(screen.distance(self.geom, k).min_distance)
             if distance < margin_m:
                 return None
             if distance < best:
@@ -184,20 +213,25 @@ class CollisionChecker:
             cache[contact_chain] = (data, np.array(data.activeCollisionPairs, dtype=bool))
         return cache[contact_chain]
 
-    def _screened(self, q: FloatArray, contact_chain: str | None) -> tuple[pin.GeometryData, FloatArray]:
-        """The screening workspace placed at ``q``, and every pair's lower bound (m; inf: inactive)."""
-        data, active = self._workspace(self._screen, contact_chain)
-        pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
-        bounds = self._spheres().lower_bounds(data)
-        bounds[~active] = np.inf
-        return data, bounds
+    def _screening(self, contact_chain: str | None, q: FloatArray) -> _Screen:
+        """The screening workspace of ``contact_chain`` (made on first use), placed at ``q``."""
+        if contact_chain not in self._screen:
+            self._screen[contact_chain] = _Screen(self._fresh_data(contact_chain))
+        screen = self._screen[contact_chain]
+        if screen.placed is None or not np.array_equal(q, screen.placed):
+            pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, screen.data, q)
+            screen.placed, screen.bounds = np.array(q, dtype=float), None
+        return screen
 
-    def _distance(self, data: pin.GeometryData, k: int) -> coal.DistanceResult:
-        """Pair ``k``'s exact distance from coal's default guesses (an answer of the placement alone)."""
-        request = data.distanceRequests[k]
-        request.cached_gjk_guess = _DEFAULT_GJK_GUESS
-        request.cached_support_func_guess = _DEFAULT_SUPPORT_GUESS
-        return pin.computeDistance(self.geom, data, k)
+    def _screened(self, q: FloatArray, contact_chain: str | None) -> tuple[_Screen, FloatArray]:
+        """The screening workspace placed at ``q``, and every pair's lower bound (m; inf: inactive)."""
+        screen = self._screening(contact_chain, q)
+        if screen.bounds is None:
+            bounds = self._spheres().lower_bounds(screen.data)
+            bounds[~screen.active] = np.inf
+            bounds.flags.writeable = False
+            screen.bounds = bounds
+        return screen, screen.bounds
 
     def witnesses(
         self, q: FloatArray, contact_chain: str | None, within_m: float, pairs: Sequence[int] | None = None
@@ -216,15 +250,14 @@ class CollisionChecker:
 
         """
         if pairs is None:
-            data, bounds = self._screened(q, contact_chain)
+            screen, bounds = self._screened(q, contact_chain)
             candidates = np.flatnonzero(bounds < within_m).tolist()
         else:
-            data = self._workspace(self._screen, contact_chain)[0]
-            pin.updateGeometryPlacements(self.scene.model, self._model_data, self.geom, data, q)
+            screen = self._screening(contact_chain, q)
             candidates = list(pairs)
         found = []
         for k in candidates:
-            result = self._distance(data, k)
+            result = screen.distance(self.geom, k)
             if result.min_distance < within_m:
                 pair = self.geom.collisionPairs[k]
                 objects = self.geom.geometryObjects[pair.first], self.geom.geometryObjects[pair.second]
@@ -308,3 +341,15 @@ class CollisionChecker:
             result = pin.computeDistance(self.geom, data, k)
             found.append(Collision(float(result.min_distance), self._pair_names(k), margins[k]))
         return sorted(found, key=lambda p: p.distance_m)
+
+
+def _by_bound(bounds: FloatArray, split_m: float) -> Iterator[int]:
+    """Pair indices by increasing bound, ties by index (a stable sort), those below ``split_m`` sorted first.
+
+    The pairs at or above ``split_m`` are sorted only when the caller gets that far: a
+    check stops at the first bound above its best distance, nearly always below the
+    split (a stable argsort of TALOS's 989 pairs costs 33 us, that of the few near ones 10 us).
+    """
+    near = bounds < split_m
+    for group in (np.flatnonzero(near), np.flatnonzero(~near)):
+        yield from group[np.argsort(bounds[group], kind="stable")].tolist()

@@ -169,19 +169,27 @@ class Projector:
         ``contact``: the contact frame's (4, 4) world placement at the kinematics in the robot.
 
         Plain floats on purpose: numpy's per-call overhead on 3-vectors cost more than the
-        QP step it checks (172 vs 72-110 us per iteration).
+        QP step it checks (172 vs 72-110 us per iteration); the sums are written out, in the
+        order a generator's sum takes them (7 us a call instead of 12).
         """
         position = 0.0
         angle = 0.0
-        for frame, origin, rotation in self._soles:
-            actual = self.robot.get_T_world_frame(frame).tolist()
-            position = max(position, math.sqrt(sum((actual[i][3] - origin[i]) ** 2 for i in range(3))))
-            angle = max(angle, math.sqrt(sum((actual[i][j] - rotation[i][j]) ** 2 for i in range(3) for j in range(3))))
-        normal = self._normal
-        position = max(position, abs(sum(normal[i] * (contact[i][3] - target_m[i]) for i in range(3))))
+        for frame, (o0, o1, o2), ((a0, a1, a2), (b0, b1, b2), (c0, c1, c2)) in self._soles:
+            r0, r1, r2, _ = self.robot.get_T_world_frame(frame).tolist()
+            position = max(position, math.sqrt((r0[3] - o0) ** 2 + (r1[3] - o1) ** 2 + (r2[3] - o2) ** 2))
+            squares = (  # summed left to right, row by row
+                (r0[0] - a0) ** 2 + (r0[1] - a1) ** 2 + (r0[2] - a2) ** 2
+                + (r1[0] - b0) ** 2 + (r1[1] - b1) ** 2 + (r1[2] - b2) ** 2
+                + (r2[0] - c0) ** 2 + (r2[1] - c1) ** 2 + (r2[2] - c2) ** 2
+            )  # fmt: skip
+            angle = max(angle, math.sqrt(squares))
+        n0, n1, n2 = self._normal
+        k0, k1, k2, _ = contact
+        height = n0 * (k0[3] - target_m[0]) + n1 * (k1[3] - target_m[1]) + n2 * (k2[3] - target_m[2])
+        position = max(position, abs(height))
         if not problem.kind.aligned:
             return position, angle  # e.g. a point contact's tilt is free (its cone is checked afterwards)
-        cosine = sum(contact[i][2] * normal[i] for i in range(3))
+        cosine = k0[2] * n0 + k1[2] * n1 + k2[2] * n2
         return position, max(angle, math.acos(min(1.0, max(-1.0, cosine))))
 
     def project(self, joints: FloatArray, chain: str, target_m: FloatArray) -> Projection:

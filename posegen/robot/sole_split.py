@@ -26,11 +26,6 @@ COP_MARGIN_M = 0.01  # each sole's centre of pressure kept this far inside its r
 WEIGHT = np.array([1.0, 1.0, 1.0, MOMENT_ARM_M, MOMENT_ARM_M, MOMENT_ARM_M])  # the planner's least-size scaling
 
 
-def cross(a: FloatArray, b: FloatArray) -> FloatArray:
-    """The cross product of two 3-vectors (numpy's is slow on one pair)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def _action(pose: FloatArray) -> FloatArray:
     """(6, 6) a wrench in the frame ``pose`` (4, 4) -> the same wrench in the world, about the origin."""
     rotation, origin = pose[:3, :3], pose[:3, 3]

@@ -201,7 +201,7 @@ class Statics:
         pseudo = split.T @ np.linalg.inv(gram)  # (6 k, 6) B^+
         moved, blocks = [], []  # the joints that move a sole, and d B / d joint (6, 6 k) for each
         for s, jac in enumerate(jacobians):
-            columns = np.flatnonzero(np.abs(jac[:, 6:]).max(axis=0) > 0)
+            columns = np.flatnonzero(jac[:, 6:].any(axis=0))
             block = np.zeros((len(columns), 6, split.shape[1]))
             block[:, :, 6 * s : 6 * s + 6] = -np.transpose(_ads(jac[:, 6 + columns].T) @ jac[:, :6], (0, 2, 1))
             moved.append(columns)
@@ -238,21 +238,30 @@ class _SoleRows:
         return np.asarray(load - self.contact.T @ self.wrenches(load))
 
 
+# The spatial cross product's matrix of a motion (linear v first, angular w): [[w x, v x], [0, w x]] as
+# (row, column, component of the motion, sign) for its twelve non-zero entries; each entry copies one component.
+_SKEW = ((0, 1, 2, -1.0), (0, 2, 1, 1.0), (1, 0, 2, 1.0), (1, 2, 0, -1.0), (2, 0, 1, -1.0), (2, 1, 0, 1.0))
+_AD_ENTRIES = tuple(
+    (row + r0, column + c0, component + offset, sign)
+    for r0, c0, offset in ((0, 0, 3), (3, 3, 3), (0, 3, 0))  # w x twice, v x top right
+    for row, column, component, sign in _SKEW
+)
+_AD_FLAT = np.array([6 * row + column for row, column, _, _ in _AD_ENTRIES])  # (18,) in the (6, 6) matrix, row-major
+_AD_COMPONENT = np.array([component for _, _, component, _ in _AD_ENTRIES])  # (18,) which of the motion's six
+_AD_SIGN = np.array([sign for _, _, _, sign in _AD_ENTRIES])  # (18,) +-1
+for _constant in (_AD_FLAT, _AD_COMPONENT, _AD_SIGN):
+    _constant.flags.writeable = False
+
+
 def _ads(motions: FloatArray) -> FloatArray:
-    """(K, 6, 6) the matrices of the spatial cross products ``motion x`` of (K, 6) motions (linear first)."""
-    out = np.zeros((len(motions), 6, 6))
-    angular, linear = _skews(motions[:, 3:]), _skews(motions[:, :3])
-    out[:, :3, :3] = out[:, 3:, 3:] = angular
-    out[:, :3, 3:] = linear
-    return out
+    """(K, 6, 6) the matrices of the spatial cross products ``motion x`` of (K, 6) motions (linear first).
 
-
-def _skews(vectors: FloatArray) -> FloatArray:
-    """(K, 3, 3) the cross-product matrices of (K, 3) vectors."""
-    out = np.zeros((len(vectors), 3, 3))
-    out[:, 0, 1], out[:, 0, 2], out[:, 1, 2] = -vectors[:, 2], vectors[:, 1], -vectors[:, 0]
-    out[:, 1, 0], out[:, 2, 0], out[:, 2, 1] = vectors[:, 2], -vectors[:, 1], vectors[:, 0]
-    return out
+    One gather for the eighteen non-zero entries (a pool's projection asks for these at
+    every torque derivative: 14 us each built block by block, 4 us so).
+    """
+    out = np.zeros((len(motions), 36))
+    out[:, _AD_FLAT] = motions[:, _AD_COMPONENT] * _AD_SIGN
+    return out.reshape(len(motions), 6, 6)
 
 
 def gravity_torques(scene: Scene, joints: FloatArray) -> FloatArray:
@@ -360,9 +369,12 @@ def worst_effort_ratio(
 
     """
     statics = statics or Statics(scene)
-    loads = [None] if chain is None else [None, chain]
-    torques = np.array([statics.torques(joints, load, scene.route.contact_force_n) for load in loads])
-    bound = np.abs(torques) + statics.com_spread(joints)  # (loads, nj) N m
+    if chain is None:
+        torques, spread = statics.torques(joints, None, 0.0)[None, :], statics.com_spread(joints)
+    else:  # both loads and the spread from one kinematics pass (the same numbers)
+        pair = statics.torque_pair(joints, chain, scene.route.contact_force_n)
+        torques, spread = np.array([pair.unloaded, pair.pressing]), pair.spread
+    bound = np.abs(torques) + spread  # (loads, nj) N m
     ratio = np.nan_to_num(effort_ratios(scene, bound), nan=-1.0).max(axis=0)  # (nj,)
     if not np.any(ratio >= 0.0):
         return 0.0, -1

@@ -69,3 +69,17 @@ def test_collides_asks_coal_only_about_pairs_that_could_be_within_the_margin(sce
             assert hulls.collides(q, chain, margin) == full
             verdicts.append(full)
     assert 0 < sum(verdicts) < len(verdicts)  # both answers were exercised
+
+
+def test_pairs_are_visited_in_the_order_of_a_stable_sort_of_their_bounds():
+    """Sorting the near pairs first, the rest when reached, is one stable argsort (ties, inactive and nan included)."""
+    from posegen.robot.collision import _by_bound
+
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        n = int(rng.integers(1, 60))
+        bounds = np.round(rng.normal(0.02, 0.03, n), 3)  # rounded: ties
+        bounds[rng.random(n) < 0.2] = np.inf
+        bounds[rng.random(n) < 0.05] = np.nan
+        split = float(rng.normal(0.02, 0.03))
+        assert list(_by_bound(bounds, split)) == np.argsort(bounds, kind="stable").tolist()

@@ -1,5 +1,7 @@
 """The projection's stop rule: an iteration whose errors repeat is stuck, a shrinking one is not."""
 
+import pytest
+
 from posegen.pool.sampler import draw
 from posegen.robot.projection import Projector, _cycling
 
@@ -55,3 +57,28 @@ def test_the_hard_phase_of_a_flush_contact_converges_quadratically(scene):
         if len(steps) >= 2:
             assert steps[-1] <= 0.02 * steps[-2]  # quadratic: the last step gains orders of magnitude
     assert converged >= 25
+
+
+def test_the_equality_errors_are_the_soles_and_contacts_distances_from_their_targets(scene):
+    """``_errors`` on plain floats against the same quantities with numpy, at random postures."""
+    import numpy as np
+
+    projector = Projector(scene)
+    rng = np.random.default_rng(6)
+    normal = scene.table_pose[:3, 2]
+    for chain in scene.chains:
+        problem = projector._problems[chain.name]
+        for _ in range(20):
+            projector._set_joints(rng.uniform(*scene.planning_limits()))
+            contact = np.array(projector.robot.get_T_world_frame(problem.contact))  # (4, 4)
+            target = rng.normal(0.0, 0.1, 3)
+            position, angle = projector._errors(problem, target.tolist(), contact.tolist())
+            soles = [(np.array(projector.robot.get_T_world_frame(f)), pose) for f, pose in scene.sole_poses.items()]
+            assert position == pytest.approx(
+                max(*(np.linalg.norm(a[:3, 3] - p[:3, 3]) for a, p in soles), abs(normal @ (contact[:3, 3] - target))),
+                rel=1e-12,
+            )
+            angles = [np.linalg.norm(a[:3, :3] - p[:3, :3]) for a, p in soles]  # Frobenius
+            if problem.kind.aligned:
+                angles.append(np.arccos(np.clip(contact[:3, 2] @ normal, -1.0, 1.0)))
+            assert angle == pytest.approx(max(angles), rel=1e-12)

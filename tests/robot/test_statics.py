@@ -198,3 +198,16 @@ def _least_size_torques(scene, posture):
     split = contact[:, :6].T * weight[None, :]
     soles = split.T @ np.linalg.solve(split @ split.T, gravity[:6]) * weight
     return (gravity - contact.T @ soles)[scene.velocity_indices()]
+
+
+def test_the_spatial_cross_product_matrices_are_the_cross_products():
+    """``_ads(m) @ x`` is the motion cross product ``m x x`` = (w x v' + v x w', w x w'), linear parts first."""
+    from posegen.robot.statics import _ads
+
+    rng = np.random.default_rng(4)
+    motions, others = rng.normal(size=(7, 6)), rng.normal(size=(7, 6))
+    for motion, other, matrix in zip(motions, others, _ads(motions), strict=True):
+        v, w, v2, w2 = motion[:3], motion[3:], other[:3], other[3:]
+        expected = np.concatenate([np.cross(w, v2) + np.cross(v, w2), np.cross(w, w2)])
+        np.testing.assert_allclose(matrix @ other, expected, rtol=1e-12, atol=1e-12)
+    assert _ads(np.zeros((0, 6))).shape == (0, 6, 6)
