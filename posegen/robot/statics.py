@@ -239,7 +239,7 @@ class _SoleRows:
 
 
 # The spatial cross product's matrix of a motion (linear v first, angular w): [[w x, v x], [0, w x]] as
-# (row, column, component of the motion, sign) for its twelve non-zero entries; each entry copies one component.
+# (row, column, component of the motion, sign) for its eighteen non-zero entries; each copies one component.
 _SKEW = ((0, 1, 2, -1.0), (0, 2, 1, 1.0), (1, 0, 2, 1.0), (1, 2, 0, -1.0), (2, 0, 1, -1.0), (2, 1, 0, 1.0))
 _AD_ENTRIES = tuple(
     (row + r0, column + c0, component + offset, sign)
@@ -257,7 +257,7 @@ def _ads(motions: FloatArray) -> FloatArray:
     """(K, 6, 6) the matrices of the spatial cross products ``motion x`` of (K, 6) motions (linear first).
 
     One gather for the eighteen non-zero entries (a pool's projection asks for these at
-    every torque derivative: 14 us each built block by block, 4 us so).
+    every torque derivative: 14 us each built block by block, 5 us so).
     """
     out = np.zeros((len(motions), 36))
     out[:, _AD_FLAT] = motions[:, _AD_COMPONENT] * _AD_SIGN
