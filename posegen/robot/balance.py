@@ -98,7 +98,7 @@ class Balance:
         if chain is not None and force_n != 0.0:
             pin.updateFramePlacements(self.model, self.data)
             force = force_n * self.normal
-            static -= np.concatenate([force, np.cross(self.data.oMf[self.hands[chain]].translation, force)])
+            static -= np.concatenate([force, cross(self.data.oMf[self.hands[chain]].translation, force)])
         return static, _world(base, motion[:6])
 
     def generalized(

@@ -204,14 +204,12 @@ class CollisionChecker:
             self._bounds = BoundingSpheres(self.geom)
         return self._bounds
 
-    def _workspace(
-        self, cache: dict[str | None, tuple[pin.GeometryData, NDArray[np.bool_]]], contact_chain: str | None
-    ) -> tuple[pin.GeometryData, NDArray[np.bool_]]:
-        """``cache``'s geometry data for ``contact_chain`` and its active pairs (made on first use)."""
-        if contact_chain not in cache:
+    def _fast_workspace(self, contact_chain: str | None) -> tuple[pin.GeometryData, NDArray[np.bool_]]:
+        """:meth:`collides`' geometry data for ``contact_chain`` (warm-started) and its active pairs (made once)."""
+        if contact_chain not in self._fast:
             data = self._fresh_data(contact_chain)
-            cache[contact_chain] = (data, np.array(data.activeCollisionPairs, dtype=bool))
-        return cache[contact_chain]
+            self._fast[contact_chain] = (data, np.array(data.activeCollisionPairs, dtype=bool))
+        return self._fast[contact_chain]
 
     def _screening(self, contact_chain: str | None, q: FloatArray) -> _Screen:
         """The screening workspace of ``contact_chain`` (made on first use), placed at ``q``."""
@@ -299,7 +297,7 @@ class CollisionChecker:
             table_margin_m: A larger margin for the pairs of the robot and the table (m), or None.
 
         """
-        data, active = self._workspace(self._fast, contact_chain)
+        data, active = self._fast_workspace(contact_chain)
         margins = self.pair_margins(margin_m, table_margin_m)  # (n_pairs,) m
         if self._fast_margin.get(contact_chain) != (margin_m, table_margin_m):
             for request, margin in zip(data.collisionRequests, margins.tolist(), strict=True):

@@ -26,9 +26,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import NDArray
 
 from posegen.robot.geometry import FloatArray
 from posegen.robot.scene import Scene
@@ -246,11 +248,18 @@ _AD_ENTRIES = tuple(
     for r0, c0, offset in ((0, 0, 3), (3, 3, 3), (0, 3, 0))  # w x twice, v x top right
     for row, column, component, sign in _SKEW
 )
-_AD_FLAT = np.array([6 * row + column for row, column, _, _ in _AD_ENTRIES])  # (18,) in the (6, 6) matrix, row-major
-_AD_COMPONENT = np.array([component for _, _, component, _ in _AD_ENTRIES])  # (18,) which of the motion's six
-_AD_SIGN = np.array([sign for _, _, _, sign in _AD_ENTRIES])  # (18,) +-1
-for _constant in (_AD_FLAT, _AD_COMPONENT, _AD_SIGN):
-    _constant.flags.writeable = False
+
+
+def _read_only(values: Sequence[float]) -> NDArray[Any]:
+    """A constant array (module level: written once, shared by every call)."""
+    out = np.array(values)
+    out.flags.writeable = False
+    return out
+
+
+_AD_FLAT = _read_only([6 * row + column for row, column, _, _ in _AD_ENTRIES])  # (18,) in the (6, 6) matrix, row-major
+_AD_COMPONENT = _read_only([component for _, _, component, _ in _AD_ENTRIES])  # (18,) which of the motion's six
+_AD_SIGN = _read_only([sign for _, _, _, sign in _AD_ENTRIES])  # (18,) +-1
 
 
 def _ads(motions: FloatArray) -> FloatArray:
