@@ -240,8 +240,8 @@ class Stabilizer:
         self._limit = TORQUE_RATIO * np.nan_to_num(scene.effort_limit, nan=np.inf)  # (nj,) N m
         self.margin_m = scene.margins.zmp_m  # the reference ZMP is kept this far inside the polygon
         (x0, x1), (y0, y1) = scene.stance.foot_x_m, scene.stance.foot_y_m
-        self._rectangle = Hull.of(np.array([[x0, y0], [x0, y1], [x1, y1], [x1, y0]]))  # a sole, its frame
         self._corners = np.array([[x, y, 0.0, 1.0] for x in (x0, x1) for y in (y0, y1)]).T  # (4, 4) sole frame
+        self._rectangle = Hull.of(self._corners[:2].T)  # a sole, its frame
         first, second = (scene.sole_poses[f] for f in scene.stance.sole_frames)  # (4, 4) each; a stance has two
         self._feet = PlannedFeet((first, second), np.array([*scene.stance.foot_centre_m, 0.0]))
         self._com: FloatArray | None = None
