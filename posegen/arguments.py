@@ -64,3 +64,19 @@ def check_size(value: object, name: str, positive: bool = False) -> float:
     if value < 0 or (positive and value == 0):
         raise ArgumentError(f"{name} must be {'> 0' if positive else '>= 0'}, got {value}", parameter=name)
     return float(value)
+
+
+def check_within(value: object, name: str, low: float, high: float) -> float:
+    """A finite number from ``low`` to ``high``.
+
+    Example:
+        >>> check_within(3.0, "prior_scale", 1e-3, 1e3)
+        3.0
+
+    Raises:
+        ArgumentError: It is not.
+
+    """
+    if not is_finite_number(value) or not low <= value <= high:
+        raise ArgumentError(f"{name} must be a number from {low:g} to {high:g}, got {value!r}", parameter=name)
+    return float(value)

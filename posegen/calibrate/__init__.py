@@ -40,6 +40,7 @@ from posegen.calibrate.scoring import RULE, CvResult
 from posegen.calibrate.screening import Flag
 from posegen.calibrate.simulated_recording import hermite
 from posegen.calibrate.simulation import Perturbation, floor_constants, perturbed_robot, simulate, true_parameters
+from posegen.calibrate.stream_topics import check_stream_topics, wrench_topics
 from posegen.calibrate.summary import (
     CalibrationSummary,
     ChosenModel,
@@ -75,10 +76,15 @@ if TYPE_CHECKING:
         SimulatedBag,
         measure_bag,
         simulate_route_bag,
-        wrench_topics,
     )
 
-_BAG_NAMES = ("TRUTH_FILE", "Measured", "SimulatedBag", "measure_bag", "simulate_route_bag", "wrench_topics")
+_BAG_NAMES = (
+    "TRUTH_FILE",
+    "Measured",
+    "SimulatedBag",
+    "measure_bag",
+    "simulate_route_bag",
+)
 
 
 def __getattr__(name: str) -> Any:
@@ -140,6 +146,7 @@ __all__ = [
     "calibrated_urdf",
     "check_compliance",
     "check_exportable",
+    "check_stream_topics",
     "compensate",
     "contact_residuals",
     "estimate",

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from posegen.arguments import check_seed, check_size
+from posegen.arguments import check_seed, check_size, check_within
 from posegen.calibrate.contact_windows import (
     PlannedContact,
     Rejection,
@@ -26,6 +26,7 @@ from posegen.calibrate.contact_windows import (
     match_windows,
 )
 from posegen.calibrate.simulated_recording import Motion, SensorSettings, route_motion, simulate_recording
+from posegen.calibrate.stream_topics import check_stream_topics, wrench_topics
 from posegen.calibrate.tool_gravity import ToolGravity, wrist_forces
 from posegen.calibrate.workflow import check_compliance, contact_noise_record, perturbation_of, truth_record
 from posegen.errors import ArgumentError, InputError, unknown_name
@@ -47,6 +48,7 @@ from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measureme
 from posegen.robot import FloatArray, Scene, load_config, scene_for
 
 TRUTH_FILE = "truth.yaml"  # a simulated session's true parameters, inside its bag folder
+MAX_RATE_HZ = 2000.0  # a simulated recording's highest rate: twice a 1 kHz control loop; memory grows with it
 
 
 @dataclass(frozen=True)
@@ -74,32 +76,6 @@ class Measured:
 
 def _sha256(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def wrench_topics(scene: Scene, measuring: bool = False) -> dict[str, str]:
-    """Each chain's wrist force/torque topic, from the config.
-
-    Args:
-        scene: Scene.
-        measuring: The caller measures a recording (joint speed alone is then an option, said in the error).
-
-    Raises:
-        InputError: A chain names no ``wrench_topic``.
-
-    """
-    missing = [c.name for c in scene.config.chains if not c.wrench_topic]
-    if missing:
-        where = ", ".join(f"chains.{name}.wrench_topic" for name in missing)
-        if measuring:
-            raise InputError(
-                f"no wrench_topic in the config for chain(s) {', '.join(missing)} (or measure with use_wrench=False)",
-                parameter="use_wrench=False",
-            )
-        raise InputError(
-            f"no wrist force/torque topic in the config for chain(s) {', '.join(missing)}: "
-            f"name it in {where} (e.g. /{missing[0]}_wrist_ft)"
-        )
-    return {c.name: c.wrench_topic for c in scene.config.chains}
 
 
 def _route(route_path: str, scene: Scene | None, config_path: str | None = None) -> tuple[Motion, Scene]:
@@ -140,7 +116,7 @@ def simulate_route_bag(
         error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
         noise_deg: Sigma of the encoder noise, per sample (deg).
         session: Table session (names the true plane).
-        rate_hz: Recording rate of the joint states and wrenches.
+        rate_hz: Recording rate of the joint states and wrenches (Hz, at most ``MAX_RATE_HZ``).
         joint_topic: Topic of the joint states.
         compliance_rad_per_knm: True compliance of the config's first compliance group.
         every_chain: The robot drawn with every chain of the config (the same robot for
@@ -158,6 +134,7 @@ def simulate_route_bag(
         error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
     )
     check_size(rate_hz, "rate_hz", positive=True)
+    check_within(rate_hz, "rate_hz", 0.0, MAX_RATE_HZ)
     bag_path = Path(bag)
     truth = bag_path / TRUTH_FILE
     check_writable(bag_path, OutputKind.FOLDER)
@@ -165,7 +142,7 @@ def simulate_route_bag(
     check_bag_destination(bag_path)
     motion, scene = _route(route_path, None, config_path)
     check_compliance(scene, compliance_rad_per_knm)
-    wrench_topics(scene)  # before the simulation: every wrist needs a topic
+    check_stream_topics(scene, joint_topic)  # before the simulation: every wrist needs a topic of its own
     if not motion.contacts:
         raise InputError(f"{route_path}: the route makes no contact")
     settings = SensorSettings(rate_hz=rate_hz)

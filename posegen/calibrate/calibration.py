@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from posegen.arguments import check_count, check_seed, check_size
+from posegen.arguments import check_count, check_seed, check_within
 from posegen.calibrate.deliverables import Deliverables, choose_deliverables
 from posegen.calibrate.estimation import Estimate, Noise, estimate, fit, held_at_urdf, plane_spec
 from posegen.calibrate.file_judge import with_training_planes
@@ -54,7 +54,7 @@ from posegen.model import (
 )
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import CalibrationConfig, CandidateConfig, FloatArray, Scene
+from posegen.robot import PRIOR_SCALE_RANGE, CalibrationConfig, CandidateConfig, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
 SELECTIONS = 2  # model selections at most: on the screened rows, then again if the chosen model flags more
@@ -102,12 +102,12 @@ def check_settings(settings: Settings) -> None:
     """Check the numbers of ``settings`` (before any file is read).
 
     Raises:
-        ArgumentError: A prior scale that is not a positive number, a fold seed count
+        ArgumentError: A prior scale out of ``PRIOR_SCALE_RANGE``, a fold seed count
             below 1, or a seed out of range.
 
     """
     if settings.prior_scale is not None:
-        check_size(settings.prior_scale, "prior_scale", positive=True)
+        check_within(settings.prior_scale, "prior_scale", *PRIOR_SCALE_RANGE)
     if settings.fold_seeds is not None:
         check_count(settings.fold_seeds, "fold_seeds")
     check_seed(settings.seed, "seed")

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from posegen.arguments import check_seed, check_size
+from posegen.arguments import check_seed, check_within
 from posegen.calibrate.calibration import Settings, calibrate, check_candidates, check_settings
 from posegen.calibrate.calibration_file import write_calibration_files
 from posegen.calibrate.plots import drawing
@@ -140,6 +140,16 @@ def simulate_postures_file(
     return Simulated(contacts=len(recorded), measurements=measurements, truth=truth)
 
 
+PERTURBATION_MAXIMA = {  # the largest errors a simulated robot is drawn with: beyond them no robot, no table
+    "error_mm": 1000.0,
+    "error_deg": 180.0,
+    "noise_deg": 180.0,
+    "compliance_rad_per_knm": 100.0,
+    "contact_noise_mm": 1000.0,
+    "contact_noise_deg": 90.0,
+}
+
+
 def perturbation_of(
     error_mm: float,
     error_deg: float,
@@ -151,7 +161,8 @@ def perturbation_of(
     """The perturbation in the command line's units: mm and deg of errors and noise, rad/kN m.
 
     Raises:
-        ArgumentError: A size that is negative or not a finite number.
+        ArgumentError: A size that is negative, not a finite number or beyond any robot
+            (``PERTURBATION_MAXIMA``).
 
     """
     for value, name in (
@@ -162,7 +173,7 @@ def perturbation_of(
         (contact_noise_mm, "contact_noise_mm"),
         (contact_noise_deg, "contact_noise_deg"),
     ):
-        check_size(value, name)
+        check_within(value, name, 0.0, PERTURBATION_MAXIMA[name])
     return Perturbation(
         length_m=error_mm * 1e-3,
         angle_rad=float(np.deg2rad(error_deg)),

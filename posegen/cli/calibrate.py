@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from posegen.cli.options import DEFAULT_CONFIG, positive, positive_size, seed
+from posegen.cli.options import DEFAULT_CONFIG, positive, positive_size, seed, usable_cores
 from posegen.cli.progress import ProgressBar
 
 if TYPE_CHECKING:
@@ -49,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers",
         type=positive,
-        default=os.cpu_count() or 1,
+        default=usable_cores(),
         help="processes the candidate models are cross-validated on (default: cores; the same result for any count)",
     )
     parser.add_argument("-o", "--output", default="plans/calibration", help="output folder (default plans/calibration)")

@@ -7,13 +7,13 @@ parser, before any file is read, with the message a library caller would get.
 from __future__ import annotations
 
 import argparse
-import os
 import re
 from collections.abc import Callable
 from typing import TypeVar
 
 from posegen.arguments import check_count, check_seed, check_size
 from posegen.errors import PosegenError
+from posegen.parallel import usable_cores
 
 DEFAULT_CONFIG = "configs/talos_table.yaml"
 EXIT_VIOLATIONS = 1  # a check found violations
@@ -51,6 +51,10 @@ FLAGS = {  # the library's words for a parameter (PosegenError.parameter) -> the
     "max_batches": "--max-batches",
     "patience": "--patience",
     "package_dirs": "--package-dir",
+    "topic": "--topic",
+    "segments_topic": "--segments-topic",
+    "joint_topic": "--joint-topic",
+    "host": "--host",
 }
 
 
@@ -111,7 +115,7 @@ def fraction(text: str) -> float:
 def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
     """``--workers`` and ``--scheduler``: where a command's independent jobs run."""
     parser.add_argument(
-        "--workers", type=positive, default=os.cpu_count() or 1, help="local worker processes (default: cores)"
+        "--workers", type=positive, default=usable_cores(), help="local worker processes (default: cores)"
     )
     parser.add_argument(
         "--scheduler",

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 from typing import Any
 
 from posegen.cli.export import SEGMENTS_TOPIC, TRAJECTORY_TOPIC
-from posegen.cli.options import JOINT_STATES_TOPIC, non_negative, positive, positive_size, seed, size
+from posegen.cli.options import JOINT_STATES_TOPIC, non_negative, positive, positive_size, seed, size, usable_cores
 
 NAME = "session"
 HELP = "an experiment batch by batch: start, add each recorded bag, status; rehearse on a simulated robot"
@@ -74,7 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         sub.add_argument("-q", "--quiet", action="store_true", help="no progress output")
         if sub is not status:
             sub.add_argument(
-                "--workers", type=positive, default=os.cpu_count() or 1, help="local worker processes (default: cores)"
+                "--workers", type=positive, default=usable_cores(), help="local worker processes (default: cores)"
             )
 
 

@@ -40,7 +40,7 @@ from posegen.draft.stance import (
     waist_joints,
 )
 from posegen.errors import ConfigError
-from posegen.robot import FloatArray, RobotFiles, yaw_rotation
+from posegen.robot import FloatArray, RobotFiles, read_srdf_states, yaw_rotation
 
 LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
 LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
@@ -183,10 +183,14 @@ def srdf_state(model: pin.Model, files: RobotFiles) -> tuple[str, FloatArray, tu
 
     A state outside the URDF's limits is not used (a CHECK line says so). The SRDF's states
     are added to ``model.referenceConfigurations``.
+
+    Raises:
+        ConfigError: The SRDF is unreadable or malformed.
+
     """
     states: dict[str, FloatArray] = {}
     if files.srdf is not None:
-        pin.loadReferenceConfigurations(model, str(files.srdf), False)
+        read_srdf_states(model, files)  # a clear error for an unreadable or malformed SRDF
         states = {str(e.key()): np.array(e.data()) for e in model.referenceConfigurations}
     state = next(iter(states), "")
     outside = outside_limits(model, states[state]) if state else []

@@ -74,6 +74,7 @@ from posegen.io.route_writer import (
     stored_arrays,
     write_route,
 )
+from posegen.io.topic_names import check_topics, topic_name_problem
 from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, write_trajectory_bag
 
 __all__ = [
@@ -111,6 +112,7 @@ __all__ = [
     "check_apart",
     "check_bag_destination",
     "check_replaceable",
+    "check_topics",
     "check_writable",
     "claim_output",
     "companion_of",
@@ -144,6 +146,7 @@ __all__ = [
     "stamp",
     "stored_arrays",
     "swap_folder",
+    "topic_name_problem",
     "write_atomic",
     "write_pool",
     "write_recording",

@@ -16,7 +16,7 @@ names here are its plumbing and may change between versions.
 from __future__ import annotations
 
 from posegen.extras import Extra, require
-from posegen.parallel.backend import Backend, Job, ProcessBackend, job_name, no_state
+from posegen.parallel.backend import Backend, Job, ProcessBackend, job_name, no_state, usable_cores
 
 
 def open_backend(workers: int = 1, scheduler: str | None = None, preload: tuple[str, ...] = ()) -> Backend:
@@ -52,4 +52,4 @@ def as_backend(workers: int | Backend) -> Backend:
     return workers if isinstance(workers, Backend) else ProcessBackend(workers)
 
 
-__all__ = ["Backend", "Job", "ProcessBackend", "as_backend", "job_name", "no_state", "open_backend"]
+__all__ = ["Backend", "Job", "ProcessBackend", "as_backend", "job_name", "no_state", "open_backend", "usable_cores"]

@@ -10,6 +10,7 @@ import concurrent.futures.process
 import hashlib
 import itertools
 import json
+import logging
 import multiprocessing
 import os
 import select
@@ -23,6 +24,8 @@ from types import FrameType, TracebackType
 from typing import Any, Generic, Protocol, TypeVar
 
 from posegen.errors import BackendError, reason
+
+LOG = logging.getLogger(__name__)
 
 StateT = TypeVar("StateT")
 ItemT = TypeVar("ItemT")
@@ -246,6 +249,18 @@ def start_forkserver(modules: tuple[str, ...]) -> None:
     forkserver.ensure_running()
 
 
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the system says, else the machine's).
+
+    Example:
+        >>> usable_cores() >= 1
+        True
+
+    """
+    affinity = getattr(os, "sched_getaffinity", None)
+    return max(1, len(affinity(0)) if affinity is not None else (os.cpu_count() or 1))
+
+
 class ProcessBackend(Backend):
     """``workers`` local processes (forkserver); with one worker, or one item, all runs in this process.
 
@@ -256,11 +271,14 @@ class ProcessBackend(Backend):
     Entered with ``preload`` modules (and more than one worker), it starts the process
     that forks the workers at once, importing them while the command reads its inputs:
     the workers, forked from it later, start with them imported (a second off a
-    calibration's wall time).
+    calibration's wall time). More workers than :func:`usable_cores` run as that many (a warning says so).
     """
 
     def __init__(self, workers: int, preload: tuple[str, ...] = ()) -> None:
-        self.workers = max(1, workers)
+        cores = usable_cores()
+        if workers > cores:  # more processes than cores only add start-up and memory (each imports the stack)
+            LOG.warning("workers: %d asked, this machine has %d usable cores: running %d", workers, cores, cores)
+        self.workers = max(1, min(workers, cores))
         self.preload = preload
         self._keep = False  # inside ``with``: keep processes and states between maps
         self._executors: dict[str, concurrent.futures.ProcessPoolExecutor] = {}

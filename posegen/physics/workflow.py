@@ -26,9 +26,9 @@ from posegen.calibrate import (
     TRUTH_FILE,
     Perturbation,
     check_compliance,
+    check_stream_topics,
     perturbation_of,
     truth_record,
-    wrench_topics,
 )
 from posegen.errors import ArgumentError, InputError
 from posegen.io import (
@@ -177,7 +177,7 @@ def simulate_physics_bag(
     scene.check_made_for(route.provenance, route_path)
     route.joint_columns(scene.joint_names, route_path)
     check_compliance(scene, options.compliance_rad_per_knm)
-    topics = wrench_topics(scene)
+    topics = check_stream_topics(scene, options.joint_topic)
     contacts = contact_times(route)
     if not contacts:
         raise InputError(f"{route_path}: the route makes no contact")

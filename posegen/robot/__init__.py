@@ -28,7 +28,13 @@ from posegen.robot.balance import (
     stretch_for_margin,
     zmp_margins,
 )
-from posegen.robot.calibration_config import CalibrationConfig, CandidateConfig, PriorConfig, parse_candidate
+from posegen.robot.calibration_config import (
+    PRIOR_SCALE_RANGE,
+    CalibrationConfig,
+    CandidateConfig,
+    PriorConfig,
+    parse_candidate,
+)
 from posegen.robot.chain_config import ChainConfig
 from posegen.robot.collision import TABLE, Collision, CollisionChecker, Proximity, Witness
 from posegen.robot.collision_geometry import (
@@ -99,6 +105,7 @@ from posegen.robot.geometry import (
 from posegen.robot.motion_torques import MotionTorques, PointLoad, allowed_ratios, effort_ratios_at, torque_stretch
 from posegen.robot.projection import Projection, Projector
 from posegen.robot.scene import Scene, Spot, scene_for, scene_for_postures
+from posegen.robot.scene_parts import read_srdf_states
 from posegen.robot.separation import Separation, SeparationRows
 from posegen.robot.sole_split import COP_MARGIN_M, least_size_map, least_size_share, split_wrench
 from posegen.robot.stance_space import StanceSpace
@@ -144,6 +151,7 @@ __all__ = [
     "MOMENT_ARM_M",
     "PACKAGE_URI",
     "POINT",
+    "PRIOR_SCALE_RANGE",
     "SOLE_ANGLE_TOL_RAD",
     "SOLE_POSITION_TOL_M",
     "TABLE",
@@ -234,6 +242,7 @@ __all__ = [
     "placement_matrix",
     "polygon_margin",
     "pressed_zmp_margin",
+    "read_srdf_states",
     "registered_kinds",
     "resolve_path",
     "resolve_source",

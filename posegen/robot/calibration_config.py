@@ -61,6 +61,9 @@ DEFAULT_CANDIDATES = (
 )
 
 
+PRIOR_SCALE_RANGE = (1e-3, 1e4)  # a prior scale's bounds: beyond them the prior is all or nothing, and LAPACK fails
+
+
 @dataclass(frozen=True)
 class CalibrationConfig:
     """How ``posegen calibrate`` models the robot and chooses among models."""
@@ -160,12 +163,13 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: {', '.join(valid)}")
     prior = _prior(data.get("prior", {}), defaults.prior, f"{where}.prior")
     scales = data.get("prior_scales", list(defaults.prior_scales))
+    low, high = PRIOR_SCALE_RANGE
     if (
         not isinstance(scales, list)
         or len(scales) < 1
-        or not all(isinstance(s, (int, float)) and not isinstance(s, bool) and s > 0 for s in scales)
+        or not all(isinstance(s, (int, float)) and not isinstance(s, bool) and low <= s <= high for s in scales)
     ):
-        raise ConfigError(f"{where}.prior_scales: expected a list of positive numbers, got {scales!r}")
+        raise ConfigError(f"{where}.prior_scales: expected a list of numbers from {low:g} to {high:g}, got {scales!r}")
     groups = data.get("compliance", {})
     if not isinstance(groups, dict) or not all(
         isinstance(v, list) and v and all(isinstance(j, str) for j in v) for v in groups.values()

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from posegen.errors import ConfigError
+from posegen.io import topic_name_problem
 from posegen.robot.config_reader import Reader
 from posegen.robot.contact_kinds import DEFAULT_KIND, ContactKind, kind_named, registered_kinds
 
@@ -96,8 +97,28 @@ def read_chain(ch: Reader, name: str) -> ChainConfig:
         tool_mass_kg=ch.number("tool_mass_kg", minimum=0.0) if ch.raw("tool_mass_kg", None) is not None else None,
         tool_com_m=_point(ch, "tool_com_m"),
     )
+    problem = topic_name_problem(chain.wrench_topic) if chain.wrench_topic else None
+    if problem is not None:
+        raise ConfigError(f"chains.{name}.wrench_topic: {problem}")
     if (chain.tool_mass_kg is None) != (chain.tool_com_m is None):
         raise ConfigError(f"chains.{name}: give tool_mass_kg and tool_com_m together (or neither: measure fits them)")
     for each in registered_kinds():
         each.check(chain, planned=each == kind)
     return chain
+
+
+def require_distinct(chains: tuple[ChainConfig, ...]) -> None:
+    """No two chains share a frame posegen adds, a recording's name or a wrench topic.
+
+    Raises:
+        ConfigError: Two do (named by the later chain's field).
+
+    """
+    for field in ("contact_frame", "recorded_as", "wrench_topic"):
+        seen: dict[str, str] = {}
+        for chain in chains:
+            value = getattr(chain, field)
+            if value and value in seen:
+                owner = seen[value]
+                raise ConfigError(f"chains.{chain.name}.{field}: '{value}' is chains.{owner}'s too; give each its own")
+            seen[value] = chain.name

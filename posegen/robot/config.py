@@ -26,7 +26,7 @@ from posegen.robot.additions import (
     read_velocity_limits,
 )
 from posegen.robot.calibration_config import CalibrationConfig, calibration_to_dict, parse_calibration
-from posegen.robot.chain_config import CHAIN_DEFAULTS, ChainConfig, read_chain
+from posegen.robot.chain_config import CHAIN_DEFAULTS, ChainConfig, read_chain, require_distinct
 from posegen.robot.config_reader import Reader
 from posegen.robot.config_sections import (
     MarginConfig,
@@ -233,7 +233,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
         table=table,
         margins=margins,
         sampling=read_sampling(top.sub("sampling")),
-        route=_section(top, "route", RouteConfig()),
+        route=_route(top),
         recording=_recording(top),
         calibration=parse_calibration(top.raw("calibration", None)),
         source_path=source_path,
@@ -295,13 +295,15 @@ def read_chains(top: Reader) -> tuple[ChainConfig, ...]:
     """The ``chains`` section, in the file's order.
 
     Raises:
-        ConfigError: No chains, or a malformed chain.
+        ConfigError: No chains, a malformed chain, or two sharing a contact frame, recording name or wrench topic.
 
     """
     chains_raw = top.raw("chains")
     if not isinstance(chains_raw, dict) or not chains_raw:
         raise ConfigError("chains: expected a mapping chain name -> chain settings")
-    return tuple(read_chain(top.sub("chains").sub(str(name)), str(name)) for name in chains_raw)
+    chains = tuple(read_chain(top.sub("chains").sub(str(name)), str(name)) for name in chains_raw)
+    require_distinct(chains)
+    return chains
 
 
 def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:
@@ -314,6 +316,34 @@ def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:
 
 _Section = TypeVar("_Section", RouteConfig, RecordingConfig)
 
+# Fields a zero would divide by, or make the stage meaningless (a route of infinite seconds, a contact held at 0 N).
+_POSITIVE = frozenset(
+    {
+        "acceleration_limit_rad_s2",
+        "velocity_scale_free",
+        "velocity_scale_near",
+        "velocity_scale_contact",
+        "waypoint_step_rad",
+        "planning_checks",
+        "contact_force_n",
+        "force_threshold_n",
+        "speed_threshold_rad_s",
+        "speed_span_s",
+        "max_std_rad",
+        "match_tolerance_rad",
+    }
+)
+
+
+def _route(top: Reader) -> RouteConfig:
+    """The ``route`` section; the velocity scales are fractions of the URDF's limits, at most 1."""
+    route = _section(top, "route", RouteConfig())
+    for name in ("velocity_scale_free", "velocity_scale_near", "velocity_scale_contact"):
+        scale = getattr(route, name)
+        if scale > 1.0:
+            raise ConfigError(f"route.{name}: a fraction of the URDF velocity limits, at most 1, got {scale:g}")
+    return route
+
 
 def _recording(top: Reader) -> RecordingConfig:
     """The ``recording`` section; ``match_ratio`` is a fraction below 1 (0: the tolerance alone)."""
@@ -324,7 +354,10 @@ def _recording(top: Reader) -> RecordingConfig:
 
 
 def _section(top: Reader, key: str, defaults: _Section) -> _Section:
-    """An optional section of numbers and flags; absent keys keep their defaults."""
+    """An optional section of numbers and flags; absent keys keep their defaults.
+
+    Every number is finite and >= 0; those a zero would divide by (``_POSITIVE``) are > 0.
+    """
     if key not in top.data:
         return defaults
     reader = top.sub(key)
@@ -338,6 +371,8 @@ def _section(top: Reader, key: str, defaults: _Section) -> _Section:
             values[name] = flag
         else:
             values[name] = reader.number(name, default, minimum=0.0)
+            if name in _POSITIVE and values[name] == 0.0:
+                raise ConfigError(f"{key}.{name}: must be > 0, got 0")
     unknown = set(reader.data) - set(fields)
     if unknown:
         raise ConfigError(f"{key}: unknown keys {sorted(unknown)}; valid keys: {', '.join(fields)}")

@@ -18,6 +18,7 @@ from posegen.io import (
     Pool,
     check_apart,
     check_bag_destination,
+    check_topics,
     check_writable,
     claim_output,
     load_postures,
@@ -244,10 +245,11 @@ def export_route_bag(
     any order) and every contact segment names one of the config's chains.
 
     Raises:
-        PosegenError: Not a route, one of another robot or of names the robot lacks, or a
-            destination that is not posegen's bag.
+        PosegenError: Not a route, one of another robot or of names the robot lacks, topics
+            that are no ROS 2 names or one name twice, or a destination that is not posegen's bag.
 
     """
+    check_topics({"topic": topic, "segments_topic": segments_topic})
     check_writable(bag, OutputKind.FOLDER)
     check_apart([bag], [route_path, config_path])
     check_bag_destination(bag)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import socket
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -19,6 +20,7 @@ from typing import Protocol
 
 import viser
 
+from posegen.errors import InputError
 from posegen.io import check_apart, check_writable, claim_output, write_atomic
 from posegen.view.artefact import Artefact, CalibrationArtefact, PosturesArtefact, RouteArtefact, open_artefact
 from posegen.view.calibration_view import CalibrationView
@@ -68,6 +70,29 @@ def _view(server: viser.ViserServer, artefact: Artefact) -> View:
         return RouteView(server, artefact)
     assert isinstance(artefact, CalibrationArtefact)
     return CalibrationView(server, artefact)
+
+
+def check_host(host: str) -> None:
+    """Check that the viewer can listen on ``host``: an address of this machine (viser would retry forever).
+
+    Example:
+        >>> check_host("127.0.0.1")
+
+    Raises:
+        InputError: ``host`` does not resolve, or is no address of this machine.
+
+    """
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, 0, type=socket.SOCK_STREAM)[0]
+    except (OSError, UnicodeError) as exc:
+        raise InputError(f"host: cannot resolve '{host}' ({exc})", parameter="host") from exc
+    with socket.socket(family, kind, proto) as probe:
+        try:
+            probe.bind(address)
+        except OSError as exc:
+            raise InputError(
+                f"host: cannot listen on '{host}' ({exc.strerror}): give an address of this machine", parameter="host"
+            ) from exc
 
 
 @contextlib.contextmanager
@@ -145,7 +170,11 @@ def serve(
         ready: Told the viewer's URL once it is up.
         stop: Ends the server when set.
 
+    Raises:
+        InputError: ``host`` is no address of this machine.
+
     """
+    check_host(host)
     with local_server(host, port) as server:
         view = _view(server, artefact)
         view.add_controls()

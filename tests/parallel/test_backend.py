@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from posegen.errors import BackendError
-from posegen.parallel import Job, ProcessBackend, as_backend, open_backend
+from posegen.parallel import Job, ProcessBackend, as_backend, open_backend, usable_cores
 from posegen.pool import generate_pool, verify_postures
 
 
@@ -41,9 +41,22 @@ def test_a_stage_runs_on_the_backend_it_is_given_or_on_that_many_local_processes
         [(square, _, _)] = list(as_backend(given).map(job, [2]))
         assert square == 4
         assert job.name in given._states  # the given backend keeps its state: as_backend did not close it
-    made = as_backend(3)
-    assert isinstance(made, ProcessBackend) and made.slots == 3
-    assert isinstance(open_backend(2), ProcessBackend) and open_backend(2).slots == 2
+    made = as_backend(1)
+    assert isinstance(made, ProcessBackend) and made.slots == 1
+    opened = open_backend(usable_cores())
+    assert isinstance(opened, ProcessBackend) and opened.slots == usable_cores()
+
+
+def test_more_workers_than_cores_run_as_many_as_cores_and_say_so(caplog):
+    cores = usable_cores()
+    assert cores == len(os.sched_getaffinity(0))  # Linux: this process's affinity
+    with caplog.at_level("WARNING", logger="posegen.parallel.backend"):
+        assert ProcessBackend(cores + 998).slots == cores
+    assert f"workers: {cores + 998} asked, this machine has {cores} usable cores: running {cores}" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="posegen.parallel.backend"):
+        assert ProcessBackend(cores).slots == cores
+    assert caplog.text == ""
 
 
 def test_closing_the_results_early_stops_the_work():

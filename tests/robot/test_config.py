@@ -89,6 +89,36 @@ def test_recording_section_and_wrench_topics():
         parse_config(data)
 
 
+@pytest.mark.parametrize(
+    ("section", "key", "value", "message"),
+    [
+        ("route", "waypoint_step_rad", 0, r"route\.waypoint_step_rad: must be > 0, got 0"),
+        ("route", "acceleration_limit_rad_s2", 0.0, r"route\.acceleration_limit_rad_s2: must be > 0"),
+        ("route", "velocity_scale_free", 0, r"route\.velocity_scale_free: must be > 0"),
+        ("route", "velocity_scale_contact", 0, r"route\.velocity_scale_contact: must be > 0"),
+        ("route", "velocity_scale_near", 1.5, r"route\.velocity_scale_near: a fraction .* at most 1, got 1\.5"),
+        ("route", "contact_force_n", 0, r"route\.contact_force_n: must be > 0"),
+        ("recording", "speed_span_s", 0, r"recording\.speed_span_s: must be > 0"),
+    ],
+)
+def test_a_number_a_stage_divides_by_must_be_positive(section, key, value, message):
+    data = raw()
+    data[section] = {key: value}
+    with pytest.raises(ConfigError, match=message):
+        parse_config(data)
+    data[section] = {key: 0.5}  # a positive fraction is accepted
+    assert getattr(getattr(parse_config(data), section), key) == 0.5
+
+
+@pytest.mark.parametrize("field", ["contact_frame", "recorded_as", "wrench_topic"])
+def test_two_chains_may_not_share_a_frame_a_recording_name_or_a_topic(field):
+    data = raw()
+    left, right = list(data["chains"])
+    data["chains"][right][field] = data["chains"][left][field]
+    with pytest.raises(ConfigError, match=rf"chains\.{right}\.{field}: '.*' is chains\.{left}'s too"):
+        parse_config(data)
+
+
 def test_read_source_makes_paths_absolute_from_the_config_folder(tmp_path):
     src = Reader({"urdf": "robot/r.urdf", "srdf": "package://pkg/r.srdf", "package_dirs": [".."]}, "robot.source")
     source = read_source(src, str(tmp_path / "configs" / "c.yaml"))

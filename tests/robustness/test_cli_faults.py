@@ -268,6 +268,20 @@ TABLE = [
     F("calibrate", "--prior-scale 0", "{measurements}", "--prior-scale", "0", *C, "-o", "{out}/cal"),
     F("calibrate", "negative --prior-scale", "{measurements}", "--prior-scale", "-1", *C, "-o", "{out}/cal"),
     F("calibrate", "NaN --prior-scale", "{measurements}", "--prior-scale", "nan", *C, "-o", "{out}/cal"),
+    *(
+        F(
+            "calibrate",
+            f"--prior-scale {scale}",
+            "{measurements}",
+            "--prior-scale",
+            scale,
+            *C,
+            "-o",
+            "{out}/cal",
+            expect="--prior-scale must be a number from 0.001 to 10000",
+        )
+        for scale in ("1e300", "1e-300")
+    ),
     F("calibrate", "negative --seed", "{measurements}", "--seed", "-1", *C, "-o", "{out}/cal"),
     F("calibrate", "--candidates unknown", "{measurements}", "--candidates", "nonsense", *C, "-o", "{out}/cal"),
     F("calibrate", "--fold-seeds 0", "{measurements}", "--fold-seeds", "0", *C, "-o", "{out}/cal"),
@@ -328,6 +342,7 @@ TABLE = [
     F("view", "binary config", "{pool}", "--config", "{binary}", "--html", "{out}/v.html"),
     F("view", "negative --port", "{pool}", "--port", "-1"),
     F("view", "--port past 65535", "{pool}", "--port", "70000"),
+    F("view", "--host not of this machine", "{pool}", "--host", "10.9.9.9", expect="--host: cannot listen on"),
     F(
         "view",
         "a calibration folder with a damaged calibration.yaml",
@@ -345,11 +360,31 @@ TABLE = [
     F("export", "--bag a file", "{route}", "--bag", "{existing}"),
     F("export", "--bag unwritable", "{route}", "--bag", f"{UNWRITABLE}/bag"),
     F("export", "--bag being written", "{route}", "--bag", "{out}/bag", locked="{out}/bag"),
+    F(
+        "export",
+        "--segments-topic equal to --topic",
+        *("{route}", "--topic", "/x", "--segments-topic", "/x", "--bag", "{out}/bag"),
+        expect="--segments-topic: '/x' is already in use (by topic)",
+    ),
+    F("export", "--topic no ROS 2 name", "{route}", "--topic", "x y", "--bag", "{out}/bag", expect="starts with '/'"),
+    F("export", "empty --segments-topic", "{route}", "--segments-topic", "", "--bag", "{out}/bag"),
     # simulate --bag
     F("simulate", "--bag of a pool", "{pool}", "--bag", "{out}/bag"),
     F("simulate", "--bag of a binary file", "{binary}", "--bag", "{out}/bag"),
     F("simulate", "--bag --rate 0", "{route}", "--rate", "0", "--bag", "{out}/bag"),
     F("simulate", "--bag --rate NaN", "{route}", "--rate", "nan", "--bag", "{out}/bag"),
+    F("simulate", "--bag --rate 1e9", "{route}", "--rate", "1e9", "--bag", "{out}/bag", expect="from 0 to 2000"),
+    F(
+        "simulate",
+        "--bag --joint-topic a wrist's topic",
+        *("{route}", "--joint-topic", "/left_wrist_ft", "--bag", "{out}/bag"),
+        expect="--joint-topic: '/left_wrist_ft' is already in use (by chains.left.wrench_topic)",
+    ),
+    *(
+        F("simulate", f"--bag --joint-topic {topic!r}", "{route}", "--joint-topic", topic, "--bag", "{out}/bag")
+        for topic in ("", "joint_states", "/a//b", "/2d")
+    ),
+    F("simulate", "--noise-deg 1e300", "{pool}", "--noise-deg", "1e300", *C, "-o", "{out}/m.yaml", expect="to 180"),
     F("simulate", "--bag negative --seed", "{route}", "--seed", "-2", "--bag", "{out}/bag"),
     F("simulate", "--bag a folder that is no bag", "{route}", "--bag", "{out}"),
     F("simulate", "--bag unwritable", "{route}", "--bag", f"{UNWRITABLE}/bag"),
@@ -371,6 +406,15 @@ TABLE = [
     F("robot", "init: unknown robot", "init", "nonsense", "-o", "{out}/c.yaml", expect="valid example-robot-data"),
     F("robot", "init: missing --srdf", "init", "talos", "--srdf", "{out}/nothing.srdf", "-o", "{out}/c.yaml"),
     F("robot", "init: --samples 0", "init", "talos", "--samples", "0", "-o", "{out}/c.yaml"),
+    F("robot", "init: truncated --srdf", "init", "talos", "--srdf", "{truncated_srdf}", "-o", "{out}/c.yaml"),
+    F("robot", "init: --srdf no SRDF", "init", "talos", "--srdf", "{not_srdf_txt}", "-o", "{out}/c.yaml"),
+    F("pool", "two chains, one contact frame", "--n", "3", "--config", "{shared_frame_config}", "-o", "{out}/p.yaml"),
+    F(
+        "route",
+        "route.waypoint_step_rad 0 in the config",
+        *("{pool}", "--config", "{zero_step_config}", "-o", "{out}/route.yaml"),
+        expect="route.waypoint_step_rad: must be > 0",
+    ),
     F("robot", "init: negative --seed", "init", "talos", "--seed", "-1", "-o", "{out}/c.yaml"),
     F("robot", "init: no name", "init", "-o", "{out}/c.yaml"),
     *bad_outputs("robot", "init", "talos"),
@@ -520,6 +564,13 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     rigid = _config_data()
     rigid["calibration"] = {"compliance": {}, "candidates": {"offsets": {"fit": ["*.joint_offset"]}}}
     put("rigid_config.yaml", rigid)
+    shared = _config_data()
+    shared["chains"]["right"]["contact_frame"] = shared["chains"]["left"]["contact_frame"]
+    put("shared_frame_config.yaml", shared)
+    put("zero_step_config.yaml", config | {"route": {"waypoint_step_rad": 0}})
+    srdf = scene.files.srdf
+    put("truncated.srdf", srdf.read_text()[:3000])
+    put("not_srdf.txt", "hello\n")
 
     pool_path = folder / "pool.yaml"
     selection = yaml.safe_load(pool_path.read_text())
