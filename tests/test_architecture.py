@@ -419,6 +419,7 @@ DICT_READERS = {
     "posegen.session.index_reader": "reader: session.yaml (SessionIndex)",
     "posegen.physics.physics_file": "reader: physics.yaml (PhysicsReport)",
     "posegen.parallel.cluster": "not an artefact: a worker plugin's pickled state (__setstate__)",
+    "posegen.robot.config": "reader: the scene config (Config); an artefact given for one is named by its format",
     "posegen.robot.scene": "Provenance: an artefact's provenance as a dict (scene_for, check_made_for)",
     "posegen.route.workflow": "Route and Selection: segments, entries and provenance as dicts",
     "posegen.view.artefact": "Route and Selection: segments and provenance as dicts",

@@ -34,6 +34,7 @@ from posegen.io import (
 from posegen.model import (
     CalibrationModel,
     Contacts,
+    existing_measurement_file,
     measurement_item,
     measurement_provenance,
     measurements_to_dict,
@@ -367,8 +368,8 @@ def _saved_scene(items: Sequence[str]) -> Scene:
 
     """
     for item in items:
-        path = measurement_item(item)[0]
-        if Path(path).suffix.lower() in (".yaml", ".yml"):
+        path = existing_measurement_file(measurement_item(item)[0])  # a folder or nothing: said as such
+        if path.suffix.lower() in (".yaml", ".yml"):
             return scene_for(measurement_provenance(path), None)
     raise InputError(
         "the measurement files carry no scene config (recorded CSV files do not): give config_path",

@@ -1,4 +1,4 @@
-"""``posegen check``: re-verify a pool or a route from scratch; exit 1 on any violation."""
+"""``posegen check``: re-verify a pool, a selection or a route from scratch; exit 1 on any violation."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ from posegen.cli.options import EXIT_VIOLATIONS, add_backend_arguments, positive
 from posegen.cli.progress import ProgressBar
 
 NAME = "check"
-HELP = "re-verify a pool or a route from scratch (exit 1 on any violation)"
+HELP = "re-verify a pool, a selection or a route from scratch (exit 1 on any violation)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the command's arguments."""
-    parser.add_argument("file", help="pool or route file")
+    parser.add_argument("file", help="pool, selection or route file")
     parser.add_argument("--config", default=None, help="scene config (default: the one saved in the file)")
     parser.add_argument(
         "--min-dt",

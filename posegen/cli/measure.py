@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import DEFAULT_CONFIG, JOINT_STATES_TOPIC
+from posegen.cli.options import DEFAULT_CONFIG, JOINT_STATES_TOPIC, session_name
 
 NAME = "measure"
 HELP = "find the static contacts in a recorded rosbag2 and write them as measurements"
@@ -15,7 +15,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("bag", help="rosbag2 directory (MCAP or sqlite3)")
     parser.add_argument("--route", default=None, help="the route the robot ran: names each contact's arm and posture")
     parser.add_argument("--config", default=DEFAULT_CONFIG, help=f"scene config (default {DEFAULT_CONFIG})")
-    parser.add_argument("--session", default=None, help="table session of the contacts (default: the bag's name)")
+    parser.add_argument(
+        "--session", type=session_name, default=None, help="table session of the contacts (default: the bag's name)"
+    )
     parser.add_argument(
         "--joint-topic", default=JOINT_STATES_TOPIC, help=f"JointState topic (default {JOINT_STATES_TOPIC})"
     )

@@ -125,8 +125,8 @@ def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def name(text: str) -> str:
-    """A non-empty name without path separators or control characters."""
-    if not text.strip() or any(c in text for c in "/\\") or not text.isprintable():
-        raise argparse.ArgumentTypeError(f"not a usable name: {text!r}")
+def session_name(text: str) -> str:
+    """A table session's name: printable, not blank (a label, as ``FILE@SESSION`` gives one: '/' allowed)."""
+    if not text.strip() or not text.isprintable():
+        raise argparse.ArgumentTypeError(f"not a usable session name: {text!r}")
     return text

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from posegen.cli.options import JOINT_STATES_TOPIC, name, positive_size, seed, size
+from posegen.cli.options import JOINT_STATES_TOPIC, positive_size, seed, session_name, size
 from posegen.cli.progress import ProgressBar
 
 KINEMATIC_RATE_HZ = 500.0  # the default rate of a kinematic recording (simulate --bag)
@@ -27,7 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--error-deg", type=size, default=0.5, help="sigma of angle errors (default 0.5 deg, clipped 1.5)"
     )
     parser.add_argument("--noise-deg", type=size, default=0.005, help="encoder noise sigma (default 0.005 deg)")
-    parser.add_argument("--session", type=name, default="sim", help="table session name (default sim)")
+    parser.add_argument("--session", type=session_name, default="sim", help="table session name (default sim)")
     parser.add_argument(
         "--compliance",
         type=size,

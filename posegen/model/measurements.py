@@ -59,7 +59,7 @@ def _check_angles(scene: Scene, names: Sequence[str], values: np.ndarray, where:
     if len(bad):
         k = int(bad[0])
         raise InputError(
-            f"{where}: {names[k]} = {values[k]:.4f} rad is outside its limits "
+            f"{where}: {names[k]} = {values[k]:.6g} rad is outside its limits "
             f"[{scene.lower[idx[k]]:.3f}, {scene.upper[idx[k]]:.3f}] +/- {tolerance} rad (shifted column?)"
         )
 
@@ -112,6 +112,25 @@ def measurement_item(item: str) -> tuple[str, str | None]:
             text.append(item[k])
             k += 1
     return "".join(text), None
+
+
+def existing_measurement_file(path: str | Path) -> Path:
+    """``path``, a file that exists: a folder (a recorded bag, measured first) or nothing is refused.
+
+    Example:
+        >>> existing_measurement_file("plans/demo/measured.yaml")
+        PosixPath('plans/demo/measured.yaml')
+
+    Raises:
+        InputError: ``path`` is a folder, or no file.
+
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: a folder, not a measurement file (measure a recorded bag first)")
+    if not path.is_file():
+        raise InputError(f"measurement file not found: {path}")
+    return path
 
 
 def _full_joints(scene: Scene, names: Sequence[str], values: np.ndarray) -> np.ndarray:
@@ -226,9 +245,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         InputError: The file is missing or malformed.
 
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"measurement file not found: {path}")
+    path = existing_measurement_file(path)
     if path.suffix.lower() == ".csv":
         return read_csv(path, scene, session or path.stem)
     data = read_yaml(path, MEASUREMENT_FORMAT)
@@ -286,7 +303,7 @@ def measurement_provenance(path: str | Path) -> dict[str, Any]:
         InputError: The file is missing or not in posegen's measurement format.
 
     """
-    return _provenance(read_yaml(path, MEASUREMENT_FORMAT), Path(path))
+    return _provenance(read_yaml(existing_measurement_file(path), MEASUREMENT_FORMAT), Path(path))
 
 
 def measurements_to_dict(scene: Scene, contacts: Contacts, provenance: dict[str, Any]) -> dict[str, Any]:

@@ -7,7 +7,16 @@ from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import InputError, PosegenError
-from posegen.io import POOL_FORMAT, Pool, check_apart, claim_output, pool_from_dict, read_yaml, write_pool
+from posegen.io import (
+    POOL_FORMAT,
+    SELECTION_FORMAT,
+    Pool,
+    check_apart,
+    claim_output,
+    pool_from_dict,
+    read_yaml,
+    write_pool,
+)
 from posegen.parallel import Backend
 from posegen.pool.check import verify_postures
 from posegen.pool.generation import generate_pool
@@ -74,19 +83,19 @@ def check_pool_file(
     progress: ProgressCallback = ignore_progress,
     workers: int | Backend = 1,
 ) -> Verification:
-    """Re-verify every posture of a pool file from scratch, on the robot's meshes.
+    """Re-verify every posture of a pool (or selection) file from scratch, on the robot's meshes.
 
     Args:
-        path: Pool file.
+        path: Pool or selection file.
         config_path: Scene config; None: the one saved in the pool.
         progress: Told after each chunk of postures.
         workers: Local worker processes (1: in this process), or the backend to run on.
 
     Raises:
-        PosegenError: Not a pool, an empty pool, or a pool made for another robot model.
+        PosegenError: Not a pool or selection, no posture, or postures made for another robot model.
 
     """
-    pool = pool_from_dict(read_yaml(path, POOL_FORMAT), path)
+    pool = pool_from_dict(read_yaml(path, (POOL_FORMAT, SELECTION_FORMAT)), path)
     if not pool.postures:
         raise InputError(f"{path}: the pool holds no posture: nothing to check")
     scene = scene_for(pool.provenance, config_path)

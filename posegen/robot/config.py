@@ -391,6 +391,9 @@ def load_config(path: str | Path) -> Config:
     """
     path = shipped_path(path)  # a shipped config (configs/...) is found outside the checkout too
     data = load_yaml_file(path, ConfigError)
+    kind = data.get("format") if isinstance(data, dict) else None
+    if isinstance(kind, str) and "robot" not in data:  # an artefact (a pool, a route...) given for its config
+        raise ConfigError(f"{path}: a {kind} file, not a scene config (a config has 'robot', 'stance', 'chains'...)")
     try:
         return parse_config(data, str(path))
     except ConfigError as exc:

@@ -228,6 +228,8 @@ def read_calibration_model(path: str, scene: Scene) -> tuple[CandidateConfig, fl
 
     """
     report = read_yaml(path, "posegen-calibration")
+    provenance = report.get("provenance", {})
+    scene.check_made_for(provenance if isinstance(provenance, dict) else {}, path)  # another robot's: refused
     if report.get("format_version") != CALIBRATION_VERSION:
         raise InputError(
             f"{path}: calibration format_version {report.get('format_version')!r}; this posegen reads "

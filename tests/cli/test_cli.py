@@ -95,6 +95,20 @@ def test_check_flags_a_tampered_pool(small_pool, tmp_path, capsys):
     assert "FAIL sole" in stdout and "FAIL contact" in stdout and "posture 3" in stdout
 
 
+def test_check_verifies_a_selection_and_flags_its_tampered_posture(selection_file, tmp_path, capsys):
+    data = yaml.safe_load(selection_file.read_text())
+    data["postures"] = data["postures"][:4]  # the check of four postures: quick
+    path = tmp_path / "selected.yaml"
+    write_yaml(path, data)
+    code, stdout, _ = run(["check", str(path), "-q"], capsys)
+    assert code == 0 and f"checked 4 postures of {path}" in stdout and "FAIL" not in stdout
+    hip = data["joint_names"].index("leg_left_3_joint")
+    data["postures"][2]["joints"][hip] += 0.05  # the right sole and the hand leave their places
+    write_yaml(path, data)
+    code, stdout, _ = run(["check", str(path), "-q"], capsys)
+    assert code == 1 and "FAIL sole" in stdout and "posture 2" in stdout
+
+
 def test_check_rejects_files_that_are_not_pools(tmp_path, capsys):
     path = tmp_path / "notapool.yaml"
     path.write_text("format: something-else\n")

@@ -1,18 +1,19 @@
 """The command line's words: a library error names a parameter; the command line shows its flag."""
 
+import argparse
 import ast
 from pathlib import Path
 
 import pytest
 
 from posegen.cli.main import main
-from posegen.cli.options import FLAGS, in_flags
+from posegen.cli.options import FLAGS, in_flags, session_name
 from posegen.errors import ArgumentError, InputError
 from posegen.route import route_postures_file
 from posegen.select import SelectionSettings, select_pool_file
 
 PACKAGE = Path(__file__).resolve().parents[2] / "posegen"
-CHECKS = {"check_seed", "check_count", "check_size"}
+CHECKS = {"check_seed", "check_count", "check_size", "check_within"}
 
 
 @pytest.mark.parametrize(
@@ -78,3 +79,10 @@ def test_a_script_reads_the_parameter_and_the_command_line_its_flag(tmp_path, ca
         route_postures_file(str(tmp_path / "selected.yaml"), str(out))
     assert main(["route", str(tmp_path / "selected.yaml"), "-q", "-o", str(out)]) == 2
     assert f"posegen: error: -o {out}: a route file ends in" in capsys.readouterr().err
+
+
+def test_a_session_name_is_a_printable_label_as_file_at_session_gives_one():
+    assert session_name("day 2/table B") == "day 2/table B"  # calibrate's FILE@day 2/table B names it too
+    for bad in ("", "   ", "a\nb", "tab\there"):
+        with pytest.raises(argparse.ArgumentTypeError, match="not a usable session name"):
+            session_name(bad)

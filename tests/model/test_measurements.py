@@ -46,6 +46,25 @@ def test_shifted_column_is_reported(scene, real_data, tmp_path):
     assert len(recording.rejected) == 1 and re.search(r"edited.csv:4: .* outside its limits", recording.rejected[0])
 
 
+def test_a_huge_angle_is_reported_in_a_few_digits(scene, real_data, tmp_path):
+    def huge(lines):
+        cells = lines[2].split(",")
+        cells[10] = "1e300"
+        lines[2] = ",".join(cells)
+        return lines
+
+    recording = read_measurements(_copy_with(tmp_path, huge, real_data), scene)
+    [message] = recording.rejected
+    assert re.search(r"edited.csv:3: \w+ = 1e\+300 rad is outside its limits", message) and len(message) < 250
+
+
+def test_a_folder_is_no_measurement_file(scene, tmp_path):
+    with pytest.raises(InputError, match=rf"^{re.escape(str(tmp_path))}: a folder, not a measurement file"):
+        read_measurements(tmp_path, scene)
+    with pytest.raises(InputError, match="measurement file not found"):
+        read_measurements(tmp_path / "nothing.yaml", scene)
+
+
 def test_text_in_an_angle_field_is_reported(scene, real_data, tmp_path):
     def text(lines):
         cells = lines[2].split(",")

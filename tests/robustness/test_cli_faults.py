@@ -106,6 +106,7 @@ CALIBRATION_FILES = {  # bad calibration.yaml files: input name
     "unknown candidate part": "calibration_bad_fit",
     "NaN prior scale": "calibration_nan_scale",
     "weakest chain not in the pool": "calibration_other_chain",
+    "another robot model's": "calibration_other_robot",
 }
 STAGE_PLANS = {**PLAN_FILES, "empty pool": "empty_pool", "posture outside the joint limits": "out_of_limits_pool"}
 
@@ -136,7 +137,12 @@ TABLE = [
     F("pool", "binary config", "--n", "3", "--config", "{binary}", "-o", "{out}/pool.yaml"),
     F("pool", "empty config", "--n", "3", "--config", "{empty}", "-o", "{out}/pool.yaml"),
     F("pool", "truncated config", "--n", "3", "--config", "{truncated_config}", "-o", "{out}/pool.yaml"),
-    F("pool", "a pool given as config", "--n", "3", "--config", "{pool}", "-o", "{out}/pool.yaml"),
+    F(
+        "pool",
+        "a pool given as config",
+        *("--n", "3", "--config", "{pool}", "-o", "{out}/pool.yaml"),
+        expect="a posegen-pool file, not a scene config",
+    ),
     F("pool", "NaN in config", "--n", "3", "--config", "{nan_config}", "-o", "{out}/pool.yaml"),
     F("pool", "huge chunk_size", "--n", "3", "--config", "{huge_chunk_config}", "-o", "{out}/pool.yaml"),
     F("pool", "unknown frame", "--n", "3", "--config", "{unknown_frame_config}", "-o", "{out}/pool.yaml"),
@@ -592,6 +598,8 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     put("calibration_nan_scale.yaml", report | {"model": report["model"] | {"prior_scale": float("nan")}})
     error = next(iter(report["model"]["predicted_error"].values()))
     put("calibration_other_chain.yaml", report | {"model": report["model"] | {"predicted_error": {"tail": error}}})
+    other_robot = report | {"provenance": report["provenance"] | {"robot_model_sha256": "0" * 64}}
+    put("calibration_other_robot.yaml", other_robot)
     damaged = folder / "damaged_calibration"
     shutil.copytree(calibration_folder.path, damaged)
     text = (damaged / "calibration.yaml").read_text()
