@@ -16,6 +16,7 @@ Each step is a function of what the previous ones made, testable alone; each rai
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
@@ -253,16 +254,22 @@ def read_srdf_states(model: pin.Model, files: RobotFiles) -> None:
     """Step 5a: the SRDF's group states, added to ``model.referenceConfigurations`` (none without an SRDF).
 
     Raises:
-        ConfigError: The SRDF is unreadable or malformed.
+        ConfigError: The SRDF is unreadable or malformed, or its states name none of the model's joints.
 
     """
     if files.srdf is None:
         return
-    read_text_file(files.srdf, ConfigError)  # a clear error for a binary or unreadable SRDF
+    text = read_text_file(files.srdf, ConfigError)  # a clear error for a binary or unreadable SRDF
     try:
+        named = {str(j.get("name")) for j in ET.fromstring(text).iter("joint") if j.get("name")}
         pin.loadReferenceConfigurations(model, str(files.srdf), False)
-    except (RuntimeError, ValueError) as exc:
+    except (ET.ParseError, RuntimeError, ValueError) as exc:
         raise ConfigError(f"cannot read SRDF {files.srdf}: {str(exc).strip().splitlines()[0]}") from exc
+    moving = {n for n, j in zip(model.names, model.joints, strict=True) if j.nq == 1}  # not the world, the free flyer
+    if named and not named & moving:
+        raise ConfigError(
+            f"SRDF {files.srdf} names none of this robot's joints (such as '{min(named)}'): another robot's SRDF?"
+        )
 
 
 def reference_configuration(model: pin.Model, stance: StanceConfig, joints: Joints) -> FloatArray:

@@ -414,6 +414,13 @@ TABLE = [
     F("robot", "init: --samples 0", "init", "talos", "--samples", "0", "-o", "{out}/c.yaml"),
     F("robot", "init: truncated --srdf", "init", "talos", "--srdf", "{truncated_srdf}", "-o", "{out}/c.yaml"),
     F("robot", "init: --srdf no SRDF", "init", "talos", "--srdf", "{not_srdf_txt}", "-o", "{out}/c.yaml"),
+    F(
+        "robot",
+        "init: another robot's SRDF",
+        *("init", "talos", "--srdf", "{other_robot_srdf}", "-o", "{out}/c.yaml"),
+        expect="names none of this robot's joints (such as 'wing_joint')",
+    ),
+    F("pool", "another robot's SRDF", "--n", "3", "--config", "{other_srdf_config}", "-o", "{out}/p.yaml"),
     F("pool", "two chains, one contact frame", "--n", "3", "--config", "{shared_frame_config}", "-o", "{out}/p.yaml"),
     F(
         "route",
@@ -577,6 +584,9 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     srdf = scene.files.srdf
     put("truncated.srdf", srdf.read_text()[:3000])
     put("not_srdf.txt", "hello\n")
+    state = '<group_state name="s" group="g"><joint name="wing_joint" value="0"/></group_state>'
+    put("other_robot.srdf", f'<?xml version="1.0"?>\n<robot name="bird">{state}</robot>\n')
+    put("other_srdf_config.yaml", config | {"robot": config["robot"] | {"srdf": made["other_robot_srdf"]}})
 
     pool_path = folder / "pool.yaml"
     selection = yaml.safe_load(pool_path.read_text())
