@@ -48,6 +48,7 @@ from posegen.model import LIMIT_TOLERANCE_RAD, ContactModel, Contacts, measureme
 from posegen.robot import FloatArray, Scene, load_config, scene_for
 
 TRUTH_FILE = "truth.yaml"  # a simulated session's true parameters, inside its bag folder
+MIN_RATE_HZ = 50.0  # a simulated recording's lowest rate: measure's joint speed spans 0.04 s (two samples)
 MAX_RATE_HZ = 2000.0  # a simulated recording's highest rate: twice a 1 kHz control loop; memory grows with it
 
 
@@ -116,7 +117,7 @@ def simulate_route_bag(
         error_deg: Sigma of placement angle errors (deg, clipped at 1.5 deg).
         noise_deg: Sigma of the encoder noise, per sample (deg).
         session: Table session (names the true plane).
-        rate_hz: Recording rate of the joint states and wrenches (Hz, at most ``MAX_RATE_HZ``).
+        rate_hz: Recording rate of the joint states and wrenches (Hz, from ``MIN_RATE_HZ`` to ``MAX_RATE_HZ``).
         joint_topic: Topic of the joint states.
         compliance_rad_per_knm: True compliance of the config's first compliance group.
         every_chain: The robot drawn with every chain of the config (the same robot for
@@ -134,7 +135,7 @@ def simulate_route_bag(
         error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
     )
     check_size(rate_hz, "rate_hz", positive=True)
-    check_within(rate_hz, "rate_hz", 0.0, MAX_RATE_HZ)
+    check_within(rate_hz, "rate_hz", MIN_RATE_HZ, MAX_RATE_HZ)
     bag_path = Path(bag)
     truth = bag_path / TRUTH_FILE
     check_writable(bag_path, OutputKind.FOLDER)

@@ -54,7 +54,7 @@ from posegen.model import (
 )
 from posegen.parallel import Backend
 from posegen.progress import ProgressCallback, ignore_progress
-from posegen.robot import PRIOR_SCALE_RANGE, CalibrationConfig, CandidateConfig, FloatArray, Scene
+from posegen.robot import MAX_FOLD_SEEDS, PRIOR_SCALE_RANGE, CalibrationConfig, CandidateConfig, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
 SELECTIONS = 2  # model selections at most: on the screened rows, then again if the chosen model flags more
@@ -109,7 +109,7 @@ def check_settings(settings: Settings) -> None:
     if settings.prior_scale is not None:
         check_within(settings.prior_scale, "prior_scale", *PRIOR_SCALE_RANGE)
     if settings.fold_seeds is not None:
-        check_count(settings.fold_seeds, "fold_seeds")
+        check_count(settings.fold_seeds, "fold_seeds", maximum=MAX_FOLD_SEEDS)
     check_seed(settings.seed, "seed")
 
 

@@ -94,16 +94,16 @@ def _stride(rate_hz: float) -> int:
     """Simulator steps per control period (the recording rate must divide the simulator's).
 
     Raises:
-        ArgumentError: A rate that is not 500 Hz divided by a whole number.
+        ArgumentError: A rate that is not 500 Hz divided by a whole number from 1 to 10.
 
     """
     check_size(rate_hz, "rate_hz", positive=True)
     stride = round(1.0 / (rate_hz * TIMESTEP_S))
-    if stride < 1 or abs(stride * rate_hz * TIMESTEP_S - 1.0) > 1e-9:
-        rates = ", ".join(f"{1.0 / (k * TIMESTEP_S):g}" for k in (1, 2, 4, 5))
+    if not 1 <= stride <= 10 or abs(stride * rate_hz * TIMESTEP_S - 1.0) > 1e-9:
+        rates = ", ".join(f"{1.0 / (k * TIMESTEP_S):g}" for k in (1, 2, 4, 5, 10))
         raise ArgumentError(
             f"rate_hz={rate_hz:g}: the physics controllers run at the recording rate, which must divide "
-            f"{1.0 / TIMESTEP_S:g} Hz ({rates}, ...)",
+            f"{1.0 / TIMESTEP_S:g} Hz, at least {1.0 / (10 * TIMESTEP_S):g} Hz ({rates})",
             parameter="rate_hz",
         )
     return stride

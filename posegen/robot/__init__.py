@@ -29,6 +29,7 @@ from posegen.robot.balance import (
     zmp_margins,
 )
 from posegen.robot.calibration_config import (
+    MAX_FOLD_SEEDS,
     PRIOR_SCALE_RANGE,
     CalibrationConfig,
     CandidateConfig,
@@ -148,6 +149,7 @@ __all__ = [
     "DEFAULT_KIND",
     "EXAMPLES",
     "FLUSH",
+    "MAX_FOLD_SEEDS",
     "MOMENT_ARM_M",
     "PACKAGE_URI",
     "POINT",

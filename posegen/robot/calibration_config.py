@@ -61,6 +61,8 @@ DEFAULT_CANDIDATES = (
 )
 
 
+MAX_FOLD_SEEDS = 1000  # repetitions of the cross-validation: its estimate settles long before
+MIN_PRIOR_SIGMA = 1e-6  # a prior sigma below it (in its kind's unit) is a weight LAPACK cannot factor
 PRIOR_SCALE_RANGE = (1e-3, 1e4)  # a prior scale's bounds: beyond them the prior is all or nothing, and LAPACK fails
 
 
@@ -138,10 +140,10 @@ def _probability(data: dict[str, Any], key: str, default: float, where: str) -> 
     return value
 
 
-def _integer(data: dict[str, Any], key: str, default: int, where: str, minimum: int) -> int:
+def _integer(data: dict[str, Any], key: str, default: int, where: str, minimum: int, maximum: int = 10**6) -> int:
     value = data.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ConfigError(f"{where}.{key}: expected an integer >= {minimum}, got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, int) or not minimum <= value <= maximum:
+        raise ConfigError(f"{where}.{key}: expected an integer from {minimum} to {maximum}, got {value!r}")
     return value
 
 
@@ -181,7 +183,7 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         compliance={str(g): tuple(v) for g, v in groups.items()},
         candidates=_candidates(data.get("candidates"), defaults.candidates, groups, f"{where}.candidates"),
         folds=_integer(data, "folds", defaults.folds, where, 2),
-        fold_seeds=_integer(data, "fold_seeds", defaults.fold_seeds, where, 1),
+        fold_seeds=_integer(data, "fold_seeds", defaults.fold_seeds, where, 1, MAX_FOLD_SEEDS),
         fold_iterations=_integer(data, "fold_iterations", defaults.fold_iterations, where, 1),
         target_error_mm=_number(data, "target_error_mm", defaults.target_error_mm, where),
         outlier_false_alarm=_probability(data, "outlier_false_alarm", defaults.outlier_false_alarm, where),
@@ -201,7 +203,11 @@ def _prior(data: Any, defaults: PriorConfig, where: str) -> PriorConfig:
     unknown = set(data) - set(fields)
     if unknown:
         raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: {', '.join(fields)}")
-    return PriorConfig(**{k: _number(data, k, getattr(defaults, k), where) for k in fields})
+    prior = {k: _number(data, k, getattr(defaults, k), where) for k in fields}
+    small = [k for k, v in prior.items() if v < MIN_PRIOR_SIGMA]
+    if small:
+        raise ConfigError(f"{where}.{small[0]}: expected a number >= {MIN_PRIOR_SIGMA:g}, got {prior[small[0]]!r}")
+    return PriorConfig(**prior)
 
 
 def _candidates(

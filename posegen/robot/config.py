@@ -9,6 +9,7 @@ robot model by :class:`posegen.robot.scene.Scene`.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
@@ -29,6 +30,8 @@ from posegen.robot.calibration_config import CalibrationConfig, calibration_to_d
 from posegen.robot.chain_config import CHAIN_DEFAULTS, ChainConfig, read_chain, require_distinct
 from posegen.robot.config_reader import Reader
 from posegen.robot.config_sections import (
+    FIELD_MAXIMA,
+    POSITIVE_FIELDS,
     MarginConfig,
     SamplingConfig,
     TableConfig,
@@ -316,24 +319,6 @@ def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:
 
 _Section = TypeVar("_Section", RouteConfig, RecordingConfig)
 
-# Fields a zero would divide by, or make the stage meaningless (a route of infinite seconds, a contact held at 0 N).
-_POSITIVE = frozenset(
-    {
-        "acceleration_limit_rad_s2",
-        "velocity_scale_free",
-        "velocity_scale_near",
-        "velocity_scale_contact",
-        "waypoint_step_rad",
-        "planning_checks",
-        "contact_force_n",
-        "force_threshold_n",
-        "speed_threshold_rad_s",
-        "speed_span_s",
-        "max_std_rad",
-        "match_tolerance_rad",
-    }
-)
-
 
 def _route(top: Reader) -> RouteConfig:
     """The ``route`` section; the velocity scales are fractions of the URDF's limits, at most 1."""
@@ -356,7 +341,7 @@ def _recording(top: Reader) -> RecordingConfig:
 def _section(top: Reader, key: str, defaults: _Section) -> _Section:
     """An optional section of numbers and flags; absent keys keep their defaults.
 
-    Every number is finite and >= 0; those a zero would divide by (``_POSITIVE``) are > 0.
+    Every number is finite and >= 0; those a zero would divide by (``POSITIVE_FIELDS``) are > 0.
     """
     if key not in top.data:
         return defaults
@@ -371,8 +356,10 @@ def _section(top: Reader, key: str, defaults: _Section) -> _Section:
             values[name] = flag
         else:
             values[name] = reader.number(name, default, minimum=0.0)
-            if name in _POSITIVE and values[name] == 0.0:
+            if name in POSITIVE_FIELDS and values[name] == 0.0:
                 raise ConfigError(f"{key}.{name}: must be > 0, got 0")
+            if values[name] > FIELD_MAXIMA.get(name, math.inf):
+                raise ConfigError(f"{key}.{name}: must be <= {FIELD_MAXIMA[name]:g}, got {values[name]:g}")
     unknown = set(reader.data) - set(fields)
     if unknown:
         raise ConfigError(f"{key}: unknown keys {sorted(unknown)}; valid keys: {', '.join(fields)}")

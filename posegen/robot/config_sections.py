@@ -11,6 +11,25 @@ from posegen.errors import ConfigError
 from posegen.robot.chain_config import ChainConfig
 from posegen.robot.config_reader import Reader
 
+# Route and recording fields a zero would divide by or make meaningless (a route of infinite seconds, a hold at 0 N).
+POSITIVE_FIELDS = frozenset(
+    [
+        "acceleration_limit_rad_s2",
+        "velocity_scale_free",
+        "velocity_scale_near",
+        "velocity_scale_contact",
+        "waypoint_step_rad",
+        "planning_checks",
+        "contact_force_n",
+        "force_threshold_n",
+        "speed_threshold_rad_s",
+        "speed_span_s",
+        "max_std_rad",
+        "match_tolerance_rad",
+    ]
+)
+FIELD_MAXIMA = {"hold_s": 600.0}  # s: a contact held longer is no calibration step (a route must end within 1e6 s)
+
 
 @dataclass(frozen=True)
 class TableConfig:

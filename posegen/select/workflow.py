@@ -29,6 +29,7 @@ from posegen.select.selection_file import (
 from posegen.select.subset_selection import Subset, subset_of
 
 LOG = logging.getLogger(__name__)
+MAX_RUNS = 10_000  # DETMAX restarts: each one a whole exchange search
 
 
 @dataclass(frozen=True)
@@ -80,7 +81,7 @@ def select_pool_file(
     k, runs, seed = settings.k, settings.runs, settings.seed
     if k is not None:
         check_count(k, "k")
-    check_count(runs, "runs", minimum=0)
+    check_count(runs, "runs", minimum=0, maximum=MAX_RUNS)
     check_seed(seed, "seed")
     path = Path(output)
     plots = [path.with_name(path.stem + "_o1.png"), path.with_name(path.stem + "_detmax.png")]

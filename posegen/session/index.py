@@ -17,13 +17,15 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from posegen.arguments import check_count, check_seed, check_size
+from posegen.arguments import check_count, check_seed, check_size, check_within
 from posegen.errors import InputError
 from posegen.io import write_yaml
+from posegen.robot import MAX_FOLD_SEEDS, PRIOR_SCALE_RANGE
 
 SESSION_FORMAT = "posegen-session"
 SESSION_VERSION = 1
 INDEX_FILE = "session.yaml"
+MAX_MARGIN = 10.0  # the first batch at most (1 + 10) x the fewest identifying postures
 ROUTE_BAG = "route_bag"  # each batch's route as a rosbag2, to play
 
 
@@ -200,13 +202,13 @@ def check_settings(settings: SessionSettings) -> None:
 
     """
     check_size(settings.target_mm, "target_mm", positive=True)
-    check_size(settings.margin, "margin")
+    check_within(settings.margin, "margin", 0.0, MAX_MARGIN)
     check_seed(settings.seed, "seed")
     check_count(settings.batch_postures, "batch_postures")
     if settings.fold_seeds is not None:
-        check_count(settings.fold_seeds, "fold_seeds")
+        check_count(settings.fold_seeds, "fold_seeds", maximum=MAX_FOLD_SEEDS)
     if settings.prior_scale is not None:
-        check_size(settings.prior_scale, "prior_scale", positive=True)
+        check_within(settings.prior_scale, "prior_scale", *PRIOR_SCALE_RANGE)
     check_count(settings.patience, "patience", minimum=0)
 
 

@@ -83,6 +83,7 @@ def test_the_same_seed_writes_the_same_bytes(physics_bag: Path, physics_route: P
         (["--physics"], "give --bag DIR"),
         (["--physics", "--bag", "X", "--contact-noise-mm", "1"], "--contact-noise-mm"),
         (["--physics", "--bag", "X", "--rate", "300"], "rate"),
+        (["--physics", "--bag", "X", "--rate", "0.001"], "at least 50 Hz"),  # 500 Hz / 500 000 steps: too slow
     ],
 )
 def test_bad_physics_options_fail_in_one_line(physics_route: Path, tmp_path: Path, argv: list[str], says: str) -> None:

@@ -173,6 +173,7 @@ TABLE = [
     F("select", "--k 0", "{pool}", "--k", "0", "-o", "{out}/sel.yaml"),
     F("select", "--k larger than the pool", "{pool}", "--k", "100000", "-o", "{out}/sel.yaml"),
     F("select", "negative --runs", "{pool}", "--runs", "-1", "-o", "{out}/sel.yaml"),
+    F("select", "--runs 1e9", "{pool}", "--runs", "1000000000", "-o", "{out}/sel.yaml", expect="from 0 to 10000"),
     F("select", "negative --seed", "{pool}", "--seed", "-3", "-o", "{out}/sel.yaml"),
     F("select", "--fraction NaN", "{pool}", "--fraction", "nan", "-o", "{out}/sel.yaml"),
     F("select", "--fraction 0", "{pool}", "--fraction", "0", "-o", "{out}/sel.yaml"),
@@ -291,6 +292,13 @@ TABLE = [
     F("calibrate", "negative --seed", "{measurements}", "--seed", "-1", *C, "-o", "{out}/cal"),
     F("calibrate", "--candidates unknown", "{measurements}", "--candidates", "nonsense", *C, "-o", "{out}/cal"),
     F("calibrate", "--fold-seeds 0", "{measurements}", "--fold-seeds", "0", *C, "-o", "{out}/cal"),
+    F("calibrate", "--fold-seeds 1e9", "{measurements}", "--fold-seeds", "1000000000", *C, "-o", "{out}/cal"),
+    F(
+        "calibrate",
+        "a prior sigma of 1e-300 in the config",
+        *("{measurements}", "--config", "{tiny_prior_config}", "-o", "{out}/cal"),
+        expect="calibration.prior.joint_offset_deg: expected a number >= 1e-06",
+    ),
     F("calibrate", "negative --fold-seeds", "{measurements}", "--fold-seeds", "-2", *C, "-o", "{out}/cal"),
     F("calibrate", "huge --seed", "{measurements}", "--seed", str(2**40), *C, "-o", "{out}/cal"),
     F("calibrate", "no training file", "--validate", "{measurements}", *C, "-o", "{out}/cal"),
@@ -379,7 +387,8 @@ TABLE = [
     F("simulate", "--bag of a binary file", "{binary}", "--bag", "{out}/bag"),
     F("simulate", "--bag --rate 0", "{route}", "--rate", "0", "--bag", "{out}/bag"),
     F("simulate", "--bag --rate NaN", "{route}", "--rate", "nan", "--bag", "{out}/bag"),
-    F("simulate", "--bag --rate 1e9", "{route}", "--rate", "1e9", "--bag", "{out}/bag", expect="from 0 to 2000"),
+    F("simulate", "--bag --rate 1e9", "{route}", "--rate", "1e9", "--bag", "{out}/bag", expect="from 50 to 2000"),
+    F("simulate", "--bag --rate 0.001", "{route}", "--rate", "0.001", "--bag", "{out}/bag", expect="from 50 to 2000"),
     F(
         "simulate",
         "--bag --joint-topic a wrist's topic",
@@ -428,6 +437,12 @@ TABLE = [
         *("{pool}", "--config", "{zero_step_config}", "-o", "{out}/route.yaml"),
         expect="route.waypoint_step_rad: must be > 0",
     ),
+    F(
+        "route",
+        "route.hold_s 1e9 in the config",
+        *("{pool}", "--config", "{huge_hold_config}", "-o", "{out}/route.yaml"),
+        expect="route.hold_s: must be <= 600",
+    ),
     F("robot", "init: negative --seed", "init", "talos", "--seed", "-1", "-o", "{out}/c.yaml"),
     F("robot", "init: no name", "init", "-o", "{out}/c.yaml"),
     *bad_outputs("robot", "init", "talos"),
@@ -445,6 +460,8 @@ TABLE = [
     *[F("session", f"start: {what}", "start", f"{{{name}}}", "-o", "{out}/s") for what, name in STAGE_PLANS.items()],
     F("session", "start: --target-mm 0", "start", "{pool}", "--target-mm", "0", "-o", "{out}/s"),
     F("session", "start: negative --margin", "start", "{pool}", "--margin", "-1", "-o", "{out}/s"),
+    F("session", "start: --margin 1e9", "start", "{pool}", "--margin", "1e9", "-o", "{out}/s", expect="from 0 to 10"),
+    F("session", "start: --fold-seeds 1e9", "start", "{pool}", "--fold-seeds", "1000000000", "-o", "{out}/s"),
     F("session", "start: --batch 0", "start", "{pool}", "--batch", "0", "-o", "{out}/s"),
     F("session", "start: negative --patience", "start", "{pool}", "--patience", "-1", "-o", "{out}/s"),
     F("session", "start: unknown candidate", "start", "{pool}", "--candidates", "nonsense", "-o", "{out}/s"),
@@ -581,6 +598,10 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     shared["chains"]["right"]["contact_frame"] = shared["chains"]["left"]["contact_frame"]
     put("shared_frame_config.yaml", shared)
     put("zero_step_config.yaml", config | {"route": {"waypoint_step_rad": 0}})
+    put("huge_hold_config.yaml", config | {"route": {"hold_s": 1e9}})
+    tiny = _config_data()
+    tiny["calibration"]["prior"] = {"joint_offset_deg": 1e-300}
+    put("tiny_prior_config.yaml", tiny)
     srdf = scene.files.srdf
     put("truncated.srdf", srdf.read_text()[:3000])
     put("not_srdf.txt", "hello\n")

@@ -80,7 +80,7 @@ def test_a_batch_whose_bag_to_play_was_removed_is_refused(tmp_path):
         (lambda d: d.update(batches=[]), r"batches: expected the list of batches"),
         (lambda d: d["settings"].update(batch_postures="ten"), r"settings\.batch_postures must be an integer"),
         (lambda d: d["settings"].update(target_mm=-1.0), r"settings\.target_mm must be > 0"),
-        (lambda d: d["settings"].update(margin=-0.5), r"settings\.margin must be >= 0"),
+        (lambda d: d["settings"].update(margin=-0.5), r"settings\.margin must be a number from 0 to 10"),
         (lambda d: d["settings"].update(seed="four"), r"settings\.seed must be an integer"),
         (lambda d: d["settings"].pop("joint_topic"), r"settings\.joint_topic: missing"),
         (lambda d: d.pop("settings"), r"settings: missing"),
