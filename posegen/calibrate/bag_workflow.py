@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from posegen.arguments import check_seed, check_size, check_within
+from posegen.arguments import check_seed, check_within
 from posegen.calibrate.contact_windows import (
     PlannedContact,
     Rejection,
@@ -134,7 +134,6 @@ def simulate_route_bag(
     perturbation = perturbation_of(
         error_mm, error_deg, noise_deg, compliance_rad_per_knm, contact_noise_mm, contact_noise_deg
     )
-    check_size(rate_hz, "rate_hz", positive=True)
     check_within(rate_hz, "rate_hz", MIN_RATE_HZ, MAX_RATE_HZ)
     bag_path = Path(bag)
     truth = bag_path / TRUTH_FILE

@@ -46,14 +46,20 @@ def test_shifted_column_is_reported(scene, real_data, tmp_path):
     assert len(recording.rejected) == 1 and re.search(r"edited.csv:4: .* outside its limits", recording.rejected[0])
 
 
-def test_a_huge_angle_is_reported_in_a_few_digits(scene, real_data, tmp_path):
-    def huge(lines):
+def _angle_field(text):
+    """An edit of the CSV's second data row: its tenth field becomes ``text``."""
+
+    def put(lines):
         cells = lines[2].split(",")
-        cells[10] = "1e300"
+        cells[10] = text
         lines[2] = ",".join(cells)
         return lines
 
-    recording = read_measurements(_copy_with(tmp_path, huge, real_data), scene)
+    return put
+
+
+def test_a_huge_angle_is_reported_in_a_few_digits(scene, real_data, tmp_path):
+    recording = read_measurements(_copy_with(tmp_path, _angle_field("1e300"), real_data), scene)
     [message] = recording.rejected
     assert re.search(r"edited.csv:3: \w+ = 1e\+300 rad is outside its limits", message) and len(message) < 250
 
@@ -66,13 +72,7 @@ def test_a_folder_is_no_measurement_file(scene, tmp_path):
 
 
 def test_text_in_an_angle_field_is_reported(scene, real_data, tmp_path):
-    def text(lines):
-        cells = lines[2].split(",")
-        cells[10] = "handle"
-        lines[2] = ",".join(cells)
-        return lines
-
-    recording = read_measurements(_copy_with(tmp_path, text, real_data), scene)
+    recording = read_measurements(_copy_with(tmp_path, _angle_field("handle"), real_data), scene)
     assert recording.rejected == (
         f"{tmp_path / 'edited.csv'}:3: angle field 'handle' is not a number (shifted column?)",
     )
