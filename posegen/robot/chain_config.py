@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 from posegen.errors import ConfigError
 from posegen.io import topic_name_problem
@@ -70,13 +70,21 @@ def _point(ch: Reader, key: str) -> tuple[float, float, float] | None:
 
 
 def read_chain(ch: Reader, name: str) -> ChainConfig:
-    """One chain: its frames, the contacts its hand makes, the spots it serves."""
+    """One chain: its frames, the contacts its hand makes, the spots it serves.
+
+    Raises:
+        ConfigError: An unknown key, a malformed field or a fingertip frame listed twice.
+
+    """
+    ch.keys_within(tuple(f.name for f in fields(ChainConfig) if f.name != "name"))
     try:
         kind = kind_named(ch.text("contact_kind", DEFAULT_KIND.value))
     except ValueError as exc:
         raise ConfigError(f"chains.{name}.contact_kind: {exc}") from exc
     point = ch.text("point_frame", "") if "point_frame" in ch.data else ""
     tips = ch.texts("fingertip_frames", [])
+    if len(set(tips)) != len(tips):
+        raise ConfigError(f"chains.{name}.fingertip_frames: a frame is listed twice: {list(tips)}")
     cone = ch.number("point_cone_deg", 30.0, minimum=0.0)
     chain = ChainConfig(
         name=name,

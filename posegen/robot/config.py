@@ -214,6 +214,7 @@ def parse_config(data: Any, source_path: str = "") -> Config:
 
     """
     top = Reader(data, "")
+    top.keys_within(TOP_KEYS)
     robot = top.sub("robot")
     source = read_source(robot.sub("source"), source_path)
     robot.keys_within(("source", "locked_joints", "frames", "velocity_limits_rad_s", "collision"))
@@ -280,9 +281,10 @@ def read_stance(st: Reader) -> StanceConfig:
         ConfigError: Not exactly two sole frames, or a malformed field.
 
     """
+    st.keys_within(tuple(f.name for f in dataclasses.fields(StanceConfig)))
     soles = st.texts("sole_frames")
-    if len(soles) != 2:
-        raise ConfigError("stance.sole_frames: expected exactly two sole frames")
+    if len(soles) != 2 or soles[0] == soles[1]:
+        raise ConfigError(f"stance.sole_frames: expected two different sole frames, got {soles}")
     return StanceConfig(
         reference_posture=str(st.raw("reference_posture", "") or ""),
         sole_frames=(soles[0], soles[1]),
@@ -316,6 +318,9 @@ def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:
     roll, pitch, yaw = stance.numbers("root_rpy_deg", 3)
     return (roll, pitch, yaw)
 
+
+TOP_KEYS = ("robot", "stance", "chains", "table", "margins", "sampling", "route", "recording", "calibration")
+"""The sections of a config file (a misspelt one would otherwise be ignored)."""
 
 _Section = TypeVar("_Section", RouteConfig, RecordingConfig)
 

@@ -5,7 +5,7 @@ Read and validated by :func:`posegen.robot.config.parse_config` (which re-export
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 from posegen.errors import ConfigError
 from posegen.robot.chain_config import ChainConfig
@@ -74,6 +74,7 @@ def read_table(tb: Reader, chains: tuple[ChainConfig, ...]) -> TableConfig:
         ConfigError: A size not positive, a spot off the table or one no chain's ``spot_y_range_m`` covers.
 
     """
+    tb.keys_within(tuple(f.name for f in fields(TableConfig)))
     size = tb.numbers("size_m", 3)
     if min(size) <= 0:
         raise ConfigError("table.size_m: every dimension must be positive")
@@ -144,6 +145,7 @@ def _fraction(reader: Reader, key: str, default: float) -> float:
 
 def read_sampling(sp: Reader) -> SamplingConfig:
     """The ``sampling`` section."""
+    sp.keys_within(tuple(f.name for f in fields(SamplingConfig)))
     return SamplingConfig(
         soft_iterations=sp.integer("soft_iterations"),
         hard_iterations=sp.integer("hard_iterations"),

@@ -115,8 +115,8 @@ def check_names(model: pin.Model, config: Config) -> None:
     """Step 2: every frame the chains and the stance name, and every link of ``robot.collision``, exists.
 
     Raises:
-        ConfigError: A name the model lacks (the valid ones suggested), or a contact frame
-            posegen would add that the model already has.
+        ConfigError: A name the model lacks (the valid ones suggested), a contact frame
+            posegen would add that the model already has, or a chain's sole the robot does not stand on.
 
     """
     for chain in config.chains:
@@ -139,6 +139,12 @@ def check_names(model: pin.Model, config: Config) -> None:
         for frame in frames:
             _named_frame(model, frame, f"stance.{field}")
     check_link_names(model, config.collision)
+    for chain in config.chains:
+        if chain.sole_frame not in config.stance.sole_frames:
+            raise ConfigError(
+                f"chains.{chain.name}.sole_frame: '{chain.sole_frame}' is not one of stance.sole_frames "
+                f"({', '.join(config.stance.sole_frames)})"
+            )
 
 
 def _named_frame(model: pin.Model, name: str, field: str) -> None:

@@ -58,7 +58,7 @@ def test_malformed_additions_name_their_field(edit, message):
         (lambda d: d["robot"].update(velocity_limits_rad_s={"neck_joint": 1.0}), r"unknown joint 'neck_joint'.*rad_s"),
         (lambda d: d["robot"].update(collision={"disabled_pairs": [["base_link", "hat"]]}), r"unknown link 'hat'"),
         (lambda d: d["stance"].update(reference_joints={"knee": 0.1}), r"unknown joint 'knee'.*reference_joints"),
-        (lambda d: d["stance"].update(sole_frames=["leg_left_3_link", "leg_right_3_link"]), "is not under the robot"),
+        (lambda d: _stand_on(d, "leg_left_3_link", "leg_right_3_link"), "is not under the robot"),
         (lambda d: d["stance"].update(reference_joints={"leg_left_4_joint": 1.2}), "not on one floor"),
         (lambda d: d["table"].update(top_center_m=[0.65, 0.0, 2.5]), r"^table\.top_center_m: out of reach"),
     ],
@@ -126,3 +126,9 @@ def test_example_robot_data_names_and_srdf():
     unknown = dataclasses.replace(config, robot=dataclasses.replace(config.robot, example_robot_data="talosfull"))
     with pytest.raises(ConfigError, match=r"unknown example-robot-data robot 'talosfull'; .*; did you mean talos_full"):
         Scene(unknown)
+
+
+def _stand_on(data, left, right):
+    """The stance and both chains on these two frames."""
+    data["stance"]["sole_frames"] = [left, right]
+    data["chains"]["left"]["sole_frame"], data["chains"]["right"]["sole_frame"] = left, right

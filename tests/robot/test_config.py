@@ -137,7 +137,7 @@ def test_read_stance_and_chains_keep_the_files_order():
     stance = read_stance(Reader(data["stance"], "stance"))
     assert stance.sole_frames == tuple(data["stance"]["sole_frames"]) and stance.root_rpy_deg is None
     data["stance"]["sole_frames"] *= 2
-    with pytest.raises(ConfigError, match=r"^stance\.sole_frames: expected exactly two"):
+    with pytest.raises(ConfigError, match=r"^stance\.sole_frames: expected two different sole frames"):
         read_stance(Reader(data["stance"], "stance"))
     data["chains"] = dict(reversed(data["chains"].items()))
     assert [c.name for c in read_chains(Reader(data, ""))] == list(data["chains"]) == ["right", "left"]
@@ -238,3 +238,44 @@ def test_the_foot_rectangle_s_centre_and_half_sizes(config):
     hx, hy = config.stance.foot_half_m
     assert (cx - hx, cx + hx) == pytest.approx((x0, x1)) and (cy - hy, cy + hy) == pytest.approx((y0, y1))
     assert hx > 0 and hy > 0
+
+
+@pytest.mark.parametrize(
+    ("section", "message"),
+    [
+        ((), r"^config: unknown keys \['tabel'\]; valid keys: robot, stance"),
+        (("table",), r"^table: unknown keys \['tabel'\]; valid keys: top_center_m"),
+        (("sampling",), r"^sampling: unknown keys \['tabel'\]; valid keys: soft_iterations"),
+        (("stance",), r"^stance: unknown keys \['tabel'\]; valid keys: reference_posture"),
+        (("chains", "left"), r"^chains\.left: unknown keys \['tabel'\]; valid keys: sole_frame"),
+    ],
+)
+def test_a_misspelt_key_is_refused_in_every_section(section, message):
+    data = raw()
+    node = data
+    for key in section:
+        node = node[key]
+    node["tabel"] = 1.0
+    with pytest.raises(ConfigError, match=message):
+        parse_config(data)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d["stance"].update(sole_frames=["left_sole_link"] * 2), r"^stance\.sole_frames: expected two"),
+        (
+            lambda d: d["chains"]["left"].update(fingertip_frames=["gripper_left_fingertip_1_link"] * 3),
+            r"^chains\.left\.fingertip_frames: a frame is listed twice",
+        ),
+        (
+            lambda d: d["chains"]["left"].update(sole_frame="arm_left_7_link"),
+            r"^chains\.left\.sole_frame: 'arm_left_7_link' is not one of stance\.sole_frames",
+        ),
+    ],
+)
+def test_frames_a_chain_or_the_stance_repeat_or_do_not_stand_on_are_refused(edit, message):
+    data = raw()
+    edit(data)
+    with pytest.raises(ConfigError, match=message):
+        Scene(parse_config(data))
