@@ -87,6 +87,7 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
         if name not in names:
             raise ArgumentError(f"candidates: {unknown_name('candidate model', name, names)}", parameter="candidates")
     pool_abs = str(Path(pool_path).resolve())
+    created = not folder.exists()
     with claim_output(folder, OutputKind.FOLDER):
         try:
             write_yaml(folder / CONFIG_FILE, scene.config.to_dict())
@@ -95,6 +96,8 @@ def start_session(pool_path: str, output: str, settings: SessionSettings, backen
         except BaseException:  # nothing of a first batch is kept: the same command starts it again
             shutil.rmtree(folder / batch_folder(1), ignore_errors=True)
             (folder / CONFIG_FILE).unlink(missing_ok=True)
+            if created and folder.is_dir() and not any(folder.iterdir()):
+                folder.rmdir()  # nor the folder this start made
             raise
         batch = replace(batch, files={**batch.files, CONFIG_FILE: sha256_of(folder / CONFIG_FILE)})
         index = SessionIndex(scene.provenance(settings.seed), pool_abs, sha256_of(Path(pool_abs)), settings, (batch,))

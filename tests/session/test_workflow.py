@@ -197,6 +197,23 @@ def test_start_refuses_a_folder_that_holds_a_session(started, backend):
         start_session(read_index(started).pool, str(started), SETTINGS, backend)
 
 
+def test_a_start_that_fails_leaves_no_folder_and_keeps_one_it_was_given(started, backend, tmp_path, monkeypatch):
+    import posegen.session.workflow as workflow
+
+    def unroutable(*args, **kwargs):
+        raise InfeasibleError("no route")
+
+    monkeypatch.setattr(workflow, "route_batch", unroutable)
+    pool = read_index(started).pool
+    with pytest.raises(InfeasibleError, match="no route"):
+        start_session(pool, str(tmp_path / "new"), SETTINGS, backend)
+    assert not (tmp_path / "new").exists()
+    (tmp_path / "given").mkdir()
+    with pytest.raises(InfeasibleError, match="no route"):
+        start_session(pool, str(tmp_path / "given"), SETTINGS, backend)
+    assert (tmp_path / "given").is_dir() and not any((tmp_path / "given").iterdir())
+
+
 def test_killed_while_planning_the_next_batch_the_same_add_finishes_it(
     started, rehearsed, backend, tmp_path, monkeypatch
 ):
