@@ -12,6 +12,7 @@ from posegen.cli.options import JOINT_STATES_TOPIC, positive_size, seed, session
 from posegen.cli.progress import ProgressBar
 
 KINEMATIC_RATE_HZ = 500.0  # the default rate of a kinematic recording (simulate --bag)
+MEASUREMENTS_FILE = "plans/sim/measurements.yaml"  # the default output without --bag
 
 NAME = "simulate"
 HELP = "contacts of a perturbed robot at planned postures, or its recorded run of a route (--bag)"
@@ -46,7 +47,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=0.0,
         help="sigma of each contact's local table roll and pitch, deg (default 0; the real recordings: ~0.3)",
     )
-    parser.add_argument("-o", "--output", default="plans/sim/measurements.yaml", help="measurement file")
+    parser.add_argument(
+        "-o", "--output", default=None, help=f"measurement file, without --bag (default {MEASUREMENTS_FILE})"
+    )
     bag = parser.add_argument_group("recorded session (a route run by the perturbed robot)")
     bag.add_argument("--bag", metavar="DIR", help="write the session as a rosbag2 (MCAP); truth in DIR/truth.yaml")
     bag.add_argument(
@@ -55,9 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="joint state and wrench rate in Hz (default 500; with --physics 250: its controllers run at this rate)",
     )
-    bag.add_argument(
-        "--joint-topic", default=JOINT_STATES_TOPIC, help=f"JointState topic (default {JOINT_STATES_TOPIC})"
-    )
+    bag.add_argument("--joint-topic", default=None, help=f"JointState topic (default {JOINT_STATES_TOPIC})")
     bag.add_argument(
         "--physics",
         action="store_true",
@@ -70,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
     """Simulate, write the measurements (or the bag) and the truth, and say where."""
     from posegen.calibrate import simulate_postures_file, simulate_route_bag
 
+    _check_options(args)
+    topic = JOINT_STATES_TOPIC if args.joint_topic is None else args.joint_topic
     robot = {
         "config_path": args.config,
         "seed": args.seed,
@@ -85,18 +88,34 @@ def run(args: argparse.Namespace) -> int:
         return _physics(args)
     if args.bag:
         rate = args.rate or KINEMATIC_RATE_HZ
-        recorded = simulate_route_bag(args.postures, args.bag, rate_hz=rate, joint_topic=args.joint_topic, **robot)
+        recorded = simulate_route_bag(args.postures, args.bag, rate_hz=rate, joint_topic=topic, **robot)
         print(
             f"simulate: {recorded.contacts} contacts, {recorded.duration_s:.1f} s recorded at {rate:g} Hz "
             f"({recorded.samples} joint states) -> {recorded.bag}/ (true parameters: {recorded.truth})"
         )
         return 0
-    simulated = simulate_postures_file(args.postures, args.output, **robot)
+    simulated = simulate_postures_file(args.postures, args.output or MEASUREMENTS_FILE, **robot)
     print(
         f"simulate: {simulated.contacts} contacts of a perturbed robot -> {simulated.measurements} "
         f"(true parameters: {simulated.truth})"
     )
     return 0
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse an option the chosen simulation would ignore (it would otherwise go unnoticed)."""
+    from posegen.errors import ArgumentError
+
+    if args.bag and args.output is not None:
+        raise ArgumentError(
+            "-o/--output is the measurement file of a simulation without --bag; --bag writes DIR (truth in "
+            "DIR/truth.yaml): drop -o",
+            parameter="output",
+        )
+    if not args.bag:
+        for flag, value in (("--rate", args.rate), ("--joint-topic", args.joint_topic)):
+            if value is not None:
+                raise ArgumentError(f"{flag} is an option of a recorded session: give --bag DIR, or drop {flag}")
 
 
 def _physics(args: argparse.Namespace) -> int:
@@ -120,7 +139,7 @@ def _physics(args: argparse.Namespace) -> int:
         noise_deg=args.noise_deg,
         session=args.session,
         rate_hz=args.rate or PHYSICS_RATE_HZ,
-        joint_topic=args.joint_topic,
+        joint_topic=JOINT_STATES_TOPIC if args.joint_topic is None else args.joint_topic,
         compliance_rad_per_knm=args.compliance,
         glued_feet=args.glued_feet,
     )

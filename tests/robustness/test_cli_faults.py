@@ -404,6 +404,9 @@ TABLE = [
     F("simulate", "--bag a folder that is no bag", "{route}", "--bag", "{out}"),
     F("simulate", "--bag unwritable", "{route}", "--bag", f"{UNWRITABLE}/bag"),
     F("simulate", "--bag being written", "{route}", "--bag", "{out}/bag", locked="{out}/bag"),
+    F("simulate", "--bag with -o", "{route}", "--bag", "{out}/bag", "-o", "{out}/m.yaml", expect="drop -o"),
+    F("simulate", "--rate without --bag", "{pool}", "--rate", "100", *C, "-o", "{out}/m.yaml", expect="give --bag"),
+    F("simulate", "--joint-topic without --bag", "{pool}", "--joint-topic", "/j", *C, "-o", "{out}/m.yaml"),
     # measure
     F("measure", "a binary file", "{binary}", "-o", "{out}/m.yaml"),
     F("measure", "a folder that is no bag", "{out}", "-o", "{out}/m.yaml"),
