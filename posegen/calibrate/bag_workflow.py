@@ -251,7 +251,8 @@ def measure_bag(
 
     Raises:
         PosegenError: Not a readable rosbag2, a missing topic or a message of another type,
-            joints the robot does not have, or no contact window.
+            joints the robot does not have, a route other than the one a simulated bag ran, or no
+            contact window.
 
     """
     if route_path is None and not use_wrench:
@@ -265,6 +266,13 @@ def measure_bag(
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
     scene = Scene(load_config(config_path))
     planned_motion = None if route_path is None else _route(route_path, scene)[0]
+    route_sha = ((recorded.provenance or {}).get("simulation") or {}).get("route_sha256")
+    if route_path is not None and route_sha and route_sha != _sha256(route_path):
+        raise InputError(
+            f"{bag}: a recording of another route than {route_path} (posegen simulated it from a route of sha256 "
+            f"{str(route_sha)[:12]}): give that route",
+            parameter="route_path",
+        )
     topics = wrench_topics(scene, measuring=True) if use_wrench else {}
     with claim_output(output):
         joints, wrenches, digest = recorded.read_and_hash(joint_topic, list(topics.values()))

@@ -418,6 +418,12 @@ TABLE = [
     F("measure", "--no-wrench without --route", "{bag}", "--no-wrench", "-o", "{out}/m.yaml"),
     F("measure", "binary --route", "{bag}", "--route", "{binary}", "-o", "{out}/m.yaml"),
     F("measure", "binary config", "{bag}", "--config", "{binary}", "-o", "{out}/m.yaml"),
+    F(
+        "measure",
+        "--route not the one the simulated bag ran",
+        *("{other_route_bag}", "--route", "{route}", "-o", "{out}/m.yaml"),
+        expect="a recording of another route than",
+    ),
     F("measure", "empty --session", "{bag}", "--session", " ", "-o", "{out}/m.yaml"),
     *bad_outputs("measure", "{bag}"),
     # robot init and robot pairs (issue 12), and configs whose additions to the description are wrong
@@ -535,6 +541,9 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     joints = JointStates(("j_a", "j_b"), times, np.outer(times, [1.0, -1.0]))
     write_recording(bag, joints, "/joint_states", {"/ft": wrench}, {"seed": 0})
     made["bag"] = str(bag)
+    simulated = {"simulation": {"route_sha256": "0" * 64}}  # posegen simulated it from another route
+    write_recording(folder / "other_route_bag", joints, "/joint_states", {"/ft": wrench}, simulated)
+    made["other_route_bag"] = str(folder / "other_route_bag")
     for name, edit in (("truncated_bag", "truncate"), ("unknown_storage_bag", "storage")):
         copy = folder / name
         shutil.copytree(bag, copy)
