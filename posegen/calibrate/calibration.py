@@ -57,6 +57,7 @@ from posegen.progress import ProgressCallback, ignore_progress
 from posegen.robot import MAX_FOLD_SEEDS, PRIOR_SCALE_RANGE, CalibrationConfig, CandidateConfig, FloatArray, Scene
 
 LOG = logging.getLogger(__name__)
+SAME_POSTURE_RAD = 1e-3  # rows no joint of which differs by more (rad): one posture (a contact window's own spread)
 SELECTIONS = 2  # model selections at most: on the screened rows, then again if the chosen model flags more
 
 
@@ -177,7 +178,7 @@ def check_enough(
 
     Raises:
         InputError: Fewer contact equations than parameters without a prior, or a chain
-            with fewer than two spots (nothing to hold out).
+            with fewer than two spots (nothing to hold out) or whose rows hold one posture.
 
     """
     planes = 3 * len(set(contacts.sessions))
@@ -195,6 +196,13 @@ def check_enough(
             raise InputError(
                 f"chain '{chain}' has {len(spots)} usable spot(s){_files_of([label for _, label in mine])}"
                 f"{_left_out(left_out)}: cross-validation needs at least 2"
+            )
+        joints = contacts.joints[[i for i, c in enumerate(contacts.chains) if c == chain]]  # (n, nj) rad
+        if np.abs(joints - joints[0]).max() <= SAME_POSTURE_RAD:
+            raise InputError(
+                f"chain '{chain}': its {len(joints)} usable rows{_files_of([label for _, label in mine])} hold one "
+                f"posture (no joint differs by more than {SAME_POSTURE_RAD:g} rad): they identify nothing of its "
+                "kinematics; record contacts at different postures"
             )
 
 

@@ -213,8 +213,9 @@ def _number(value: Any) -> float | None:
 
 
 def _components(raw: dict[str, Any]) -> Components:
+    """Height, roll, pitch errors; a height written as null (a file no cross-validation scored) reads as nan."""
     z, roll, pitch = COMPONENTS
-    return Components(float(raw[z]), _number(raw[roll]), _number(raw[pitch]))
+    return Components(float("nan") if raw[z] is None else float(raw[z]), _number(raw[roll]), _number(raw[pitch]))
 
 
 def _errors(raw: dict[str, Any]) -> ErrorFigures:

@@ -8,6 +8,8 @@ for the eye: a file's CV-predicted error and its error as a stack loading it see
 
 from __future__ import annotations
 
+import math
+
 from posegen.calibrate.deliverables import DeliverableKind
 from posegen.calibrate.model_selection import NOMINAL as NOMINAL_CANDIDATE
 from posegen.calibrate.summary import CalibrationSummary, Components, DeliverableSummary, FileFigures, SetFigures
@@ -34,7 +36,10 @@ def _by_chain(figures: dict[str, Components], counts: dict[str, int] | None = No
 def figure_lines(figures: FileFigures, indent: str = "    ") -> list[str]:
     """A file's CV-predicted error per chain and, with held-out contacts, its held-out error per chain."""
     predicted = {c: e.mean_abs for c, e in figures.predicted_error.items()}
-    lines = [f"{indent}predicted held-out (grouped CV)  {_by_chain(predicted)}"]
+    if all(math.isnan(e.z_mm) for e in predicted.values()):  # left out of the rules: its fit is implausible
+        lines = [f"{indent}predicted held-out (grouped CV)  not scored: its fit on every row is implausible"]
+    else:
+        lines = [f"{indent}predicted held-out (grouped CV)  {_by_chain(predicted)}"]
     held = {c: s for c, s in figures.held_out.items() if c != "all"}
     if held:
         shown = _by_chain({c: s.mean_abs for c, s in held.items()}, {c: s.contacts for c, s in held.items()})

@@ -78,6 +78,21 @@ def test_a_point_contact_s_roll_and_pitch_are_none(calibration_folder, tmp_path)
     assert np.isfinite(error.mean_abs.z_mm)
 
 
+def test_a_nominal_urdf_no_cross_validation_scored_is_read_and_said_so(calibration_folder, tmp_path):
+    data = yaml.safe_load((calibration_folder.path / "calibration.yaml").read_text())
+    nominal = data["deliverables"]["nominal_urdf"]  # an implausible fit: score inf, its errors written as null
+    nominal |= {"score": float("inf"), "se": float("inf")}
+    for error in nominal["predicted_error"].values():
+        for key in ("mean_abs", "rms"):
+            error[key] = dict.fromkeys(error[key])
+    write_yaml(tmp_path / "calibration.yaml", data)
+    summary = read_summary(tmp_path / "calibration.yaml")
+    assert all(np.isnan(e.mean_abs.z_mm) for e in summary.nominal.predicted_error.values())
+    lines = file_lines(summary)
+    at = lines.index("  the nominal URDF (for comparison; not written):")
+    assert lines[at + 1] == "    predicted held-out (grouped CV)  not scored: its fit on every row is implausible"
+
+
 @pytest.mark.parametrize(
     ("edit", "message"),
     [

@@ -329,6 +329,13 @@ TABLE = [
         "{out}/cal",
         expect="(one_spot_measurements.yaml:0, one_spot_measurements.yaml:2, one_spot_measurements.yaml:4 and 3 more)",
     ),
+    F(
+        "calibrate",
+        "every row of a chain at one posture",
+        *("{one_posture_measurements}", *C, "-o", "{out}/cal"),
+        expect="its 6 usable rows (one_posture_measurements.yaml:0, one_posture_measurements.yaml:2, "
+        "one_posture_measurements.yaml:4 and 3 more) hold one posture",
+    ),
     F("calibrate", "output is a file", "{measurements}", *C, "-o", "{existing}"),
     F("calibrate", "output folder holds other files", "{measurements}", *C, "-o", "{out}", expect="not replacing it"),
     F("calibrate", "unwritable output", "{measurements}", *C, "-o", f"{UNWRITABLE}/cal"),
@@ -592,6 +599,8 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     put("kneeling_measurements.yaml", measurements_to_dict(scene, bent, scene.provenance(0)))
     one_spot = Contacts(clean, chains, ("s",) * 12, ("spot",) * 12)
     put("one_spot_measurements.yaml", measurements_to_dict(scene, one_spot, scene.provenance(0)))
+    one_posture = Contacts(clean, chains, ("s",) * 12, tuple(f"c{i}" for i in range(12)))
+    put("one_posture_measurements.yaml", measurements_to_dict(scene, one_posture, scene.provenance(0)))
     frames = config["robot"] | {"frames": {"tip": {"parent": "no_such_link", "xyz_m": [0.0, 0.0, 0.0]}}}
     put("bad_frame_config.yaml", config | {"robot": frames})
     frames = config["robot"] | {"frames": {"tip": {"parent": "arm_left_7_link", "xyz_m": [0.0, 0.0]}}}
