@@ -24,6 +24,7 @@ from posegen.calibrate.contact_windows import (
     Window,
     find_windows,
     match_windows,
+    still_shares,
 )
 from posegen.calibrate.simulated_recording import Motion, SensorSettings, route_motion, simulate_recording
 from posegen.calibrate.stream_topics import check_stream_topics, wrench_topics
@@ -282,7 +283,7 @@ def measure_bag(
         if not found.accepted:
             rejected = found.rejected
             first = f"; first rejected: {rejected[0].start_s:.2f} s, {rejected[0].reason}" if rejected else ""
-            raise InputError(f"{bag}: no contact window found ({len(rejected)} rejected{first})")
+            raise InputError(f"{bag}: no contact window found ({len(rejected)} rejected{first}; {found.shares})")
         name = session or Path(bag).resolve().name
         duration = float(joints.times_s[-1] - joints.times_s[0])
         prov = scene.provenance(None)
@@ -311,6 +312,7 @@ class _Found:
     joints: FloatArray  # (n, nj) rad: each accepted window's angles in the robot's order
     rejected: tuple[Rejection, ...]  # by time
     tools: tuple[ToolGravity, ...]  # each wrist's tool model (none without wrench topics)
+    shares: str  # without an accepted window: how much of the recording was still and pressed (for the message)
 
 
 def _contact_windows(
@@ -336,7 +338,8 @@ def _contact_windows(
         windows = match_windows(windows, planned, settings.match_tolerance_rad, rejected, heights, settings.match_ratio)
     accepted, full = _within_limits(scene, windows, columns, base, rejected)
     rejected.sort(key=lambda r: r.start_s)
-    return _Found(tuple(accepted), np.array(full), tuple(rejected), tools)
+    shares = "" if accepted else still_shares(joints.times_s, joints.positions, forces, settings)
+    return _Found(tuple(accepted), np.array(full), tuple(rejected), tools, shares)
 
 
 def _measurements(scene: Scene, found: _Found, bag: str, session: str, provenance: dict[str, Any]) -> dict[str, Any]:

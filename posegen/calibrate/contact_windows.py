@@ -78,6 +78,32 @@ def joint_speed(times: FloatArray, positions: FloatArray, span_s: float, block: 
     return speed
 
 
+def still_shares(
+    times: FloatArray, positions: FloatArray, forces: Mapping[str, FloatArray] | None, settings: RecordingConfig
+) -> str:
+    """Why a recording may hold no window: the share of samples still, pressed, and both (for a message).
+
+    Args:
+        times: (n,) s, increasing.
+        positions: (n, nj) rad.
+        forces: Per chain, the force magnitude (n,) in N at ``times``; None without a wrench topic.
+        settings: Thresholds.
+
+    """
+    still = joint_speed(times, positions, settings.speed_span_s) < settings.speed_threshold_rad_s
+    shares = (
+        f"the joints still in {still.mean():.0%} of the samples (their speed over recording.speed_span_s "
+        f"{settings.speed_span_s:g} s below recording.speed_threshold_rad_s)"
+    )
+    if forces:
+        pressed = np.logical_or.reduce([force > settings.force_threshold_n for force in forces.values()])
+        shares += (
+            f", a wrist above recording.force_threshold_n in {pressed.mean():.0%}, both at once in "
+            f"{(still & pressed).mean():.0%}"
+        )
+    return shares
+
+
 def wrist_force(times: FloatArray, wrench_times: FloatArray, forces: FloatArray) -> FloatArray:
     """Force magnitude (n,) in N at ``times``, each component's offset (its median over the session) removed."""
     magnitude = np.linalg.norm(forces - np.median(forces, axis=0), axis=1)

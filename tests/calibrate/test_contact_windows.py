@@ -1,9 +1,18 @@
 """Contact windows on synthetic sessions whose contacts, pauses and faults are known."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from posegen.calibrate.contact_windows import PlannedContact, find_windows, joint_speed, match_windows, wrist_force
+from posegen.calibrate.contact_windows import (
+    PlannedContact,
+    find_windows,
+    joint_speed,
+    match_windows,
+    still_shares,
+    wrist_force,
+)
 from posegen.robot import RecordingConfig
 
 RATE = 500.0
@@ -157,3 +166,14 @@ def test_a_stabilized_hold_beyond_the_tolerance_holds_its_unambiguous_contact():
     accepted = match_windows(windows, planned, SETTINGS.match_tolerance_rad, rejected, ratio=SETTINGS.match_ratio)
     assert [(w.label, w.chain, w.start_s) for w in accepted] == [("p0", "left", 1.0), ("p1", "right", 3.0)]
     assert [r.reason for r in rejected] == reasons[2:]
+
+
+def test_the_shares_of_still_and_pressed_samples_explain_a_recording_without_windows():
+    times, positions, forces, _, _ = synthetic(CLEAN)  # per contact 5 s: 3 s still, pressed 2 s of them
+    assert still_shares(times, positions, forces, SETTINGS) == (
+        "the joints still in 60% of the samples (their speed over recording.speed_span_s 0.04 s below "
+        "recording.speed_threshold_rad_s), a wrist above recording.force_threshold_n in 40%, both at once in 40%"
+    )
+    narrow = dataclasses.replace(SETTINGS, speed_span_s=1e-6)  # one sample period: the encoder noise is a speed
+    assert find_windows(times, positions, forces, narrow)[0] == []
+    assert still_shares(times, positions, None, narrow).startswith("the joints still in 0% of the samples")
