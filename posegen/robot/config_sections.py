@@ -28,7 +28,10 @@ POSITIVE_FIELDS = frozenset(
         "match_tolerance_rad",
     ]
 )
-FIELD_MAXIMA = {"hold_s": 600.0}  # s: a contact held longer is no calibration step (a route must end within 1e6 s)
+FIELD_MAXIMA = {
+    "hold_s": 600.0,  # s: a contact held longer is no calibration step (a route must end within 1e6 s)
+    "waypoint_step_rad": 0.2,  # rad: beyond it, a hand 0.6 m from its shoulder moves 12 cm between collision checks
+}
 
 
 @dataclass(frozen=True)

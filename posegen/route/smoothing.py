@@ -104,7 +104,7 @@ def blend_corners(
     """
     path, keep, labels = list(path), list(keep), list(labels)
     for k in reversed(corners(path, space.scene.velocity_limit)):  # from the end: earlier indices stay valid
-        if keep[k]:
+        if k >= len(path) - 1 or keep[k]:  # past the end: a later blend of fewer waypoints took this corner in
             continue
         before = next((i for i in range(k - 1, -1, -1) if keep[i]), -1)  # the window may reach, not pass, a kept point
         after = next((i for i in range(k + 1, len(path)) if keep[i]), len(path))

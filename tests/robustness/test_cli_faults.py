@@ -459,6 +459,12 @@ TABLE = [
         *("{pool}", "--config", "{huge_hold_config}", "-o", "{out}/route.yaml"),
         expect="route.hold_s: must be <= 600",
     ),
+    F(
+        "route",
+        "route.waypoint_step_rad 100 in the config",
+        *("{pool}", "--config", "{huge_step_config}", "-o", "{out}/route.yaml"),
+        expect="route.waypoint_step_rad: must be <= 0.2, got 100",
+    ),
     F("robot", "init: negative --seed", "init", "talos", "--seed", "-1", "-o", "{out}/c.yaml"),
     F("robot", "init: no name", "init", "-o", "{out}/c.yaml"),
     *bad_outputs("robot", "init", "talos"),
@@ -620,6 +626,7 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     put("shared_frame_config.yaml", shared)
     put("zero_step_config.yaml", config | {"route": {"waypoint_step_rad": 0}})
     put("huge_hold_config.yaml", config | {"route": {"hold_s": 1e9}})
+    put("huge_step_config.yaml", config | {"route": {"waypoint_step_rad": 100}})
     tiny = _config_data()
     tiny["calibration"]["prior"] = {"joint_offset_deg": 1e-300}
     put("tiny_prior_config.yaml", tiny)

@@ -1,9 +1,11 @@
 """Shortcuts and blends: shorter and rounder, every new state valid, kept waypoints untouched."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from posegen.robot import CollisionChecker, Projector, StanceSpace
+from posegen.robot import CollisionChecker, Projector, Scene, StanceSpace
 from posegen.route import blend_corners, corners, path_length, shortcut, through, vertical_paths
 from tests.conftest import DETOUR_ROWS
 
@@ -50,3 +52,15 @@ def test_blends_round_the_corners_outside_the_kept_waypoints(scene, detour):
     assert "blend" in new_labels
     assert all(space.is_valid(q, None) for q in blended)
     assert np.abs(np.diff(np.array(blended), axis=0)).max() <= scene.route.waypoint_step_rad * (1 + 1e-6)
+
+
+def test_a_blend_that_takes_later_corners_in_leaves_them_alone(config, detour):
+    _, path = detour
+    coarse = Scene(dataclasses.replace(config, route=dataclasses.replace(config.route, waypoint_step_rad=100.0)))
+    zigzag = [path[i] for i in (0, 30, 60, 40, 90, len(path) - 1)]  # a corner at every inner waypoint
+    assert corners(zigzag, coarse.velocity_limit) == [1, 2, 3, 4]
+    space = StanceSpace(coarse, CollisionChecker(coarse, convex=True))  # a blend is two waypoints: the path shrinks
+    blended, keep, labels = blend_corners(space, zigzag, [False] * 6, ["a"] * 6, "blend")
+    assert len(blended) == len(keep) == len(labels) < 6  # was an IndexError on the corners the first blend took in
+    assert np.array_equal(blended[0], zigzag[0]) and np.array_equal(blended[-1], zigzag[-1])
+    assert all(space.is_valid(q, None) for q in blended)
