@@ -85,7 +85,9 @@ def plot_cross_validation(
     chosen_point = next(p for p in curves[chosen[0]] if p["prior_scale"] == chosen[1])
     ax.plot([chosen[1]], [chosen_point["score"]], "k*", markersize=14, label="chosen (one-SE rule)")
     ax.set_xscale("log")
-    ax.set_yscale("log")
+    scores = np.array([p["score"] for points in curves.values() for p in points])
+    if np.any(np.isfinite(scores) & (scores > 0)):  # all zero or unscored (a degenerate design): a linear axis
+        ax.set_yscale("log")
     ax.set_xlabel("prior scale (x the kind sigmas)")
     ax.set_ylabel("CV score: mean of (z/1 mm)^2 + (roll/0.1 deg)^2 + (pitch/0.1 deg)^2")
     ax.grid(alpha=0.3, which="both")
