@@ -62,6 +62,9 @@ CHAIN_DEFAULTS = {
 }
 
 
+MAX_FINGERTIP_M = 0.3  # m: a fingertip link's origin to its end (TALOS: 0.03); longer is no fingertip
+
+
 def _point(ch: Reader, key: str) -> tuple[float, float, float] | None:
     if ch.raw(key, None) is None:
         return None
@@ -91,7 +94,7 @@ def read_chain(ch: Reader, name: str) -> ChainConfig:
         sole_frame=ch.text("sole_frame"),
         gripper_frame=ch.text("gripper_frame"),
         fingertip_frames=tips,
-        fingertip_length_m=ch.number("fingertip_length_m", 0.0, minimum=0.0),
+        fingertip_length_m=ch.number("fingertip_length_m", 0.0, minimum=0.0, maximum=MAX_FINGERTIP_M),
         contact_frame=ch.text("contact_frame") if tips else str(ch.raw("contact_frame", "") or ""),
         spot_y_range_m=ch.interval("spot_y_range_m"),
         recorded_as=ch.text("recorded_as", name),

@@ -288,8 +288,8 @@ def read_stance(st: Reader) -> StanceConfig:
     return StanceConfig(
         reference_posture=str(st.raw("reference_posture", "") or ""),
         sole_frames=(soles[0], soles[1]),
-        foot_x_m=st.interval("foot_x_m"),
-        foot_y_m=st.interval("foot_y_m"),
+        foot_x_m=st.interval("foot_x_m", MAX_FOOT_M),
+        foot_y_m=st.interval("foot_y_m", MAX_FOOT_M),
         floor_contact_frames=st.texts("floor_contact_frames"),
         reference_joints=st.angles("reference_joints"),
         root_rpy_deg=_root_rpy(st),
@@ -318,6 +318,8 @@ def _root_rpy(stance: Reader) -> tuple[float, float, float] | None:
     roll, pitch, yaw = stance.numbers("root_rpy_deg", 3)
     return (roll, pitch, yaw)
 
+
+MAX_FOOT_M = 0.5  # m: a sole rectangle reaches at most this far from its sole frame (a humanoid's foot: ~0.1-0.15)
 
 TOP_KEYS = ("robot", "stance", "chains", "table", "margins", "sampling", "route", "recording", "calibration")
 """The sections of a config file (a misspelt one would otherwise be ignored)."""

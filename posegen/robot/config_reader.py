@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from posegen.arguments import is_finite_number
@@ -43,13 +44,15 @@ class Reader:
         """A non-empty string, or None when absent or null."""
         return None if self.raw(key, None) is None else self.text(key)
 
-    def number(self, key: str, default: Any = ..., minimum: float | None = None) -> float:
-        """A finite number, at least ``minimum`` if given."""
+    def number(self, key: str, default: Any = ..., minimum: float | None = None, maximum: float | None = None) -> float:
+        """A finite number, at least ``minimum`` and at most ``maximum`` if given."""
         value = self.raw(key, default)
         if not is_finite_number(value):
             raise ConfigError(f"{self._path(key)}: expected a finite number, got {value!r}")
         if minimum is not None and value < minimum:
             raise ConfigError(f"{self._path(key)}: must be >= {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise ConfigError(f"{self._path(key)}: must be <= {maximum:g}, got {value:g}")
         return float(value)
 
     def integer(self, key: str, default: Any = ..., minimum: int = 1, maximum: int = 1_000_000) -> int:
@@ -75,11 +78,13 @@ class Reader:
             raise ConfigError(f"{self._path(key)}: expected a list of names, got {value!r}")
         return tuple(value)
 
-    def interval(self, key: str) -> tuple[float, float]:
-        """Two numbers ``[low, high]`` with low < high."""
+    def interval(self, key: str, bound: float = math.inf) -> tuple[float, float]:
+        """Two numbers ``[low, high]`` with low < high, each within ``bound`` of zero."""
         low, high = self.numbers(key, 2)
         if low >= high:
             raise ConfigError(f"{self._path(key)}: expected [low, high] with low < high")
+        if max(abs(low), abs(high)) > bound:
+            raise ConfigError(f"{self._path(key)}: expected values within {bound:g} of 0, got [{low:g}, {high:g}]")
         return low, high
 
     def angles(self, key: str) -> dict[str, float]:

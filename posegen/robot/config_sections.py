@@ -84,7 +84,7 @@ def read_table(tb: Reader, chains: tuple[ChainConfig, ...]) -> TableConfig:
     top_center = tb.numbers("top_center_m", 3)
     table = TableConfig(
         top_center_m=(top_center[0], top_center[1], top_center[2]),
-        yaw_deg=tb.number("yaw_deg", 0.0),
+        yaw_deg=tb.number("yaw_deg", 0.0, minimum=-360.0, maximum=360.0),
         size_m=(size[0], size[1], size[2]),
         spots_x_m=tb.numbers("spots_x_m"),
         spots_y_m=tb.numbers("spots_y_m"),

@@ -116,7 +116,8 @@ def check_names(model: pin.Model, config: Config) -> None:
 
     Raises:
         ConfigError: A name the model lacks (the valid ones suggested), a contact frame
-            posegen would add that the model already has, or a chain's sole the robot does not stand on.
+            posegen would add that the model already has, a fingertip the gripper does not
+            carry, or a chain's sole the robot does not stand on.
 
     """
     for chain in config.chains:
@@ -140,11 +141,25 @@ def check_names(model: pin.Model, config: Config) -> None:
             _named_frame(model, frame, f"stance.{field}")
     check_link_names(model, config.collision)
     for chain in config.chains:
+        for field, frames in (("fingertip_frames", chain.fingertip_frames), ("point_frame", [chain.point_frame])):
+            for frame in (f for f in frames if f and not _carried_by(model, f, chain.gripper_frame)):
+                raise ConfigError(
+                    f"chains.{chain.name}.{field}: '{frame}' is not carried by the chain's gripper_frame "
+                    f"'{chain.gripper_frame}' (another arm's?)"
+                )
         if chain.sole_frame not in config.stance.sole_frames:
             raise ConfigError(
                 f"chains.{chain.name}.sole_frame: '{chain.sole_frame}' is not one of stance.sole_frames "
                 f"({', '.join(config.stance.sole_frames)})"
             )
+
+
+def _carried_by(model: pin.Model, frame: str, carrier: str) -> bool:
+    """Whether ``frame`` moves with ``carrier``: its joint is ``carrier``'s or one after it."""
+    joint, above = (model.frames[model.getFrameId(name)].parentJoint for name in (frame, carrier))
+    while joint > above:
+        joint = model.parents[joint]
+    return bool(joint == above)
 
 
 def _named_frame(model: pin.Model, name: str, field: str) -> None:

@@ -272,6 +272,11 @@ def test_a_misspelt_key_is_refused_in_every_section(section, message):
             lambda d: d["chains"]["left"].update(sole_frame="arm_left_7_link"),
             r"^chains\.left\.sole_frame: 'arm_left_7_link' is not one of stance\.sole_frames",
         ),
+        (
+            lambda d: d["chains"]["left"].update(fingertip_frames=d["chains"]["right"]["fingertip_frames"]),
+            r"^chains\.left\.fingertip_frames: 'gripper_right_fingertip_1_link' is not carried by the chain's "
+            r"gripper_frame 'gripper_left_base_link' \(another arm's\?\)$",
+        ),
     ],
 )
 def test_frames_a_chain_or_the_stance_repeat_or_do_not_stand_on_are_refused(edit, message):
@@ -279,3 +284,22 @@ def test_frames_a_chain_or_the_stance_repeat_or_do_not_stand_on_are_refused(edit
     edit(data)
     with pytest.raises(ConfigError, match=message):
         Scene(parse_config(data))
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda d: d["stance"].update(foot_x_m=[-10.0, 10.0]), r"^stance\.foot_x_m: expected values within 0\.5 of 0"),
+        (lambda d: d["stance"].update(foot_y_m=[-0.06, 0.9]), r"^stance\.foot_y_m: expected values within 0\.5 of 0"),
+        (lambda d: d["table"].update(yaw_deg=1e30), r"^table\.yaw_deg: must be <= 360, got 1e\+30"),
+        (
+            lambda d: d["chains"]["left"].update(fingertip_length_m=10),
+            r"^chains\.left\.fingertip_length_m: must be <= 0\.3",
+        ),
+    ],
+)
+def test_implausible_sizes_are_refused(edit, message):
+    data = raw()
+    edit(data)
+    with pytest.raises(ConfigError, match=message):
+        parse_config(data)
