@@ -48,7 +48,7 @@ def find_up(
 
     Raises:
         ConfigError: No axis along which two branches of one joint, alike in mass, reach the
-            floor (one leg, no legs).
+            floor (one leg, no legs), or an axis along which four or more do (a quadruped).
 
     """
     data = model.createData()
@@ -67,12 +67,17 @@ def find_up(
             lowest = {b: min(_heights(model, data, set(subtree(b)))) for b in range(2, model.njoints)}
             floor = min(lowest[b] for b in children[1])
             reaching = reaching_branches(children, lowest, floor)
+            name = f"{'+' if sign > 0 else '-'}{'xyz'[axis]}"
+            if len(reaching) >= 4 and _alike(model, subtree, reaching):
+                raise ConfigError(
+                    f"{label}: {len(reaching)} limbs alike in mass reach the floor along the root's {name} axis: "
+                    "a robot on four legs, not a humanoid; posegen needs a humanoid with two legs"
+                )
             if len(reaching) != 2 or not _alike(model, subtree, reaching):
                 continue
             if model.parents[reaching[0]] != 1 and len(upper_branches(model, children, reaching)) < 2:
                 continue  # legs below the root leave the arms: else a legless model stands on its arms
             com = float(pin.centerOfMass(model, data, qq)[2]) - floor
-            name = f"{'+' if sign > 0 else '-'}{'xyz'[axis]}"
             if best is None or com > best[0]:
                 best = (com, root, name)
     if best is None:

@@ -467,6 +467,7 @@ TABLE = [
     ),
     F("robot", "init: negative --seed", "init", "talos", "--seed", "-1", "-o", "{out}/c.yaml"),
     F("robot", "init: no name", "init", "-o", "{out}/c.yaml"),
+    F("robot", "init: a quadruped", "init", "a1", "-o", "{out}/c.yaml", expect="a1: 4 limbs alike in mass reach the"),
     *bad_outputs("robot", "init", "talos"),
     F("robot", "pairs: missing config", "pairs", "{out}/nothing.yaml"),
     F("robot", "pairs: binary config", "pairs", "{binary}"),
