@@ -278,13 +278,14 @@ def read_stance(st: Reader) -> StanceConfig:
     """The ``stance`` section.
 
     Raises:
-        ConfigError: Not exactly two sole frames, or a malformed field.
+        ConfigError: Not two different sole frames, an unknown key, a malformed field or a sole
+            rectangle beyond ``MAX_FOOT_M`` of its frame.
 
     """
     st.keys_within(tuple(f.name for f in dataclasses.fields(StanceConfig)))
     soles = st.texts("sole_frames")
     if len(soles) != 2 or soles[0] == soles[1]:
-        raise ConfigError(f"stance.sole_frames: expected two different sole frames, got {soles}")
+        raise ConfigError(f"stance.sole_frames: expected two different sole frames, got {list(soles)}")
     return StanceConfig(
         reference_posture=str(st.raw("reference_posture", "") or ""),
         sole_frames=(soles[0], soles[1]),
