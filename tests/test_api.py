@@ -73,7 +73,7 @@ def _defaults(command: str) -> dict[str, object]:
     [
         ("generate_pool", "pool", {"n": "n", "seed": "seed"}),
         ("plan_route", "route", {"seed": "seed", "csv": "csv"}),
-        ("simulate_recording", "simulate", {"session": "session", "joint_topic": "joint_topic"}),
+        ("simulate_recording", "simulate", {"session": "session"}),
         ("measure", "measure", {"joint_topic": "joint_topic", "session": "session"}),
         ("export_route", "export", {"topic": "topic", "segments_topic": "segments_topic"}),
     ],
@@ -86,12 +86,18 @@ def test_the_api_defaults_are_the_command_lines(function, command, pairs):
 
 
 def test_the_recording_rate_is_the_command_line_s_kinematic_one():
-    """``simulate --rate`` defaults by mode (500 Hz recorded, 250 Hz with --physics); the API records kinematically."""
+    """``simulate --rate`` defaults by mode (500 Hz recorded, 250 Hz with --physics); the API records kinematically.
+
+    ``--joint-topic``, an option of ``--bag`` like ``--rate``, is None unless given; it then means the API's topic.
+    """
+    from posegen.cli.options import JOINT_STATES_TOPIC
     from posegen.cli.simulate import KINEMATIC_RATE_HZ
 
     parameters = inspect.signature(posegen.api.simulate_recording).parameters
     assert _defaults("simulate")["rate"] is None
     assert parameters["rate_hz"].default == KINEMATIC_RATE_HZ
+    assert _defaults("simulate")["joint_topic"] is None  # an option of --bag: None tells it was not given
+    assert parameters["joint_topic"].default == JOINT_STATES_TOPIC
 
 
 def test_a_simulated_robot_has_the_command_lines_defaults():
