@@ -267,8 +267,9 @@ def measure_bag(
     recorded = RecordedBag(bag)  # checked first: a bad bag is the likeliest mistake, and cheap to find
     scene = Scene(load_config(config_path))
     planned_motion = None if route_path is None else _route(route_path, scene)[0]
+    route_digest = _sha256(route_path) if route_path else None
     route_sha = ((recorded.provenance or {}).get("simulation") or {}).get("route_sha256")
-    if route_path is not None and route_sha and route_sha != _sha256(route_path):
+    if route_sha and route_digest and route_sha != route_digest:
         raise InputError(
             f"{bag}: a recording of another route than {route_path} (posegen simulated it from a route of sha256 "
             f"{str(route_sha)[:12]}): give that route",
@@ -295,7 +296,7 @@ def measure_bag(
             "topics": {"joint_states": joint_topic, "wrenches": topics},
             "thresholds": dataclasses.asdict(scene.config.recording),
             "route": route_path,
-            "route_sha256": _sha256(route_path) if route_path else None,
+            "route_sha256": route_digest,
             "joint_states": {"samples": len(joints.times_s), "duration_s": duration},
             "joints_not_recorded": absent,
             "tool_gravity": {tool.chain: _tool_fields(tool) for tool in found.tools},

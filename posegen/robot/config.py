@@ -9,7 +9,6 @@ robot model by :class:`posegen.robot.scene.Scene`.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
@@ -363,14 +362,10 @@ def _section(top: Reader, key: str, defaults: _Section) -> _Section:
                 raise ConfigError(f"{key}.{name}: expected true or false, got {flag!r}")
             values[name] = flag
         else:
-            values[name] = reader.number(name, default, minimum=0.0)
+            values[name] = reader.number(name, default, minimum=0.0, maximum=FIELD_MAXIMA.get(name))
             if name in POSITIVE_FIELDS and values[name] == 0.0:
                 raise ConfigError(f"{key}.{name}: must be > 0, got 0")
-            if values[name] > FIELD_MAXIMA.get(name, math.inf):
-                raise ConfigError(f"{key}.{name}: must be <= {FIELD_MAXIMA[name]:g}, got {values[name]:g}")
-    unknown = set(reader.data) - set(fields)
-    if unknown:
-        raise ConfigError(f"{key}: unknown keys {sorted(unknown)}; valid keys: {', '.join(fields)}")
+    reader.keys_within(tuple(fields))
     return dataclasses.replace(defaults, **values)
 
 
