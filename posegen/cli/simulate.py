@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         "contact_noise_deg": args.contact_noise_deg,
     }
     if args.physics or args.glued_feet:
-        return _physics(args)
+        return _physics(args, topic)
     if args.bag:
         rate = args.rate or KINEMATIC_RATE_HZ
         recorded = simulate_route_bag(args.postures, args.bag, rate_hz=rate, joint_topic=topic, **robot)
@@ -118,8 +118,11 @@ def _check_options(args: argparse.Namespace) -> None:
                 raise ArgumentError(f"{flag} is an option of a recorded session: give --bag DIR, or drop {flag}")
 
 
-def _physics(args: argparse.Namespace) -> int:
-    """``--physics``: rehearse the route in MuJoCo, write the bag, its truth and physics.yaml, and say how it went."""
+def _physics(args: argparse.Namespace, topic: str) -> int:
+    """``--physics``: rehearse the route in MuJoCo, write the bag, its truth and physics.yaml, and say how it went.
+
+    ``topic``: the bag's JointState topic.
+    """
     from posegen.errors import ArgumentError
 
     if not args.physics:
@@ -139,7 +142,7 @@ def _physics(args: argparse.Namespace) -> int:
         noise_deg=args.noise_deg,
         session=args.session,
         rate_hz=args.rate or PHYSICS_RATE_HZ,
-        joint_topic=JOINT_STATES_TOPIC if args.joint_topic is None else args.joint_topic,
+        joint_topic=topic,
         compliance_rad_per_knm=args.compliance,
         glued_feet=args.glued_feet,
     )

@@ -12,7 +12,9 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
+from posegen.arguments import is_finite_number
 from posegen.errors import ConfigError
+from posegen.robot.config_reader import Reader
 
 PARTS = ("leg", "torso", "arm", "*")
 KINDS = ("joint_offset", "axis_tilt", "link_translation", "frame_rotation", "*")
@@ -95,9 +97,7 @@ def parse_candidate(name: str, data: Any, where: str, groups: dict[str, Any]) ->
     """
     if not isinstance(data, dict):
         raise ConfigError(f"{where}: expected a mapping with fit, floor, compliance")
-    unknown = set(data) - {"fit", "floor", "compliance"}
-    if unknown:
-        raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: fit, floor, compliance")
+    Reader(data, where).keys_within(("fit", "floor", "compliance"))
     patterns = data.get("fit")
     if not isinstance(patterns, list) or not all(isinstance(p, str) for p in patterns):
         raise ConfigError(f"{where}.fit: expected a list of part.kind patterns")
@@ -126,10 +126,11 @@ def parse_candidate(name: str, data: Any, where: str, groups: dict[str, Any]) ->
     return CandidateConfig(name, tuple(patterns), floor, tuple(compliance))
 
 
-def _number(data: dict[str, Any], key: str, default: float, where: str, positive: bool = True) -> float:
+def _number(data: dict[str, Any], key: str, default: float, where: str) -> float:
+    """A finite number > 0 (NaN and infinity refused: no threshold or sigma means them)."""
     value = data.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or (positive and value <= 0):
-        raise ConfigError(f"{where}.{key}: expected a {'positive ' if positive else ''}number, got {value!r}")
+    if not is_finite_number(value) or value <= 0:
+        raise ConfigError(f"{where}.{key}: expected a positive finite number, got {value!r}")
     return float(value)
 
 
@@ -159,10 +160,7 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
     if not isinstance(data, dict):
         raise ConfigError(f"{where}: expected a mapping")
     defaults = CalibrationConfig()
-    valid = [f.name for f in dataclasses.fields(CalibrationConfig)]
-    unknown = set(data) - set(valid)
-    if unknown:
-        raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: {', '.join(valid)}")
+    Reader(data, where).keys_within(tuple(f.name for f in dataclasses.fields(CalibrationConfig)))
     prior = _prior(data.get("prior", {}), defaults.prior, f"{where}.prior")
     scales = data.get("prior_scales", list(defaults.prior_scales))
     low, high = PRIOR_SCALE_RANGE
@@ -199,10 +197,8 @@ def _prior(data: Any, defaults: PriorConfig, where: str) -> PriorConfig:
     """The ``prior`` mapping kind -> sigma; absent kinds keep ``defaults``."""
     if not isinstance(data, dict):
         raise ConfigError(f"{where}: expected a mapping kind -> sigma")
-    fields = [f.name for f in dataclasses.fields(PriorConfig)]
-    unknown = set(data) - set(fields)
-    if unknown:
-        raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; valid keys: {', '.join(fields)}")
+    fields = tuple(f.name for f in dataclasses.fields(PriorConfig))
+    Reader(data, where).keys_within(fields)
     prior = {k: _number(data, k, getattr(defaults, k), where) for k in fields}
     small = [k for k, v in prior.items() if v < MIN_PRIOR_SIGMA]
     if small:

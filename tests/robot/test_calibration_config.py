@@ -20,3 +20,34 @@ def test_the_outlier_false_alarm_rate_is_a_probability(value):
 
 def test_a_probability_is_accepted():
     assert parse_calibration({"outlier_false_alarm": 0.01}).outlier_false_alarm == 0.01
+
+
+@pytest.mark.parametrize(
+    ("data", "where"),
+    [
+        ({"target_error_mm": float("nan")}, r"calibration\.target_error_mm"),
+        ({"plausible_mm": float("inf")}, r"calibration\.plausible_mm"),
+        ({"feet_tolerance_deg": float("nan")}, r"calibration\.feet_tolerance_deg"),
+        ({"prior": {"joint_offset_deg": float("nan")}}, r"calibration\.prior\.joint_offset_deg"),
+    ],
+)
+def test_a_threshold_or_sigma_is_finite(data, where):
+    """NaN passed ``value <= 0`` and was taken: every comparison with it is false (no fit implausible, say)."""
+    with pytest.raises(ConfigError, match=where + r": expected a positive finite number"):
+        parse_calibration(data)
+
+
+@pytest.mark.parametrize(
+    ("data", "where"),
+    [
+        ({"fold": 3}, r"^calibration: unknown keys \['fold'\]; valid keys: prior, "),
+        ({"prior": {"joint_offset": 0.1}}, r"^calibration\.prior: unknown keys \['joint_offset'\]"),
+        (
+            {"candidates": {"a": {"fit": ["arm.*"], "flor": True}}},
+            r"^calibration\.candidates\.a: unknown keys \['flor'\]",
+        ),
+    ],
+)
+def test_a_misspelt_key_is_named(data, where):
+    with pytest.raises(ConfigError, match=where):
+        parse_calibration(data)
