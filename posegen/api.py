@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from posegen.arguments import check_path, check_paths, check_type
 from posegen.calibrate import (
     CALIBRATION_FORMAT,
     Calibrated,
@@ -38,7 +39,7 @@ from posegen.calibrate import (
     simulate_route_bag,
 )
 from posegen.calibrate import Settings as CalibrationSettings
-from posegen.errors import InputError
+from posegen.errors import ArgumentError, InputError
 from posegen.io import POOL_FORMAT, ROUTE_FORMAT, SELECTION_FORMAT, Pool, Route, load_pool, read_route, read_yaml
 from posegen.model import MEASUREMENT_FORMAT, Measurements, read_measurements
 from posegen.parallel import Backend
@@ -98,7 +99,7 @@ def load_scene(config: str | Path = DEFAULT_CONFIG) -> Scene:
         >>> scene.joint_names[:2]
 
     """
-    return Scene(load_config(config))
+    return Scene(load_config(check_path(config, "config")))
 
 
 def load(path: str | Path) -> Pool | Selection[Any] | Route | Measurements | CalibrationSummary:
@@ -115,7 +116,7 @@ def load(path: str | Path) -> Pool | Selection[Any] | Route | Measurements | Cal
         >>> len(pool.postures)
 
     """
-    where = Path(path)
+    where = Path(check_path(path, "path"))
     if where.is_dir():
         return read_summary(where / CALIBRATION_FILE)
     header = read_yaml(where, (POOL_FORMAT, SELECTION_FORMAT, ROUTE_FORMAT, MEASUREMENT_FORMAT, CALIBRATION_FORMAT))
@@ -143,7 +144,9 @@ def generate_pool(
         >>> pool.postures[0].chain
 
     """
-    return generate_pool_file(str(config), str(output), n=n, seed=seed, workers=workers)
+    return generate_pool_file(
+        check_path(config, "config"), check_path(output, "output"), n=n, seed=seed, workers=workers
+    )
 
 
 def check_pool(pool: str | Path, *, config: str | Path | None = None, workers: int | Backend = 1) -> Verification:
@@ -154,7 +157,7 @@ def check_pool(pool: str | Path, *, config: str | Path | None = None, workers: i
         True
 
     """
-    return check_pool_file(str(pool), _optional(config), workers=workers)
+    return check_pool_file(check_path(pool, "pool"), _optional(config), workers=workers)
 
 
 def select_postures(
@@ -173,7 +176,12 @@ def select_postures(
         40
 
     """
-    return select_pool_file(str(pool), str(output), settings, _optional(config))
+    return select_pool_file(
+        check_path(pool, "pool"),
+        check_path(output, "output"),
+        check_type(settings, SelectionSettings, "settings"),
+        _optional(config),
+    )
 
 
 def follow_up(
@@ -193,10 +201,10 @@ def follow_up(
 
     """
     return follow_up_pool_file(
-        str(pool),
-        str(output),
-        [str(g) for g in given],
-        _optional(calibration),
+        check_path(pool, "pool"),
+        check_path(output, "output"),
+        check_paths(given, "given"),
+        _optional(calibration, "calibration"),
         k=k,
         config_path=_optional(config),
         weakest=weakest,
@@ -222,12 +230,12 @@ def plan_route(
 
     """
     return route_postures_file(
-        str(postures),
-        str(output),
+        check_path(postures, "postures"),
+        check_path(output, "output"),
         seed=seed,
         config_path=_optional(config),
         workers=workers,
-        pool_path=_optional(pool),
+        pool_path=_optional(pool, "pool"),
         csv=csv,
     )
 
@@ -240,7 +248,7 @@ def check_route(route: str | Path, *, config: str | Path | None = None, workers:
         True
 
     """
-    return check_route_file(str(route), _optional(config), workers=workers)
+    return check_route_file(check_path(route, "route"), _optional(config), workers=workers)
 
 
 def export_route(
@@ -252,7 +260,7 @@ def export_route(
         >>> posegen.export_route("plans/route.yaml", "plans/route_bag")
 
     """
-    return export_route_bag(str(route), str(bag), topic, segments_topic)
+    return export_route_bag(check_path(route, "route"), check_path(bag, "bag"), topic, segments_topic)
 
 
 def simulate(
@@ -269,8 +277,10 @@ def simulate(
         >>> posegen.simulate("plans/selected.yaml", "plans/sim.yaml", robot=posegen.SimulatedRobot(seed=7))
 
     """
-    options = (robot or SimulatedRobot()).options()
-    return simulate_postures_file(str(postures), str(output), config_path=_optional(config), session=session, **options)
+    options = (check_type(robot, SimulatedRobot, "robot") or SimulatedRobot()).options()
+    postures, output = check_path(postures, "postures"), check_path(output, "output")
+    session = check_type(session, str, "session")
+    return simulate_postures_file(postures, output, config_path=_optional(config), session=session, **options)
 
 
 def simulate_recording(
@@ -289,10 +299,10 @@ def simulate_recording(
         >>> posegen.simulate_recording("plans/route.yaml", "plans/recording", rate_hz=100.0)
 
     """
-    options = (robot or SimulatedRobot()).options()
+    options = (check_type(robot, SimulatedRobot, "robot") or SimulatedRobot()).options()
     return simulate_route_bag(
-        str(route),
-        str(bag),
+        check_path(route, "route"),
+        check_path(bag, "bag"),
         config_path=_optional(config),
         session=session,
         rate_hz=rate_hz,
@@ -321,11 +331,11 @@ def measure(
 
     """
     return measure_bag(
-        str(bag),
-        str(output),
-        config_path=str(config),
-        route_path=_optional(route),
-        session=session,
+        check_path(bag, "bag"),
+        check_path(output, "output"),
+        config_path=check_path(config, "config"),
+        route_path=_optional(route, "route"),
+        session=check_type(session, str, "session"),
         joint_topic=joint_topic,
         use_wrench=use_wrench,
     )
@@ -349,10 +359,10 @@ def calibrate_robot(
 
     """
     calibrated: Calibrated = calibrate_files(
-        [str(m) for m in measurements],
-        [str(h) for h in held_out],
-        str(output),
-        settings or CalibrationSettings(),
+        check_paths(measurements, "measurements"),
+        check_paths(held_out, "held_out"),
+        check_path(output, "output"),
+        check_type(settings, CalibrationSettings, "settings", "posegen.CalibrationSettings") or CalibrationSettings(),
         _optional(config),
     )
     return calibrated.summary
@@ -365,6 +375,8 @@ def describe_calibration(summary: CalibrationSummary) -> str:
         >>> print(posegen.describe_calibration(posegen.load("plans/calibration")))
 
     """
+    if not isinstance(summary, CalibrationSummary):
+        raise ArgumentError(f"summary must be a CalibrationSummary (posegen.load(FOLDER)), got {summary!r}")
     return "\n".join([*file_lines(summary), format_table(summary), load_line(summary)])
 
 
@@ -379,9 +391,9 @@ def write_view(artefact: str | Path, html: str | Path, *, config: str | Path | N
     """
     from posegen.view import write_html_file  # the viewer's packages are an extra: loaded only here
 
-    write_html_file(str(artefact), str(html), _optional(config))
+    write_html_file(check_path(artefact, "artefact"), check_path(html, "html"), _optional(config))
     return Path(html)
 
 
-def _optional(path: str | Path | None) -> str | None:
-    return None if path is None else str(path)
+def _optional(path: str | Path | None, name: str = "config") -> str | None:
+    return None if path is None else check_path(path, name)

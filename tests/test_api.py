@@ -14,6 +14,7 @@ import pytest
 
 import posegen
 import posegen.api
+from posegen.errors import ArgumentError
 
 ROOT = Path(__file__).resolve().parents[1]
 PUBLIC = [name for name in posegen.__all__ if name != "__version__"]
@@ -124,3 +125,47 @@ def test_the_examples_call_only_public_names():
     called = {m for doc in docs for m in re.findall(r">>> .*?\bposegen\.(\w+)", doc)}
     called |= {m for doc in docs for m in re.findall(r"\.\.\. .*?\bposegen\.(\w+)", doc)}
     assert called and called <= set(PUBLIC), sorted(called - set(PUBLIC))
+
+
+def test_one_path_is_a_list_of_one_and_never_its_letters(tmp_path):
+    """``calibrate_robot("meas.yaml", ...)`` read the string letter by letter ("." was the folder: refused)."""
+    missing = tmp_path / "recorded.yaml"
+    with pytest.raises(posegen.PosegenError, match=r"measurement file not found: .*recorded\.yaml$"):
+        posegen.calibrate_robot(str(missing), tmp_path / "out")
+    with pytest.raises(posegen.PosegenError, match=r"measurement file not found: .*recorded\.yaml$"):
+        posegen.calibrate_robot(missing, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+    from posegen.calibrate.calibration import check_candidates
+
+    settings = posegen.CalibrationSettings(candidates="offsets")  # type: ignore[arg-type]
+    with pytest.raises(ArgumentError, match=r"^candidates must be a list of model names, got the string"):
+        check_candidates(posegen.load_scene(), settings)  # was: unknown candidate models ['o', 'f', 'f', ...]
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: posegen.load(None), r"^path must be a path \(str or pathlib\.Path\), got None"),
+        (lambda: posegen.load_scene(3), r"^config must be a path"),
+        (lambda: posegen.Scene("configs/talos_table.yaml"), r"^config must be a Config: Scene\(load_config\(path\)\)"),
+        (
+            lambda: posegen.check_pool(ROOT / "plans/talos/pool.yaml", workers=0),
+            r"^workers must be a backend or an integer >= 1, got 0",
+        ),
+        (
+            lambda: posegen.check_pool(ROOT / "plans/talos/pool.yaml", workers="2"),
+            r"^workers must be a backend or an integer",
+        ),
+        (lambda: posegen.select_postures("p.yaml", "s.yaml", settings={"k": 40}), r"^settings must be a SelectionSet"),
+        (lambda: posegen.simulate("p.yaml", "m.yaml", robot={"seed": 1}), r"^robot must be a SimulatedRobot"),
+        (lambda: posegen.calibrate_robot(["m.yaml"], "o", settings={}), r"^settings must be a posegen\.CalibrationS"),
+        (lambda: posegen.calibrate_robot([None], "o"), r"^measurements\[0\] must be a path"),
+        (lambda: posegen.follow_up("p.yaml", "n.yaml", 5), r"^given must be a list of paths, got 5"),
+        (lambda: posegen.describe_calibration(None), r"^summary must be a CalibrationSummary"),
+        (lambda: posegen.write_view("s.yaml", None), r"^html must be a path"),
+    ],
+)
+def test_an_argument_of_the_wrong_type_is_named(call, message):
+    """Each was a bare AttributeError or TypeError from deep inside (a dict has no ``k``, a str no ``stance``)."""
+    with pytest.raises(ArgumentError, match=message):
+        call()

@@ -29,6 +29,8 @@ import posegen.io.artefact
 from posegen.cli.main import main
 from tests.numeric_fingerprint import numeric_fingerprint
 
+pytestmark = pytest.mark.slow  # seven minutes (every stage from the command line): `make slow`, a step of .ci/run
+
 ROOT = Path(__file__).resolve().parents[1]
 MANIFESTS = ROOT / "tests" / "data" / "artefact_manifests"  # <numeric fingerprint>.json, one per machine
 VERSION = "0.0.0+manifest"  # held fixed: the installed version must not change the bytes

@@ -33,7 +33,7 @@ from posegen.calibrate.folds import repeated_folds, spot_of
 from posegen.calibrate.model_selection import ModelSelection, ScaleSearch, select_model
 from posegen.calibrate.screening import Flag, Screening, feet_off_the_floor, feet_unexplained
 from posegen.calibrate.urdf_export import check_exportable
-from posegen.errors import InputError
+from posegen.errors import ArgumentError, InputError
 from posegen.model import (
     DEFAULT_FLOOR_NOISE,
     DEFAULT_NOISE,
@@ -131,6 +131,10 @@ def _settings(scene: Scene, settings: Settings) -> tuple[CalibrationConfig, list
     if settings.fold_seeds is not None:
         config = replace(config, fold_seeds=settings.fold_seeds)
     names = [c.name for c in config.candidates]
+    if isinstance(settings.candidates, str):  # its letters would be read as names
+        raise ArgumentError(
+            f"candidates must be a list of model names, got the string {settings.candidates!r}", parameter="candidates"
+        )
     unknown = [n for n in settings.candidates if n not in names]
     if unknown:
         raise InputError(f"unknown candidate models {unknown}; the config has: {', '.join(names)}")

@@ -186,8 +186,9 @@ def knee_of(model: pin.Model, data: pin.Data, leg: list[int], forward: FloatArra
         p = data.oMi[j].translation
         return min(float(np.linalg.norm(p - hip)), float(np.linalg.norm(p - ankle)))
 
-    far = max(middle(j) for j in leg)
-    near_middle = [j for j in leg if middle(j) > far - 0.01]
+    turning = [j for j in leg if model.joints[j].shortname().startswith("JointModelR")] or leg  # a knee turns
+    far = max(middle(j) for j in turning)
+    near_middle = [j for j in turning if middle(j) > far - 0.01]
     return max(near_middle, key=lambda j: abs(float(data.oMi[j].rotation @ joint_axis(model.joints[j]) @ lateral)))
 
 
@@ -260,9 +261,9 @@ def _knee_start(model: pin.Model, data: pin.Data, knee: int, foot: int, forward:
 
 
 def joint_axis(joint: pin.JointModel) -> FloatArray:
-    """A 1-dof joint's axis in its own frame. Shape (3,)."""
+    """A 1-dof joint's axis (of rotation or of translation) in its own frame. Shape (3,)."""
     name = joint.shortname()
-    if name.startswith("JointModelR") and name[-1] in "XYZ" and "Unaligned" not in name:
+    if name[:11] in ("JointModelR", "JointModelP") and name[-1] in "XYZ" and "Unaligned" not in name:
         out = np.zeros(3)
         out["XYZ".index(name[-1])] = 1.0
         return out

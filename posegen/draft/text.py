@@ -33,7 +33,7 @@ POINT_CONE_DEG = 60.0  # a drafted point contact: the hand may tilt this far fro
 
 
 def _flow(value: Any) -> str:
-    """One YAML value on one line (flow style)."""
+    """One YAML value on one line (flow style); a name YAML would read otherwise (``no``, ``a: #1``) is quoted."""
     return str(yaml.safe_dump(value, default_flow_style=True, width=10_000)).strip().removesuffix("...").strip()
 
 
@@ -57,26 +57,26 @@ def render_draft(draft: Draft, seed: int, command: str = "") -> str:
     ]
     source = draft.source
     if source.example_robot_data:
-        lines.append(f"    example_robot_data: {source.example_robot_data}")
+        lines.append(f"    example_robot_data: {_flow(source.example_robot_data)}")
     else:
-        lines.append(f"    urdf: {source.urdf}")
+        lines.append(f"    urdf: {_flow(source.urdf)}")
     if source.srdf:
-        lines.append(f"    srdf: {source.srdf}")
+        lines.append(f"    srdf: {_flow(source.srdf)}")
     if source.package_dirs:
         lines.append(f"    package_dirs: {_flow(list(source.package_dirs))}")
     if draft.locked:
         lines.append("  locked_joints:                     # held fixed (rad): off the legs and arms (head, fingers)")
-        lines += [f"    {name}: {value:.4g}" for name, value in draft.locked.items()]
+        lines += [f"    {_flow(name)}: {value:.4g}" for name, value in draft.locked.items()]
     lines.append("  frames:                            # declared here, added to the description at load")
     for frame in draft.frames:
-        entry = f"{{parent: {frame.parent}, xyz_m: {_flow(list(frame.xyz_m))}"
+        entry = f"{{parent: {_flow(frame.parent)}, xyz_m: {_flow(list(frame.xyz_m))}"
         if any(frame.rpy_deg):
             entry += f", rpy_deg: {_flow(list(frame.rpy_deg))}"
-        lines.append(f"    {frame.name}: {entry}}}")
+        lines.append(f"    {_flow(frame.name)}: {entry}}}")
     if draft.velocity_limits:
         lines.append("  velocity_limits_rad_s:             # CHECK: the URDF gives none or an implausible one")
         for name, value in draft.velocity_limits.items():
-            lines.append(f"    {name}: {value}    # URDF: {draft.urdf_velocity[name]:g} rad/s")
+            lines.append(f"    {_flow(name)}: {value}    # URDF: {draft.urdf_velocity[name]:g} rad/s")
     lines.append("  collision:")
     lines += pairs_text(draft.survey.disabled)
     lines.append(
@@ -114,7 +114,7 @@ def _shapes_text(draft: Draft) -> list[str]:
             why = f"its collision shapes: {draft.left_out[link]}"
         else:
             why = f"no collision geometry: {draft.covered.get(link, '')}"
-        lines.append(f"      {link}:                    # {why}")
+        lines.append(f"      {_flow(link)}:                    # {why}")
         for shape in draft.shapes:
             if shape.link != link:
                 continue
@@ -133,14 +133,14 @@ def _stance_text(draft: Draft) -> list[str]:
     left, right = draft.soles
     lines = ["", "stance:"]
     if draft.reference_posture:
-        lines.append(f"  reference_posture: {draft.reference_posture}      # the SRDF's first group state")
+        lines.append(f"  reference_posture: {_flow(draft.reference_posture)}      # the SRDF's first group state")
     if draft.root_rpy_deg is not None:
         lines.append(f"  root_rpy_deg: {_flow(list(draft.root_rpy_deg))}   # the model's {draft.up_axis} axis up")
     if draft.reference_joints:
         lines.append(
             "  reference_joints:                  # CHECK: set by the draft (legs bent, joints off their limits)"
         )
-        lines += [f"    {name}: {value}" for name, value in draft.reference_joints.items()]
+        lines += [f"    {_flow(name)}: {value}" for name, value in draft.reference_joints.items()]
     guessed = "" if left.from_geometry and right.from_geometry else "   # CHECK: no foot geometry: a guess"
     lines += [
         f"  sole_frames: {_flow([left.frame, right.frame])}   # the first one anchors the floating base",
@@ -162,8 +162,8 @@ def _chains_text(draft: Draft) -> list[str]:
         contact = chain.contact
         lines += [
             f"  {chain.name}:                            # arm: {', '.join(chain.joints)}",
-            f"    sole_frame: {chain.sole}",
-            f"    gripper_frame: {chain.gripper.name}   # on {chain.hand}, the arm's last link",
+            f"    sole_frame: {_flow(chain.sole)}",
+            f"    gripper_frame: {_flow(chain.gripper.name)}   # on {chain.hand}, the arm's last link",
         ]
         if contact.flush:
             lines += [
@@ -179,7 +179,7 @@ def _chains_text(draft: Draft) -> list[str]:
             lines += [
                 "    fingertip_frames: []",
                 "    contact_kind: point",
-                f"    point_frame: {contact.frames[0].name}   # CHECK: {contact.how}",
+                f"    point_frame: {_flow(contact.frames[0].name)}   # CHECK: {contact.how}",
                 f"    point_radius_m: {contact.radius_m}",
                 f"    point_cone_deg: {POINT_CONE_DEG}   # CHECK: how far the hand may tilt from the table's normal",
             ]

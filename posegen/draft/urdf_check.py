@@ -6,8 +6,10 @@ then fails with "not a valid URDF", or loads what it should not (a NaN origin, a
 text is checked here first, and each defect is said in one line naming the file and the
 element: a link or joint named twice or not at all, a joint's parent or child that is no
 link, a link carried by two joints, a loop, links no joint connects to the root, a joint
-type URDF does not have, an origin, axis, limit, mass, inertia or shape size that is not
-finite numbers, an axis of zero length, a negative mass, and a robot without mass.
+type URDF does not have, a moving joint that is not one value between limits (continuous,
+planar, floating) or whose lower limit is above its upper, an origin, axis, limit, mass,
+inertia or shape size that is not finite numbers, an axis of zero length, a negative mass,
+and a robot without mass.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from posegen.errors import ConfigError
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 MOVING = ("revolute", "continuous", "prismatic", "planar")
+UNBOUNDED = ("continuous", "planar", "floating")  # joints of no range, or of more than one value
 _VECTORS = (  # (element path under a link or joint, attribute, how many numbers, what they are)
     ("origin", "xyz", 3),
     ("origin", "rpy", 3),
@@ -156,6 +159,7 @@ def _tree(joints: list[ET.Element], links: list[str], where: str | Path) -> dict
             raise ConfigError(
                 f"{where}: {_label(joint)}: type {kind!r} is not a URDF joint type ({', '.join(JOINT_TYPES)})"
             )
+        _check_motion(joint, where)
         ends = {}
         for end in ("parent", "child"):
             found = joint.find(end)
@@ -172,6 +176,24 @@ def _tree(joints: list[ET.Element], links: list[str], where: str | Path) -> dict
             )
         parent_of[child] = ends["parent"]
     return parent_of
+
+
+def _check_motion(joint: ET.Element, where: str | Path) -> None:
+    """A moving joint is one angle or length between limits (revolute or prismatic), its lower limit below its upper."""
+    kind = joint.get("type")
+    if kind in UNBOUNDED:
+        raise ConfigError(
+            f"{where}: {_label(joint)} is {kind}: posegen plans joints of one angle or length between limits; "
+            "make it revolute (or fixed) with <limit lower=... upper=...> (MJCF: a hinge with a range)"
+        )
+    limit = joint.find("limit")
+    if kind in ("revolute", "prismatic") and limit is not None:
+        lower, upper = _number(limit, "lower"), _number(limit, "upper")
+        if lower > upper:
+            raise ConfigError(
+                f'{where}: {_label(joint)}: <limit lower="{limit.get("lower")}" upper="{limit.get("upper")}">: '
+                "its lower limit is above its upper"
+            )
 
 
 def _check_connected(links: list[str], parent_of: dict[str, str], where: str | Path) -> None:

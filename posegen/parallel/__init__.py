@@ -15,6 +15,7 @@ names here are its plumbing and may change between versions.
 
 from __future__ import annotations
 
+from posegen.errors import ArgumentError
 from posegen.extras import Extra, require
 from posegen.parallel.backend import Backend, Job, ProcessBackend, job_name, no_state, usable_cores
 
@@ -48,8 +49,16 @@ def as_backend(workers: int | Backend) -> Backend:
     A backend made here is not entered: each of its maps starts and stops its own worker
     processes (enter it with ``with`` to keep them between maps). A backend given is
     returned as is, never closed here: its owner closes it.
+
+    Raises:
+        ArgumentError: ``workers`` is neither a backend nor a positive integer.
+
     """
-    return workers if isinstance(workers, Backend) else ProcessBackend(workers)
+    if isinstance(workers, Backend):
+        return workers
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ArgumentError(f"workers must be a backend or an integer >= 1, got {workers!r}", parameter="workers")
+    return ProcessBackend(workers)
 
 
 __all__ = ["Backend", "Job", "ProcessBackend", "as_backend", "job_name", "no_state", "open_backend", "usable_cores"]

@@ -55,8 +55,11 @@ def robot_geometry(
                 # A true hull (qhull). buildConvexRepresentation would wrap the raw,
                 # non-convex mesh, and coal's hill-climbing support function then
                 # overestimates distances (seen: 10 mm reported for a 1 mm gap).
-                obj.geometry.buildConvexHull(True, "Qt")
-                obj.geometry = obj.geometry.convex
+                # A flat mesh becomes a thin box: qhull fails on it and coal then crashes.
+                shape, local = _visual_hull(obj.geometry)
+                obj.geometry = shape
+                if not local.isIdentity():
+                    obj.placement = obj.placement * local
     return geom
 
 
@@ -88,7 +91,7 @@ THIN_M = 0.001  # a flat mesh's box is this thick
 
 
 def _visual_hull(shape: coal.CollisionGeometry) -> tuple[coal.CollisionGeometry, pin.SE3]:
-    """A visual shape as collision geometry, and its placement in the shape's frame.
+    """A mesh as convex collision geometry (a visual or a collision one), and its placement in the shape's frame.
 
     A mesh becomes its convex hull (qhull), a flat mesh its box THIN_M thick (qhull would
     fail on it, and coal then crashes), a primitive stays as it is.

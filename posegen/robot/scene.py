@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from posegen.errors import ConfigError, InputError, unknown_name
+from posegen.errors import ArgumentError, ConfigError, InputError, unknown_name
 from posegen.io import Pool, provenance
 from posegen.robot.config import ChainConfig, Config, load_config, parse_config
 from posegen.robot.description import frame_id
@@ -65,8 +65,14 @@ class Scene:
 
         Raises:
             ConfigError: The config names what the robot lacks, or its files do not load.
+            ArgumentError: ``config`` is not a :class:`Config` (a path: ``Scene(load_config(path))``).
 
         """
+        if not isinstance(config, Config):
+            raise ArgumentError(
+                f"config must be a Config: Scene(load_config(path)) or posegen.load_scene(path), got {config!r}",
+                parameter="config",
+            )
         self.config = config
         self.stance = config.stance
         self.chains = config.chains

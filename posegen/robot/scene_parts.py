@@ -24,7 +24,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from posegen.errors import ConfigError, unknown_name
-from posegen.io import read_text_file
+from posegen.io import native_output, read_text_file
 from posegen.robot.collision_geometry import check_link_names
 from posegen.robot.config import ChainConfig, Config, StanceConfig, TableConfig
 from posegen.robot.description import (
@@ -91,7 +91,15 @@ def _joint_index(names: tuple[str, ...], name: str, field: str) -> int:
 
 
 def _model_from_xml(urdf_text: str) -> pin.Model:
-    return pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
+    """The model of a URDF's text; urdfdom's own lines are kept off the terminal (the error gives their cause)."""
+    failure: Exception
+    with native_output() as printed:
+        try:
+            return pin.buildModelFromXML(urdf_text, pin.JointModelFreeFlyer())
+        except (RuntimeError, ValueError) as exc:
+            failure = exc
+    cause = printed.cause()
+    raise ValueError(f"{failure} ({cause})" if cause else str(failure)) from failure
 
 
 def load_description(config: Config) -> Description:
@@ -182,11 +190,22 @@ def actuated_joints(model: pin.Model, config: Config) -> Joints:
             a velocity limit.
 
     """
+    for j in range(2, model.njoints):  # 1: the floating base
+        if model.joints[j].nq != 1:
+            raise ConfigError(
+                f"robot: joint '{model.names[j]}' is a {model.joints[j].shortname()} ({model.joints[j].nq} values): "
+                "posegen plans joints of one angle or length between limits; make it revolute (or fixed) with "
+                "its limits in the URDF"
+            )
     names = tuple(str(model.names[j]) for j in range(1, model.njoints) if model.joints[j].nq == 1)
     q_index = np.array([model.joints[model.getJointId(n)].idx_q for n in names])
     v_index = np.array([model.joints[model.getJointId(n)].idx_v for n in names])
     lower = model.lowerPositionLimit[q_index].copy()
     upper = model.upperPositionLimit[q_index].copy()
+    reversed_limits = np.flatnonzero(~(lower <= upper))
+    if len(reversed_limits):
+        i = reversed_limits[0]
+        raise ConfigError(f"robot: joint '{names[i]}': its lower limit {lower[i]:g} is above its upper {upper[i]:g}")
     locked = np.zeros(len(names), dtype=bool)
     locked_values = np.zeros(len(names))
     for name, value in config.locked_joints.items():
@@ -198,21 +217,34 @@ def actuated_joints(model: pin.Model, config: Config) -> Joints:
     limit = velocity_limits(model.velocityLimit[v_index], names, locked, config.velocity_limits)
     effort = np.array(model.effortLimit[v_index], dtype=float)
     effort[~(np.isfinite(effort) & (effort > 0))] = np.nan  # a URDF without an effort gives 0
-    margin = limit_margins(names, lower, upper, config)
+    margin = limit_margins(names, lower, upper, config, locked)
     return Joints(names, q_index, v_index, lower, upper, locked, locked_values, limit, effort, margin)
 
 
-def limit_margins(names: tuple[str, ...], lower: FloatArray, upper: FloatArray, config: Config) -> FloatArray:
+def limit_margins(
+    names: tuple[str, ...], lower: FloatArray, upper: FloatArray, config: Config, locked: npt.NDArray[np.bool_]
+) -> FloatArray:
     """The margin (rad) kept from each joint's limits: ``margins.joint_limit_rad`` or the joint's own. Shape (nj,).
 
     ``margins.joint_limit_rad_by_joint`` gives a joint a larger margin, e.g. a stance knee
     kept bent so that its leg can still lengthen on a robot whose legs are not the model's.
+    A locked joint (``locked``, (nj,)) whose range is narrower than twice the margin (a
+    gripper's finger, 2 cm) keeps none: it never moves.
 
     Raises:
         ConfigError: An unknown joint, or a margin leaving no room between the limits.
 
     """
     margin = np.full(len(names), config.margins.joint_limit_rad)
+    narrow = upper - lower <= 2.0 * margin  # (nj,)
+    margin[narrow & locked] = 0.0
+    narrow &= ~locked
+    if narrow.any():
+        i = int(np.flatnonzero(narrow)[0])
+        raise ConfigError(
+            f"margins.joint_limit_rad: {margin[i]:g} rad from both limits leaves no room for joint '{names[i]}' "
+            f"in [{lower[i]:.3f}, {upper[i]:.3f}]: lock it (robot.locked_joints) or lower the margin"
+        )
     field = "margins.joint_limit_rad_by_joint"
     for name, value in config.margins.joint_limit_rad_by_joint.items():
         i = _joint_index(names, name, field)

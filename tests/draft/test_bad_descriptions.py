@@ -40,6 +40,17 @@ URDF_CASES = [
     (lambda t: t.replace('<parent link="pelvis"/>', '<parent link="nothing"/>', 1), r"parent link 'nothing' is not"),
     (lambda t: t.replace('<child link="l_thigh"/>', '<child link="pelvis"/>', 1), r"loop through link"),
     (lambda t: _first(r"<limit [^>]*/>", "", t), r"pinocchio cannot load it: .*does not specify limits"),
+    (  # an unbounded wrist: the draft named it in reference_joints, a scene cannot hold a 2-value joint
+        lambda t: _first(r'(<joint name="l_wrist") type="revolute"', r'\1 type="continuous"', t),
+        r"joint 'l_wrist' is continuous: posegen plans joints of one angle or length between limits",
+    ),
+    (lambda t: _first(r'<joint name="neck" type="revolute"', '<joint name="neck" type="planar"', t), r"is planar"),
+    (  # numpy's uniform draw failed on it (a traceback)
+        lambda t: _first(
+            r'(<joint name="l_elbow".*?)<limit lower="-2.0" upper="0.0"', r'\1<limit lower="0" upper="-2"', t
+        ),
+        r"joint 'l_elbow': <limit lower=\"0\" upper=\"-2\">: its lower limit is above its upper",
+    ),
 ]
 
 

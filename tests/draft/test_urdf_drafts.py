@@ -227,3 +227,24 @@ def test_a_torso_rooted_draft_runs_the_whole_chain(tmp_path, capsys):
     run("simulate", str(pool), "--seed", "1", "-o", str(measurements))
     run("calibrate", str(measurements), "--prior-scale", "5", "-q", "-o", str(tmp_path / "cal"))
     assert (tmp_path / "cal" / "calibrated.urdf").exists()
+
+
+def test_names_yaml_would_read_otherwise_are_quoted_in_the_draft(tmp_path):
+    """A link ``l_hand: #1`` broke the draft's YAML (a traceback); a joint ``no`` was read back as false."""
+    path = humanoid_urdf(tmp_path, "z")
+    path.write_text(path.read_text().replace('"l_hand"', '"l_hand: #1"').replace('"neck"', '"no"'))
+    draft = write_draft(str(path), str(tmp_path / "config.yaml"), samples=20)
+    config = load_config(tmp_path / "config.yaml")
+    assert config.chain("left").gripper_frame == "left_gripper"
+    assert {f.name: f.parent for f in config.frames}["left_gripper"] == "l_hand: #1"
+    assert "no" in {**config.locked_joints, **config.stance.reference_joints}
+    assert draft.notes[-1].startswith("the draft loads as a scene")
+
+
+def test_a_prismatic_joint_has_an_axis_and_is_never_the_knee():
+    """``JointModelPZ`` has no ``axis`` attribute: a leg with a sliding joint ended in a traceback."""
+    from posegen.draft.stance import joint_axis
+
+    slide = pin.JointModelPZ()
+    assert list(joint_axis(slide)) == [0.0, 0.0, 1.0]
+    assert list(joint_axis(pin.JointModelRY())) == [0.0, 1.0, 0.0]

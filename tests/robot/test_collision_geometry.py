@@ -43,3 +43,15 @@ def test_a_visual_hull_keeps_primitives_and_boxes_a_flat_mesh(tmp_path):
         assert panel.placement.translation == pytest.approx([0.05, 0.025, 0.3])
     with pytest.raises(ConfigError, match=r"shapes\.bare: visual_hull, but the link has no visual geometry"):
         robot_geometry(model, text, (), CollisionConfig(shapes=(VisualHull("bare"),)), convex=False)
+
+
+def test_a_flat_collision_mesh_becomes_its_thin_box(tmp_path):
+    """A URDF whose collision mesh is a panel (a sole drawn as one face): qhull failed on it and coal crashed."""
+    text = _urdf(tmp_path).replace("<visual>", "<collision>").replace("</visual>", "</collision>")
+    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    geom = robot_geometry(model, text, (), CollisionConfig(), convex=True)
+    box, panel = geom.geometryObjects
+    assert isinstance(box.geometry, coal.Box) and box.placement.translation == pytest.approx([0, 0, 0.1])
+    assert isinstance(panel.geometry, coal.Box)
+    assert 2 * np.asarray(panel.geometry.halfSide) == pytest.approx([0.1, 0.05, 0.001])
+    assert panel.placement.translation == pytest.approx([0.05, 0.025, 0.3])

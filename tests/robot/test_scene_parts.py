@@ -13,6 +13,7 @@ from posegen.robot.scene_parts import (
     apply_additions,
     check_names,
     contact_placements,
+    limit_margins,
     load_description,
     read_srdf_states,
     reference_configuration,
@@ -99,6 +100,33 @@ def test_actuated_joints_lock_and_limit_from_the_config(scene, config):
         actuated_joints(scene.model, dataclasses.replace(config, locked_joints=outside))
     faster = actuated_joints(scene.model, dataclasses.replace(config, velocity_limits={"arm_left_4_joint": 9.0}))
     assert faster.velocity_limit[i] == 9.0 and joints.velocity_limit[i] == scene.model.velocityLimit[joints.v_index[i]]
+
+
+def test_a_joint_of_reversed_limits_or_of_two_values_is_refused(scene, config):
+    """Either made numpy's uniform draw or the placo solver fail later (a traceback, or no posture found)."""
+    model = pin.Model(scene.model)
+    i = model.joints[model.getJointId("arm_left_4_joint")].idx_q
+    model.lowerPositionLimit[i], model.upperPositionLimit[i] = 0.5, -0.5
+    with pytest.raises(ConfigError, match=r"^robot: joint 'arm_left_4_joint': its lower limit 0.5 is above its upper"):
+        actuated_joints(model, config)
+    free = pin.buildModelFromXML(
+        '<robot name="r"><link name="a"/><link name="b"/><joint name="spin" type="continuous"><parent link="a"/>'
+        '<child link="b"/><axis xyz="0 0 1"/></joint></robot>',
+        pin.JointModelFreeFlyer(),
+    )
+    with pytest.raises(ConfigError, match=r"^robot: joint 'spin' is a JointModelRUBZ \(2 values\): posegen plans"):
+        actuated_joints(free, config)
+
+
+def test_a_locked_joint_narrower_than_the_margins_keeps_none_and_a_free_one_is_refused(config):
+    """A gripper's finger of 2 cm locked at 0: both margins of 0.02 crossed, and the draw failed (a traceback)."""
+    names, lower, upper = ("finger", "elbow"), np.array([0.0, -2.0]), np.array([0.02, 0.0])
+    config = dataclasses.replace(config, margins=dataclasses.replace(config.margins, joint_limit_rad_by_joint={}))
+    margin = config.margins.joint_limit_rad
+    kept = limit_margins(names, lower, upper, config, np.array([True, False]))
+    assert list(kept) == [0.0, margin]
+    with pytest.raises(ConfigError, match=r"leaves no room for joint 'finger' in \[0.000, 0.020\]: lock it"):
+        limit_margins(names, lower, upper, config, np.array([False, False]))
 
 
 def test_velocity_limits_fill_locked_joints_and_name_free_ones_without():

@@ -100,6 +100,7 @@ def test_a_killed_add_leaves_a_session_the_same_add_finishes(started, rehearsed,
         open_session(session)
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 @pytest.mark.parametrize(
     ("edit", "message"),
     [

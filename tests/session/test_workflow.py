@@ -72,6 +72,7 @@ def test_the_first_batch_identifies_every_base_parameter(started):
     assert provenance["config"]["chains"][CHAIN]
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_the_rehearsal_plays_batches_for_the_weakest_chain(rehearsed):
     folder, added = rehearsed
     index = read_index(folder)
@@ -85,6 +86,7 @@ def test_the_rehearsal_plays_batches_for_the_weakest_chain(rehearsed):
     assert not index.done  # 1 mm is out of reach of the URDF alone on a robot whose hips give way
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
     folder, _ = rehearsed
     index = read_index(folder)
@@ -129,6 +131,7 @@ def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, 
     assert np.array_equal(after[0], standoff) and sorted(batch.pool_rows) == routed
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_the_stopping_figure_is_the_one_calibrate_reports(rehearsed):
     folder, _ = rehearsed
     for batch in read_index(folder).batches[:2]:
@@ -140,6 +143,7 @@ def test_the_stopping_figure_is_the_one_calibrate_reports(rehearsed):
         assert batch.assessment.done == all(v <= SETTINGS.target_mm for v in expected.values())
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_status_counts_contacts_and_robot_time(rehearsed, capsys):
     folder, _ = rehearsed
     status = session_status(str(folder))
@@ -153,6 +157,7 @@ def test_status_counts_contacts_and_robot_time(rehearsed, capsys):
     assert f"{status.contacts} contacts" in out and "not done" in out and (folder / "again.png").is_file()
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_a_bag_added_twice_or_not_a_recording_is_refused_and_nothing_changes(rehearsed, backend):
     folder, _ = rehearsed
     before = (folder / INDEX_FILE).read_bytes()
@@ -163,6 +168,7 @@ def test_a_bag_added_twice_or_not_a_recording_is_refused_and_nothing_changes(reh
     assert (folder / INDEX_FILE).read_bytes() == before
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_a_bag_of_another_route_or_robot_is_refused(started, rehearsed, backend, tmp_path):
     copy = copy_of(started, tmp_path)
     other = rehearsed[0] / "batch_002" / REHEARSAL_BAG
@@ -179,6 +185,7 @@ def test_a_bag_of_another_route_or_robot_is_refused(started, rehearsed, backend,
     assert read_index(copy) == read_index(started)
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_a_file_edited_by_hand_stops_every_command(rehearsed, tmp_path, capsys):
     copy = copy_of(rehearsed[0], tmp_path)
     selection = copy / "batch_002" / "selection.yaml"
@@ -214,6 +221,7 @@ def test_a_start_that_fails_leaves_no_folder_and_keeps_one_it_was_given(started,
     assert (tmp_path / "given").is_dir() and not any((tmp_path / "given").iterdir())
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_killed_while_planning_the_next_batch_the_same_add_finishes_it(
     started, rehearsed, backend, tmp_path, monkeypatch
 ):
@@ -239,6 +247,7 @@ def test_killed_while_planning_the_next_batch_the_same_add_finishes_it(
     assert (second.pool_rows, second.planned_s) == (done.batches[1].pool_rows, done.batches[1].planned_s)
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_a_batch_played_in_part_plans_its_missing_postures_again(started, rehearsed, backend, tmp_path):
     copy = copy_of(started, tmp_path)
     full = RecordedBag(rehearsed[0] / "batch_001" / REHEARSAL_BAG)
@@ -267,6 +276,7 @@ def test_a_batch_played_in_part_plans_its_missing_postures_again(started, rehear
     assert np.isfinite(list(added.batch.assessment.predicted_z_mm.values())).all()
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_the_session_stops_when_every_chain_meets_the_target(started, rehearsed, tmp_path, capsys):
     copy = copy_of(started, tmp_path)
     index = read_index(copy)
@@ -287,6 +297,7 @@ def test_the_session_stops_when_every_chain_meets_the_target(started, rehearsed,
     assert "is done already" in capsys.readouterr().out
 
 
+@pytest.mark.slow  # the rehearsed session (3 min, shared by these tests): `make slow`
 def test_the_session_stops_at_the_floor_when_batches_bring_no_new_low(started, rehearsed, backend, tmp_path, capsys):
     copy = copy_of(started, tmp_path)
     first = add_bag(str(copy), str(rehearsed[0] / "batch_001" / REHEARSAL_BAG), backend)
