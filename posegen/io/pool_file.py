@@ -231,6 +231,8 @@ def _postures_from_arrays(data: dict[str, Any], n_joints: int, where: str) -> tu
     if not isinstance(chains, list) or not isinstance(spots, list):
         raise InputError(f"{where}: 'chains' and 'spots' must be lists")
     arrays = read_arrays(where, data.get("arrays"), ARRAY_NAMES)
+    if arrays["sample"].ndim != 1:
+        raise InputError(f"{where}: the sidecar's 'sample' is of shape {arrays['sample'].shape}, not one per posture")
     n = len(arrays["sample"])
     shapes = {name: a.shape for name, a in arrays.items()}
     expected = {name: (n,) for name in ARRAY_NAMES} | {"joints": (n, n_joints), "contact_xy_m": (n, 2)}

@@ -146,14 +146,14 @@ class Route:
         return [self.joint_names.index(name) for name in names]
 
     def check_chains(self, chains: Sequence[str], where: str = "route") -> None:
-        """Every contact segment names one of ``chains``.
+        """Every contact segment names one of ``chains``, and so does any other segment that names a chain.
 
         Raises:
-            InputError: A contact segment naming another chain (or none).
+            InputError: A contact segment naming another chain (or none), or another segment naming another chain.
 
         """
         for i, seg in enumerate(self.segments):
-            if seg.type.in_contact and seg.chain not in chains:
+            if (seg.type.in_contact or seg.chain is not None) and seg.chain not in chains:
                 raise InputError(
                     f"{where}: segment {i} ({seg.type.value}) names chain {seg.chain!r}; valid: {sorted(chains)}"
                 )

@@ -167,9 +167,14 @@ def _substitutes(
     """The pool a selection came from, if it can be found; and a word on what a repair can use."""
     if not all("pool_id" in e for e in entries):
         return None, [], "no repair: the input is a pool, not a selection"
+    for k, entry in enumerate(entries):
+        if isinstance(entry["pool_id"], bool) or not isinstance(entry["pool_id"], int):
+            raise InputError(f"{postures_path}: posture {k}: pool_id {entry['pool_id']!r} is not a posture number")
     recorded = chosen.provenance.get("pool")
+    if recorded is not None and not isinstance(recorded, str):
+        raise InputError(f"{postures_path}: provenance.pool {recorded!r} is not a path")
     path = Path(pool_path) if pool_path else (Path(recorded) if recorded else None)
-    if path is None or not path.exists():
+    if path is None or not path.is_file():
         return None, [], f"no repair: the selection's pool {path} is not there (give it with --pool)"
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     expected = chosen.provenance.get("pool_sha256")

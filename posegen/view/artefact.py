@@ -148,6 +148,10 @@ def _calibration(path: Path, config_path: str | None) -> CalibrationArtefact:
     calibrated = Scene(load_config(str(record.calibrated_config)))
     if calibrated.joint_names != nominal.joint_names:
         raise InputError(f"{record.calibrated_config}: not the same joints as the nominal robot")
+    chains = [c.name for c in calibrated.chains]
+    for contact in record.contacts:
+        if contact.chain not in chains:
+            raise InputError(f"{path}: a residual of chain {contact.chain!r}; the robot's chains: {', '.join(chains)}")
     return CalibrationArtefact(path=path, nominal=nominal, calibrated=calibrated, record=record)
 
 

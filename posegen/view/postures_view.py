@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 import viser
 
+from posegen.arguments import is_finite_number
 from posegen.io import Pool
 from posegen.robot import FloatArray, Scene
 from posegen.view.artefact import ArtefactKind, PosturesArtefact
@@ -47,7 +48,9 @@ def describe(artefact: PosturesArtefact, k: int) -> str:
         posture.spot,
     ]
     if artefact.kind == ArtefactKind.SELECTION:
-        parts.append(f"IROC rank {entry.get('rank')}, weight {float(entry.get('weight', 0.0)):.4f}")
+        weight = entry.get("weight", 0.0)
+        shown = f"{weight:.4f}" if is_finite_number(weight) else repr(weight)  # a label: what the file says
+        parts.append(f"IROC rank {entry.get('rank')}, weight {shown}")
     parts.append(f"CoM margin {posture.com_margin_m * 1e3:.0f} mm")
     parts.append(f"min distance {posture.min_distance_m * 1e3:.1f} mm")
     return " | ".join(parts[:4]) + "\n" + " | ".join(parts[4:])

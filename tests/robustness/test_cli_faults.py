@@ -28,6 +28,7 @@ from posegen.io import (
     JointStates,
     OutputLock,
     Wrenches,
+    load_pool,
     read_arrays,
     write_recording,
     write_with_arrays,
@@ -217,6 +218,14 @@ TABLE = [
     F("route", "malformed --scheduler", "{pool}", "--scheduler", "nonsense", "-o", "{out}/route.yaml"),
     F("route", "binary --pool", "{selection}", "--pool", "{binary}", "-o", "{out}/route.yaml"),
     F("route", "--pool not the selection's", "{selection}", "--pool", "{other_pool}", "-o", "{out}/route.yaml"),
+    *(  # each was a traceback (int() of None or of 'x', Path() of 5)
+        F("route", what, f"{{{name}}}", "-o", "{out}/route.yaml", expect=expect)
+        for what, name, expect in (
+            ("a selection's pool_id null", "null_pool_id_selection", "posture 0: pool_id None is not a posture"),
+            ("a selection's pool_id text", "text_pool_id_selection", "posture 0: pool_id 'x' is not a posture"),
+            ("a selection's provenance.pool a number", "number_pool_selection", "provenance.pool 5 is not a path"),
+        )
+    ),
     *bad_outputs("route", "{pool}"),
     # simulate
     *bad_inputs("simulate", STAGE_PLANS, *C, "-o", "{out}/m.yaml"),
@@ -353,6 +362,9 @@ TABLE = [
     ),
     F("view", "a route with a contact of an unknown chain", "{route_tail_chain}", "--html", "{out}/v.html"),
     F("check", "a route with a contact of an unknown chain", "{route_tail_chain}", expect="names chain 'tail'"),
+    F("check", "a pool whose sidecar holds a scalar", "{scalar_sample_pool}", expect="'sample' is of shape ()"),
+    F("check", "a route approaching with an unknown chain", "{route_tail_approach}", expect="(approach) names chain"),
+    F("view", "a route approaching with an unknown chain", "{route_tail_approach}", "--html", "{out}/v.html"),
     *(F("export", f"a route with {what}", f"{{{name}}}", "--bag", "{out}/b") for what, name in BAD_ROUTES.items()),
     *(
         F("simulate", f"--bag: a route with {what}", f"{{{name}}}", "--bag", "{out}/b")
@@ -571,6 +583,10 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     made["route"] = str(route_file)
     made.update(bad_routes(route_file, folder))
     put("tail_chain_pool.yaml", pool | {"postures": [pool["postures"][0] | {"chain": "tail"}]})
+    header, arrays = load_pool(EXAMPLE_POOL).to_arrays()
+    arrays["sample"] = np.array(3)  # a script rewriting the sidecar, one array left a scalar (0-d)
+    write_with_arrays(folder / "scalar_sample_pool.yaml", header, arrays, compress=True)
+    made["scalar_sample_pool"] = str(folder / "scalar_sample_pool.yaml")
     put("malformed_route.yaml", {"format": "posegen-route", "format_version": 1, "trajectory": {"points": 3}})
 
     config = _config_data()
@@ -650,6 +666,9 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     }
     put("selection.yaml", selection)
     put("other_pool.yaml", pool | {"postures": pool["postures"][:5]})
+    put("null_pool_id_selection.yaml", selection | {"postures": [selection["postures"][0] | {"pool_id": None}]})
+    put("text_pool_id_selection.yaml", selection | {"postures": [selection["postures"][0] | {"pool_id": "x"}]})
+    put("number_pool_selection.yaml", selection | {"provenance": selection["provenance"] | {"pool": 5}})
 
     report = yaml.safe_load((calibration_folder.path / "calibration.yaml").read_text())
     put("calibration.yaml", report)
@@ -701,6 +720,9 @@ def bad_routes(route_file: Path, folder: Path) -> dict[str, str]:
         "route_version_3": lambda a, h: h.update(format_version=3),
         "route_nan_segment_time": lambda a, h: h["segments"][1].update(start_s=float("nan")),
         "route_tail_chain": lambda a, h: next(s for s in h["segments"] if s["type"] == "hold").update(chain="tail"),
+        "route_tail_approach": lambda a, h: next(s for s in h["segments"] if s["type"] == "approach").update(
+            chain="tail"
+        ),
     }
     made = {}
     for name, edit in edits.items():

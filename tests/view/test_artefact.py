@@ -58,3 +58,31 @@ def test_an_artefact_of_another_robot_model_is_refused(tmp_path):
     other = tmp_path / "other.yaml"
     other.write_text(yaml.safe_dump(data))
     one_line_error(other, "another robot model")
+
+
+def test_a_residual_of_a_chain_the_robot_lacks_is_refused(tmp_path, calibration_folder):
+    """``residuals.csv`` edited by hand (a chain ``tail``): the calibration view failed on a KeyError."""
+    import shutil
+
+    folder = tmp_path / "calibration"
+    shutil.copytree(calibration_folder.path, folder)
+    residuals = folder / "residuals.csv"
+    header, first, *rest = residuals.read_text().splitlines()
+    cells = first.split(",")
+    cells[header.split(",").index("chain")] = "tail"
+    residuals.write_text("\n".join([header, ",".join(cells), *rest]) + "\n")
+    with pytest.raises(InputError, match=r"a residual of chain 'tail'; the robot's chains: left, right"):
+        open_artefact(folder)
+
+
+def test_a_selection_weight_that_is_no_number_is_shown_as_written(selection_file, tmp_path):
+    """The posture's label formatted the weight as a float: a weight ``heavy`` ended the view in a ValueError."""
+    from posegen.view.postures_view import describe
+
+    data = yaml.safe_load(selection_file.read_text())
+    data["postures"][0]["weight"] = "heavy"
+    edited = tmp_path / "selected.yaml"
+    edited.write_text(yaml.safe_dump(data))
+    artefact = open_artefact(edited)
+    assert isinstance(artefact, PosturesArtefact)
+    assert "weight 'heavy'" in describe(artefact, 0)
