@@ -144,11 +144,17 @@ def _check_elements(root: ET.Element, path: Path) -> None:
     """Meshes that exist, one body in ``<worldbody>`` (pinocchio passes over the others without a word)."""
     meshdir = Path(next(c.get("meshdir", "") for c in root.findall("compiler") if c.get("meshdir")))  # absolute
     meshes = {}
+    inline = {m.get("name") for m in root.iter("mesh") if not m.get("file")}  # vertex="...": no file to convert
     for mesh in root.iter("mesh"):
         if mesh.get("file"):
             meshes[mesh.get("name") or Path(mesh.get("file", "")).stem] = mesh.get("file", "")
     for geom in root.iter("geom"):
         name = geom.get("mesh")
+        if name is not None and name not in meshes and name in inline:
+            raise ConfigError(
+                f"{path}: mesh '{name}' is given inline (vertex=...), not as a file: posegen converts mesh files; "
+                "save it as an STL or OBJ file and name it with file=..."
+            )
         if name is not None and name not in meshes:
             raise ConfigError(f"{path}: geom '{geom.get('name', '(unnamed)')}' names the mesh '{name}', not in <asset>")
         if name is not None and not (meshdir / meshes[name]).is_file():

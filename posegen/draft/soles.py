@@ -18,6 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from posegen.draft.geometry import Geometry, link_of_joint, round3, vertices
+from posegen.errors import ConfigError
 from posegen.robot import Box, FloatArray, FrameConfig
 
 SOLE_VERTEX_TOL_M = 0.005  # foot vertices this close to the lowest one make the footprint
@@ -27,6 +28,7 @@ FOOT_LENGTH = 0.28  # a foot without geometry: this share of the leg's length
 FOOT_WIDTH = 0.12
 ANKLE_HEIGHT = 0.12  # a foot without geometry: its sole this share of the leg's length below the ankle
 FOOT_BOX_M = 0.02  # thickness of the box given to a foot without geometry
+FOOT_MAX_M = 1.0  # a footprint longer or wider than this is no humanoid's (a mesh in mm, not m)
 
 
 @dataclass(frozen=True)
@@ -62,6 +64,11 @@ def find_sole(
         x = (round(float(low[:, 0].min()), 3), round(float(low[:, 0].max()), 3))
         y = (round(float(low[:, 1].min()), 3), round(float(low[:, 1].max()), 3))
         from_geometry = True
+        if max(x[1] - x[0], y[1] - y[0]) > FOOT_MAX_M:
+            raise ConfigError(
+                f"link '{link}': its foot geometry spans {x[1] - x[0]:g} x {y[1] - y[0]:g} m, not a foot: meshes in "
+                'millimetres? give each <mesh> scale="0.001 0.001 0.001"'
+            )
     for f, frame in enumerate(model.frames):
         if frame.parentJoint != foot or frame.type != pin.FrameType.BODY:
             continue

@@ -123,6 +123,16 @@ def test_an_mjcf_with_numbers_no_body_has_is_refused(edit, message, tmp_path):
         (lambda t: _first(r'pos="[^"]*"', 'pos="0 nan 0.1"', t), r"pos=\"0 nan 0\.1\": expected finite numbers"),
         (lambda t: re.sub(r'mass="[^"]*"', 'mass="0"', t), r"every link has zero mass"),
         (lambda t: _first(r'axis="[^"]*"', 'axis="0 0 0"', t), r"its axis is 0 0 0"),
+        (  # was: "names the mesh 'cube', not in <asset>" (it is there)
+            lambda t: _first(
+                r'<geom type="sphere" pos="0 0 0.1" size="0.08"/>',
+                '<geom type="mesh" mesh="cube"/>',
+                _first(
+                    r"<worldbody>", '<asset><mesh name="cube" vertex="0 0 0 1 0 0 0 1 0 0 0 1"/></asset><worldbody>', t
+                ),
+            ),
+            r"mesh 'cube' is given inline \(vertex=...\), not as a file",
+        ),
     ],
 )
 def test_an_mjcf_refused_at_init_names_the_mjcf(edit, message, tmp_path, capfd):
@@ -131,3 +141,17 @@ def test_an_mjcf_refused_at_init_names_the_mjcf(edit, message, tmp_path, capfd):
     line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
     assert path.name in line and re.search(message, line), line
     assert not (tmp_path / "config.yaml").exists() and not (tmp_path / "config.urdf").exists()
+
+
+def test_a_foot_mesh_in_millimetres_is_named(tmp_path, capfd):
+    """Was: "stance.foot_x_m: expected values within 0.5 of 0", a key of a config the user never wrote."""
+    import trimesh
+
+    path = humanoid_urdf(tmp_path)
+    for mesh in (tmp_path / "meshes").glob("*.stl"):
+        loaded = trimesh.load(mesh)
+        loaded.apply_scale(1000.0)
+        loaded.export(mesh)
+    line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert re.search(r"link '._foot': its foot geometry spans .* m, not a foot: meshes in millimetres\?", line), line
+    assert not (tmp_path / "config.yaml").exists()
