@@ -70,8 +70,7 @@ class Scene:
         """
         if not isinstance(config, Config):
             raise ArgumentError(
-                f"config must be a Config: Scene(load_config(path)) or posegen.load_scene(path), got {config!r}",
-                parameter="config",
+                f"config must be a Config: Scene(load_config(path)) or posegen.load_scene(path), got {config!r}"
             )
         self.config = config
         self.stance = config.stance
