@@ -59,7 +59,8 @@ test: lint browser
 	$(PY) -m pytest -q -m 'not slow' tests
 
 # The slow checks (a step of .ci/run): the kill matrix at every crash point, every shipped robot
-# end to end, the whole example pipeline, the pipeline's byte manifest, the session on a rehearsed robot, kills of `session add`.
+# end to end, the whole example pipeline, the pipeline's byte manifest, the session on a rehearsed robot, a simulated session
+# through rosbag2, kills of `session add`.
 slow: $(STAMP)
 	POSEGEN_KILL_MATRIX=full $(PY) -m pytest -q -m slow tests
 

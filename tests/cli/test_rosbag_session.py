@@ -23,6 +23,8 @@ from posegen.io import JointStates, RecordedBag, Wrenches, read_route, write_rec
 from posegen.model import read_measurements
 from tests.cli.test_cli import assert_fails_cleanly
 
+pytestmark = pytest.mark.slow  # one simulated session through rosbag2, 1.5 min: `make slow`, a step of .ci/run
+
 CHAIN = "left"
 K = 30
 SEED = 7
