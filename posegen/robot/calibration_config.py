@@ -141,13 +141,6 @@ def _probability(data: dict[str, Any], key: str, default: float, where: str) -> 
     return value
 
 
-def _integer(data: dict[str, Any], key: str, default: int, where: str, minimum: int, maximum: int = 10**6) -> int:
-    value = data.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int) or not minimum <= value <= maximum:
-        raise ConfigError(f"{where}.{key}: expected an integer from {minimum} to {maximum}, got {value!r}")
-    return value
-
-
 def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfig:
     """The ``calibration`` section (every key optional; defaults in :class:`CalibrationConfig`).
 
@@ -160,7 +153,8 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
     if not isinstance(data, dict):
         raise ConfigError(f"{where}: expected a mapping")
     defaults = CalibrationConfig()
-    Reader(data, where).keys_within(tuple(f.name for f in dataclasses.fields(CalibrationConfig)))
+    section = Reader(data, where)
+    section.keys_within(tuple(f.name for f in dataclasses.fields(CalibrationConfig)))
     prior = _prior(data.get("prior", {}), defaults.prior, f"{where}.prior")
     scales = data.get("prior_scales", list(defaults.prior_scales))
     low, high = PRIOR_SCALE_RANGE
@@ -180,9 +174,9 @@ def parse_calibration(data: Any, where: str = "calibration") -> CalibrationConfi
         prior_scales=tuple(float(s) for s in sorted(scales)),
         compliance={str(g): tuple(v) for g, v in groups.items()},
         candidates=_candidates(data.get("candidates"), defaults.candidates, groups, f"{where}.candidates"),
-        folds=_integer(data, "folds", defaults.folds, where, 2),
-        fold_seeds=_integer(data, "fold_seeds", defaults.fold_seeds, where, 1, MAX_FOLD_SEEDS),
-        fold_iterations=_integer(data, "fold_iterations", defaults.fold_iterations, where, 1),
+        folds=section.integer("folds", defaults.folds, minimum=2),
+        fold_seeds=section.integer("fold_seeds", defaults.fold_seeds, maximum=MAX_FOLD_SEEDS),
+        fold_iterations=section.integer("fold_iterations", defaults.fold_iterations),
         target_error_mm=_number(data, "target_error_mm", defaults.target_error_mm, where),
         outlier_false_alarm=_probability(data, "outlier_false_alarm", defaults.outlier_false_alarm, where),
         max_left_out=_probability(data, "max_left_out", defaults.max_left_out, where),

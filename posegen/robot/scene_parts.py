@@ -197,7 +197,7 @@ def actuated_joints(model: pin.Model, config: Config) -> Joints:
                 "posegen plans joints of one angle or length between limits; make it revolute (or fixed) with "
                 "its limits in the URDF"
             )
-    names = tuple(str(model.names[j]) for j in range(1, model.njoints) if model.joints[j].nq == 1)
+    names = tuple(str(model.names[j]) for j in range(2, model.njoints))  # each of one value (checked above)
     q_index = np.array([model.joints[model.getJointId(n)].idx_q for n in names])
     v_index = np.array([model.joints[model.getJointId(n)].idx_v for n in names])
     lower = model.lowerPositionLimit[q_index].copy()
