@@ -24,6 +24,7 @@ from posegen.robot import (
     Scene,
     VisualHull,
     check_for_planning,
+    check_reference_limits,
     load_config,
     parse_config,
     survey_scene_pairs,
@@ -249,6 +250,12 @@ def survey_config_pairs(config_path: str, samples: int = 400, seed: int = 0) -> 
     """Re-find the collision pairs to disable for a config, and the block to paste into it.
 
     For after editing a config's locked joints, reference posture or collision shapes.
+
+    Raises:
+        ConfigError: The config does not load, or its reference posture is not inside the joint limits.
+
     """
-    survey = survey_scene_pairs(Scene(load_config(config_path)), samples, seed)
+    scene = Scene(load_config(config_path))
+    check_reference_limits(scene)  # the pairs that touch at rest are found about the reference
+    survey = survey_scene_pairs(scene, samples, seed)
     return survey, "\n".join(pairs_text(survey.disabled))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -51,8 +53,14 @@ def load_yaml_file(path: Path, error: type[PosegenError]) -> Any:
 
 
 def read_text_file(path: Path, error: type[PosegenError]) -> str:
-    """The text of a UTF-8 file (a byte-order mark is dropped); unreadable or binary raises ``error``."""
+    """The text of a UTF-8 file (a byte-order mark is dropped); unreadable or binary raises ``error``.
+
+    Only a regular file is read: a FIFO would wait for a writer and a device (``/dev/zero``) never ends.
+    """
     try:
+        mode = os.stat(path).st_mode
+        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):  # a folder keeps the system's own message below
+            raise error(f"{path}: not a regular file (a device, FIFO or socket is not read)")
         data = path.read_bytes()
     except OSError as exc:
         raise error(f"cannot read {path}: {exc.strerror}") from exc
@@ -73,6 +81,8 @@ def read_yaml(path: str | Path, kind: str | tuple[str, ...]) -> dict[str, Any]:
         InputError: The file is missing, not YAML, or not an artefact of that kind.
 
     """
+    if not isinstance(path, (str, os.PathLike)) or not str(path):
+        raise InputError(f"expected a file's path (str or pathlib.Path), got {path!r}")
     path = Path(path)
     data = load_yaml_file(path, InputError)
     kinds = (kind,) if isinstance(kind, str) else kind

@@ -132,7 +132,7 @@ from posegen.robot.transforms import (
     tilt_measurement_jacobian,
     translation_matrix,
 )
-from posegen.robot.validation import check_for_planning
+from posegen.robot.validation import check_for_planning, check_reference_limits
 from posegen.robot.verification import (
     EXAMPLES,
     JointEffort,
@@ -215,6 +215,7 @@ __all__ = [
     "centre_of_pressure",
     "centres_of_pressure",
     "check_for_planning",
+    "check_reference_limits",
     "contact_in_table",
     "contact_placement",
     "convex_hull_clockwise",

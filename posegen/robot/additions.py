@@ -134,6 +134,8 @@ def read_collision(robot: Reader) -> CollisionConfig:
         ok = isinstance(item, list) and len(item) in (2, 3) and all(isinstance(v, str) and v for v in item)
         if not ok:
             raise ConfigError(f"{where}: expected [link, link] or [link, link, reason], got {item!r}")
+        if item[0] == item[1]:
+            raise ConfigError(f"{where}: '{item[0]}' paired with itself (a link is never checked against itself)")
         reason = item[2] if len(item) == 3 else PairReason.USER.value
         if reason not in {r.value for r in PairReason}:
             raise ConfigError(f"{where}: unknown reason '{reason}'; valid reasons: {valid}")

@@ -39,6 +39,7 @@ def test_a_config_without_additions_saves_as_before(config):
         (lambda d: d["robot"].update(velocity_limit={"a": 1}), r"^robot: unknown keys \['velocity_limit'\]"),
         (lambda d: d["robot"].update(velocity_limits_rad_s={"arm_left_1_joint": 0}), "must be > 0 rad/s"),
         (lambda d: d["robot"].update(collision={"disabled_pairs": [["a", "b", "never"]]}), "unknown reason 'never'"),
+        (lambda d: d["robot"].update(collision={"disabled_pairs": [["a", "a"]]}), r"\[0\]: 'a' paired with itself"),
         (lambda d: d["robot"].update(collision={"shapes": {"x": [{"cone": {}}]}}), r"expected \{capsule"),
         (lambda d: d["robot"].update(frames={"tip": {"parent": "a", "xyz": [0, 0, 0]}}), r"unknown keys \['xyz'\]"),
     ],

@@ -485,6 +485,8 @@ TABLE = [
     F("robot", "pairs: binary config", "pairs", "{binary}"),
     F("robot", "pairs: --samples 0", "pairs", "{config}", "--samples", "0"),
     F("robot", "pairs: a frame on a link the robot lacks", "pairs", "{bad_frame_config}", expect="no_such_link"),
+    F("robot", "pairs: a link paired with itself", "pairs", "{self_pair_config}", expect="paired with itself"),
+    F("robot", "pairs: a reference outside the limits", "pairs", "{outside_config}", expect="reference_joints"),
     F("robot", "unknown action", "nonsense"),
     F("pool", "a frame on a link the robot lacks", "--n", "3", "--config", "{bad_frame_config}", "-o", "{out}/p.yaml"),
     F("pool", "a malformed frame", "--n", "3", "--config", "{malformed_frame_config}", "-o", "{out}/p.yaml"),
@@ -630,6 +632,9 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     put("malformed_frame_config.yaml", config | {"robot": frames})
     pairs = {"disabled_pairs": [["arm_left_7_link", "no_such_link", "user"]]}
     put("bad_pair_config.yaml", config | {"robot": config["robot"] | {"collision": pairs}})
+    pairs = {"disabled_pairs": [["arm_left_7_link", "arm_left_7_link", "user"]]}
+    put("self_pair_config.yaml", config | {"robot": config["robot"] | {"collision": pairs}})
+    put("outside_config.yaml", config | {"stance": config["stance"] | {"reference_joints": {"arm_left_4_joint": 3.0}}})
     point = _config_data()
     point["chains"]["left"] |= {"contact_kind": "point", "point_frame": "no_such_tip"}
     put("bad_point_config.yaml", point)

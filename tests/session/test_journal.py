@@ -122,6 +122,7 @@ def test_an_add_on_a_hand_edited_index_fails_and_writes_nothing(edit, message, s
     assert files_of(session) == before
 
 
+@pytest.mark.slow  # the started session (1.7 min, shared with the rehearsed one): `make slow`
 def test_a_rehearsal_while_another_command_holds_the_session_names_the_lock(started, tmp_path, capsys):
     session = tmp_path / "session"
     shutil.copytree(started, session)

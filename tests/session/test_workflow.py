@@ -53,6 +53,7 @@ def copy_of(folder, tmp_path):
     return tmp_path / "session"
 
 
+@pytest.mark.slow  # the started session (1.7 min, shared with the rehearsed one): `make slow`
 def test_the_first_batch_identifies_every_base_parameter(started):
     index = read_index(started)
     assert [b.state for b in index.batches] == [BatchState.PLANNED]
@@ -110,6 +111,7 @@ def test_no_batch_repeats_a_posture_of_the_session(rehearsed, tmp_path):
         )
 
 
+@pytest.mark.slow  # the started session (1.7 min, shared with the rehearsed one): `make slow`
 def test_the_next_batch_is_routed_from_where_the_robot_stands(started, backend, tmp_path):
     assert standing_posture(started / "batch_001" / ROUTE_FILE) is None  # back at the start posture
     route = read_route(started / "batch_001" / ROUTE_FILE)
@@ -199,11 +201,13 @@ def test_a_file_edited_by_hand_stops_every_command(rehearsed, tmp_path, capsys):
         assert_one_line_error(err) and "changed since the session wrote it" in err
 
 
+@pytest.mark.slow  # the started session (1.7 min, shared with the rehearsed one): `make slow`
 def test_start_refuses_a_folder_that_holds_a_session(started, backend):
     with pytest.raises(InputError, match="already holds a session"):
         start_session(read_index(started).pool, str(started), SETTINGS, backend)
 
 
+@pytest.mark.slow  # the started session (1.7 min, shared with the rehearsed one): `make slow`
 def test_a_start_that_fails_leaves_no_folder_and_keeps_one_it_was_given(started, backend, tmp_path, monkeypatch):
     import posegen.session.workflow as workflow
 
