@@ -5,8 +5,9 @@ rosbag2 modules hold the format concerns of talking to ROS 2: fixed-layout CDR
 (:mod:`~posegen.io.cdr`), indexed MCAP reading (:mod:`~posegen.io.mcap_index`), atomic bag
 writing (:mod:`~posegen.io.bag_writer`), recorded sessions (:mod:`~posegen.io.recorded_bag`)
 and routes as bags (:mod:`~posegen.io.trajectory_bag`). Route files (the typed
-:class:`~posegen.io.route_file.Route`, its reader and writer) and pool and selection files
-(:class:`~posegen.io.pool_file.Pool`) live here too, below every stage that reads one.
+:class:`~posegen.io.route_file.Route`, its reader and writer), pool files
+(:class:`~posegen.io.pool_file.Pool`) and selection files
+(:class:`~posegen.io.selection_file.Selection`) live here too, below every stage that reads one.
 
 Internal: scripts use the public API at ``posegen.`` (stable, documented with examples); the
 names here are its plumbing and may change between versions.
@@ -42,9 +43,7 @@ from posegen.io.pool_file import (
     Pool,
     Posture,
     load_pool,
-    load_postures,
     pool_from_dict,
-    posture_entries,
     posture_from_dict,
     write_pool,
 )
@@ -74,6 +73,26 @@ from posegen.io.route_writer import (
     stored_arrays,
     write_route,
 )
+from posegen.io.selection_file import (
+    Certificate,
+    ChosenPosture,
+    DesignFigures,
+    DetmaxFigures,
+    Figures,
+    FollowUpFigures,
+    IrocFigures,
+    Selection,
+    SelectionMethod,
+    SessionFigures,
+    chosen_from_pool,
+    load_postures,
+    posture_entries,
+    postures_from_dict,
+    postures_of,
+    read_selection,
+    selection_from_dict,
+    write_selection,
+)
 from posegen.io.topic_names import check_topics, topic_name_problem
 from posegen.io.trajectory_bag import SEGMENT_FIELDS, SEGMENT_TABLE, TRAJECTORY, write_trajectory_bag
 
@@ -96,6 +115,13 @@ __all__ = [
     "TRAJECTORY",
     "VELOCITY_STEP",
     "WRENCH_STAMPED",
+    "Certificate",
+    "ChosenPosture",
+    "DesignFigures",
+    "DetmaxFigures",
+    "Figures",
+    "FollowUpFigures",
+    "IrocFigures",
     "JointStates",
     "NativeOutput",
     "OutputKind",
@@ -106,6 +132,9 @@ __all__ = [
     "Route",
     "Segment",
     "SegmentType",
+    "Selection",
+    "SelectionMethod",
+    "SessionFigures",
     "Wrenches",
     "atomic_folder",
     "atomic_path",
@@ -114,6 +143,7 @@ __all__ = [
     "check_replaceable",
     "check_topics",
     "check_writable",
+    "chosen_from_pool",
     "claim_output",
     "companion_of",
     "companion_path",
@@ -132,13 +162,17 @@ __all__ = [
     "pool_from_dict",
     "posture_entries",
     "posture_from_dict",
+    "postures_from_dict",
+    "postures_of",
     "provenance",
     "read_arrays",
     "read_route",
+    "read_selection",
     "read_text_file",
     "read_yaml",
     "route_header",
     "route_outputs",
+    "selection_from_dict",
     "sidecar_path",
     "sidecar_reference",
     "sidecars_of",
@@ -151,6 +185,7 @@ __all__ = [
     "write_pool",
     "write_recording",
     "write_route",
+    "write_selection",
     "write_trajectory_bag",
     "write_with_arrays",
     "write_with_companions",

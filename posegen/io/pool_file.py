@@ -43,7 +43,7 @@ from posegen.io.artefact import read_yaml
 from posegen.numeric import FloatArray
 
 POOL_FORMAT = "posegen-pool"
-SELECTION_FORMAT = "posegen-selection"  # read here as postures; whole by posegen.select.read_selection
+SELECTION_FORMAT = "posegen-selection"  # its reader: posegen.io.selection_file
 POOL_VERSION = 1  # postures inline
 POOL_ARRAYS_VERSION = 2  # postures in a .npz sidecar
 _SCALARS = ("contact_yaw_rad", "min_distance_m", "com_margin_m")  # float fields, one value per posture
@@ -334,24 +334,3 @@ def write_pool(path: str | Path, pool: Pool) -> None:
     """Write a pool file in the current format: YAML header and ``.npz`` sidecar, atomically each."""
     header, arrays = pool.to_arrays()
     write_with_arrays(path, header, arrays)
-
-
-def load_postures(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
-    """Read a pool or a selection that has postures: the postures, and their entries as plain data.
-
-    Raises:
-        InputError: The file is missing, malformed, neither a pool nor a selection, or empty.
-
-    """
-    data = read_yaml(path, (POOL_FORMAT, SELECTION_FORMAT))
-    chosen = pool_from_dict(data, str(path))
-    if not chosen.postures:
-        raise InputError(f"{path}: no postures")
-    return chosen, posture_entries(data, chosen)
-
-
-def posture_entries(data: dict[str, Any], chosen: Pool) -> list[dict[str, Any]]:
-    """The posture entries of a pool or selection file as plain data (a version-2 pool has none inline)."""
-    if "postures" in data:
-        return list(data["postures"])
-    return [chosen.entry(i) for i in range(len(chosen.postures))]

@@ -13,7 +13,7 @@ from posegen.io import (
     Pool,
     check_apart,
     claim_output,
-    pool_from_dict,
+    postures_of,
     read_yaml,
     write_pool,
 )
@@ -95,7 +95,7 @@ def check_pool_file(
         PosegenError: Not a pool or selection, no posture, or postures made for another robot model.
 
     """
-    pool = pool_from_dict(read_yaml(path, (POOL_FORMAT, SELECTION_FORMAT)), path)
+    pool = postures_of(read_yaml(path, (POOL_FORMAT, SELECTION_FORMAT)), path)
     if not pool.postures:
         raise InputError(f"{path}: the pool holds no posture: nothing to check")
     scene = scene_for(pool.provenance, config_path)

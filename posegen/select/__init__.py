@@ -9,12 +9,7 @@ Internal: scripts use the public API at ``posegen.`` (stable, documented with ex
 names here are its plumbing and may change between versions.
 """
 
-from posegen.model import Design, build_design
-from posegen.select.figures import design_selection, plot_detmax, plot_o1
-from posegen.select.followup import FollowUp, follow_up, read_calibration_model
-from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
-from posegen.select.selection import Iroc, detmax_runs, iroc, select_k, weight_of
-from posegen.select.selection_file import (
+from posegen.io import (  # the selection file lives with the other artefacts' readers
     Certificate,
     ChosenPosture,
     DesignFigures,
@@ -30,6 +25,11 @@ from posegen.select.selection_file import (
     selection_from_dict,
     write_selection,
 )
+from posegen.model import Design, build_design
+from posegen.select.figures import design_selection, plot_detmax, plot_o1
+from posegen.select.followup import FollowUp, follow_up, read_calibration_model
+from posegen.select.optimal_weights import OptimalWeights, d_optimal_weights
+from posegen.select.selection import Iroc, detmax_runs, iroc, select_k, weight_of
 from posegen.select.subset_selection import Subset, detmax, exchange, greedy, subset_of
 from posegen.select.workflow import SelectionSettings, follow_up_pool_file, select_pool_file
 

@@ -1,4 +1,4 @@
-"""The figures of a design chosen from a pool, as a :class:`~posegen.select.selection_file.Selection`, and its plots."""
+"""The figures of a design chosen from a pool, as a :class:`~posegen.io.selection_file.Selection`, and its plots."""
 
 from __future__ import annotations
 
@@ -7,18 +7,19 @@ from pathlib import Path
 
 import numpy as np
 
-from posegen.io import Pool, atomic_path
-from posegen.model import Design
-from posegen.select.selection import Iroc
-from posegen.select.selection_file import (
+from posegen.io import (
     Certificate,
     DesignFigures,
     DetmaxFigures,
     IrocFigures,
+    Pool,
     Selection,
     SelectionMethod,
+    atomic_path,
     chosen_from_pool,
 )
+from posegen.model import Design
+from posegen.select.selection import Iroc
 from posegen.select.subset_selection import Subset
 
 

@@ -11,21 +11,25 @@ from pathlib import Path
 
 from posegen.arguments import check_count, check_seed
 from posegen.errors import InfeasibleError, InputError
-from posegen.io import Pool, check_apart, check_writable, claim_output, load_pool
+from posegen.io import (
+    DesignFigures,
+    FollowUpFigures,
+    Pool,
+    Selection,
+    SelectionMethod,
+    check_apart,
+    check_writable,
+    chosen_from_pool,
+    claim_output,
+    load_pool,
+    write_selection,
+)
 from posegen.model import DEFAULT_NOISE, Contacts, build_design, measurement_item, read_measurements
 from posegen.progress import ProgressCallback, Steps, ignore_progress
 from posegen.robot import CandidateConfig, Scene, scene_for_postures
 from posegen.select.figures import design_selection, plot_detmax, plot_o1
 from posegen.select.followup import follow_up, read_calibration_model
 from posegen.select.selection import detmax_runs, iroc, select_k
-from posegen.select.selection_file import (
-    DesignFigures,
-    FollowUpFigures,
-    Selection,
-    SelectionMethod,
-    chosen_from_pool,
-    write_selection,
-)
 from posegen.select.subset_selection import Subset, subset_of
 
 LOG = logging.getLogger(__name__)

@@ -27,7 +27,8 @@ from posegen.io import (
     is_route_file,
     load_yaml_file,
     pool_from_dict,
-    posture_entries,
+    postures_from_dict,
+    postures_of,
     read_route,
     read_yaml,
 )
@@ -97,9 +98,7 @@ def _linked_file(recorded: Any, sha256: Any, beside: Path) -> Path | None:
 
 
 def _postures(path: Path, data: dict[str, Any], config_path: str | None) -> PosturesArtefact:
-    chosen = pool_from_dict(data, str(path))
-    if not chosen.postures:
-        raise InputError(f"{path}: no postures")
+    chosen, entries = postures_from_dict(data, str(path))
     scene = scene_for(chosen.provenance, config_path)
     scene.check_made_for(chosen.provenance, str(path))
     chosen.check_joints(scene.joint_names, str(path))
@@ -114,7 +113,7 @@ def _postures(path: Path, data: dict[str, Any], config_path: str | None) -> Post
         path=path,
         scene=scene,
         postures=chosen,
-        entries=tuple(posture_entries(data, chosen)),
+        entries=tuple(entries),
         pool=pool,
     )
 
@@ -129,7 +128,7 @@ def _route(path: Path, config_path: str | None) -> RouteArtefact:
     selection_path = _linked_file(recorded.get("selection"), recorded.get("selection_sha256"), path)
     selection = None
     if selection_path is not None:
-        selection = pool_from_dict(read_yaml(selection_path, (POOL_FORMAT, SELECTION_FORMAT)), str(selection_path))
+        selection = postures_of(read_yaml(selection_path, (POOL_FORMAT, SELECTION_FORMAT)), str(selection_path))
     return RouteArtefact(
         path=path,
         scene=scene,

@@ -76,6 +76,8 @@ PLAN_FILES = {  # bad pool or selection files, by what is wrong with them: input
     "NaN in a pool": "nan_pool",
     "future format_version": "future_pool",
     "pool of another robot model": "other_robot_pool",
+    "a selection's rank NaN": "nan_rank_selection",  # read by the stages' reader, not by posegen.load's: as load's now
+    "a selection's method unknown": "magic_selection",
 }
 MEASUREMENT_FILES = {  # bad measurement files (posegen YAML or recorded CSV): input name
     "binary YAML": "binary",
@@ -221,8 +223,16 @@ TABLE = [
     *(  # each was a traceback (int() of None or of 'x', Path() of 5)
         F("route", what, f"{{{name}}}", "-o", "{out}/route.yaml", expect=expect)
         for what, name, expect in (
-            ("a selection's pool_id null", "null_pool_id_selection", "posture 0: pool_id None is not a posture"),
-            ("a selection's pool_id text", "text_pool_id_selection", "posture 0: pool_id 'x' is not a posture"),
+            (
+                "a selection's pool_id null",
+                "null_pool_id_selection",
+                "'pool_id' must be an integer, got None",
+            ),
+            (
+                "a selection's pool_id text",
+                "text_pool_id_selection",
+                "'pool_id' must be an integer, got 'x'",
+            ),
             ("a selection's provenance.pool a number", "number_pool_selection", "provenance.pool 5 is not a path"),
         )
     ),
@@ -528,7 +538,7 @@ def _config_data() -> dict:
 
 
 @pytest.fixture(scope="module")
-def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
+def inputs(tmp_path_factory, route_file, calibration_folder, selection_file) -> dict[str, str]:
     """The bad (and a few good) input files of the table, by name."""
     folder = tmp_path_factory.mktemp("inputs")
     rng = np.random.default_rng(0)
@@ -661,7 +671,8 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
 
     pool_path = folder / "pool.yaml"
     selection = yaml.safe_load(pool_path.read_text())
-    selection |= {"format": "posegen-selection", "method": "k", "figures": {"selected": 3}}
+    figures = yaml.safe_load(selection_file.read_text())["figures"]  # a whole section, of another selection
+    selection |= {"format": "posegen-selection", "method": "k", "figures": figures}
     selection["postures"] = [
         p | {"pool_id": p["id"], "rank": r, "weight": 0.1} for r, p in enumerate(pool["postures"][:3])
     ]
@@ -674,6 +685,8 @@ def inputs(tmp_path_factory, route_file, calibration_folder) -> dict[str, str]:
     put("null_pool_id_selection.yaml", selection | {"postures": [selection["postures"][0] | {"pool_id": None}]})
     put("text_pool_id_selection.yaml", selection | {"postures": [selection["postures"][0] | {"pool_id": "x"}]})
     put("number_pool_selection.yaml", selection | {"provenance": selection["provenance"] | {"pool": 5}})
+    put("nan_rank_selection.yaml", selection | {"postures": [selection["postures"][0] | {"rank": float("nan")}]})
+    put("magic_selection.yaml", selection | {"method": "magic"})
 
     report = yaml.safe_load((calibration_folder.path / "calibration.yaml").read_text())
     put("calibration.yaml", report)

@@ -75,14 +75,14 @@ def test_a_residual_of_a_chain_the_robot_lacks_is_refused(tmp_path, calibration_
         open_artefact(folder)
 
 
-def test_a_selection_weight_that_is_no_number_is_shown_as_written(selection_file, tmp_path):
-    """The posture's label formatted the weight as a float: a weight ``heavy`` ended the view in a ValueError."""
-    from posegen.view.postures_view import describe
-
+@pytest.mark.parametrize("weight", ["heavy", float("nan")])
+def test_a_selection_weight_that_is_no_finite_number_is_refused_as_every_reader_refuses_it(
+    weight, selection_file, tmp_path
+):
+    """The view reads a selection with the one selection reader (it labelled a weight ``heavy`` as written)."""
     data = yaml.safe_load(selection_file.read_text())
-    data["postures"][0]["weight"] = "heavy"
+    data["postures"][0]["weight"] = weight
     edited = tmp_path / "selected.yaml"
     edited.write_text(yaml.safe_dump(data))
-    artefact = open_artefact(edited)
-    assert isinstance(artefact, PosturesArtefact)
-    assert "weight 'heavy'" in describe(artefact, 0)
+    with pytest.raises(InputError, match=r"selected.yaml: posture 0: 'weight' must be a finite number, got"):
+        open_artefact(edited)

@@ -13,19 +13,30 @@ selection, whose fields depend on its method::
     figures: {...}              # DesignFigures (iroc, k), FollowUpFigures, SessionFigures
     postures: [{pool_id, rank, weight, id, sample, chain, spot, joints, ...}, ...]
 
-The stages read a selection's postures through the pool reader (:func:`posegen.io.load_postures`);
-:func:`read_selection` reads the whole file.
+:func:`read_selection` reads the whole file; the stages read a pool's or a selection's
+postures with :func:`load_postures`, which checks a selection whole as :func:`read_selection`
+does (one reader: a file ``route`` takes is one ``posegen.load`` takes).
 """
 
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from posegen.errors import InputError, reason
-from posegen.io import POOL_VERSION, SELECTION_FORMAT, Pool, Posture, posture_from_dict, read_yaml, write_yaml
+from posegen.io.artefact import read_yaml, write_yaml
+from posegen.io.pool_file import (
+    POOL_FORMAT,
+    POOL_VERSION,
+    SELECTION_FORMAT,
+    Pool,
+    Posture,
+    pool_from_dict,
+    posture_from_dict,
+)
 
 
 class SelectionMethod(str, enum.Enum):
@@ -249,12 +260,27 @@ def selection_from_dict(data: dict[str, Any], where: str = "selection") -> Selec
         raise InputError(f"{where}: not a posegen selection ({reason(exc)})") from exc
     postures = []
     for i, raw in enumerate(raw_postures):
-        posture = posture_from_dict(raw, len(names), f"{where}: posture {i}")
-        try:
-            postures.append(ChosenPosture(int(raw["pool_id"]), int(raw["rank"]), float(raw["weight"]), posture))
-        except (KeyError, TypeError, ValueError, OverflowError) as exc:
-            raise InputError(f"{where}: posture {i}: malformed ({reason(exc)})") from exc
+        postures.append(
+            _chosen(raw, posture_from_dict(raw, len(names), f"{where}: posture {i}"), f"{where}: posture {i}")
+        )
     return Selection(dict(data["provenance"]), method, names, figures, tuple(postures))
+
+
+def _chosen(raw: dict[str, Any], posture: Posture, where: str) -> ChosenPosture:
+    """A posture's place in the selection: ``pool_id`` and ``rank`` integers, ``weight`` a finite number.
+
+    Raises:
+        InputError: A field missing or of another kind, named.
+
+    """
+    for name in ("pool_id", "rank"):
+        value = raw.get(name)
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise InputError(f"{where}: '{name}' must be an integer, got {value!r}")
+    weight = raw.get("weight")
+    if not isinstance(weight, (int, float)) or isinstance(weight, bool) or not math.isfinite(weight):
+        raise InputError(f"{where}: 'weight' must be a finite number, got {weight!r}")
+    return ChosenPosture(raw["pool_id"], raw["rank"], float(weight), posture)
 
 
 def _figures(method: SelectionMethod, raw: dict[str, Any]) -> Figures:
@@ -310,3 +336,49 @@ def _follow_up(raw: dict[str, Any]) -> FollowUpFigures:
             str(c): (float(s["before"]), float(s["after"])) for c, s in dict(raw["predicted_height_sigma_mm"]).items()
         },
     )
+
+
+def load_postures(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
+    """Read a pool or a selection that has postures: the postures, and their entries as plain data.
+
+    Example:
+        >>> postures, entries = load_postures("plans/talos/pool.yaml")  # doctest: +SKIP
+
+    Raises:
+        InputError: The file is missing, malformed (a selection: as :func:`read_selection`
+            finds it), neither a pool nor a selection, or empty.
+
+    """
+    return postures_from_dict(read_yaml(path, (POOL_FORMAT, SELECTION_FORMAT)), str(path))
+
+
+def postures_from_dict(data: dict[str, Any], where: str) -> tuple[Pool, list[dict[str, Any]]]:
+    """The postures of a pool's or a selection's content, and their entries as plain data.
+
+    Raises:
+        InputError: The content is not a valid pool or selection, or has no postures.
+
+    """
+    chosen = postures_of(data, where)
+    if not chosen.postures:
+        raise InputError(f"{where}: no postures")
+    return chosen, posture_entries(data, chosen)
+
+
+def postures_of(data: dict[str, Any], where: str) -> Pool:
+    """The postures of a pool's or a selection's content; a selection is checked whole, as :func:`read_selection` does.
+
+    Raises:
+        InputError: The content is not a valid pool or selection.
+
+    """
+    if data.get("format") == SELECTION_FORMAT:
+        selection_from_dict(data, where)  # its method, figures and each posture's pool_id, rank and weight
+    return pool_from_dict(data, where)
+
+
+def posture_entries(data: dict[str, Any], chosen: Pool) -> list[dict[str, Any]]:
+    """The posture entries of a pool or selection file as plain data (a version-2 pool has none inline)."""
+    if "postures" in data:
+        return list(data["postures"])
+    return [chosen.entry(i) for i in range(len(chosen.postures))]

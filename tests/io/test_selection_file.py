@@ -74,17 +74,23 @@ def test_follow_up_and_session_selections_round_trip(tmp_path, example_pool):
         (lambda d: d.update(method="best"), "not a posegen selection"),
         (lambda d: d["figures"].pop("certificate"), "not a posegen selection"),
         (lambda d: d.update(format_version=2), "unsupported format_version"),
-        (lambda d: d["postures"][0].pop("rank"), "posture 0: malformed"),
+        (lambda d: d["postures"][0].pop("rank"), "posture 0: 'rank' must be an integer, got None"),
+        (lambda d: d["postures"][0].update(rank=float("nan")), "posture 0: 'rank' must be an integer, got nan"),
+        (lambda d: d["postures"][0].update(rank="3"), "posture 0: 'rank' must be an integer, got '3'"),
+        (lambda d: d["postures"][2].update(pool_id=True), "posture 2: 'pool_id' must be an integer, got True"),
+        (lambda d: d["postures"][0].update(weight=float("inf")), "posture 0: 'weight' must be a finite number"),
         (lambda d: d["postures"][1].pop("joints"), "posture 1: malformed"),
     ],
 )
 def test_a_malformed_selection_is_refused_in_one_line(tmp_path, selection_file, edit, message):
+    """By both readers: read_selection, and load_postures (the stages': route, simulate, calibrate)."""
     data = yaml.safe_load(selection_file.read_text())
     edit(data)
     write_yaml(tmp_path / "bad.yaml", data)
-    with pytest.raises(InputError, match=message) as refused:
-        read_selection(tmp_path / "bad.yaml")
-    assert "\n" not in str(refused.value)
+    for read in (read_selection, load_postures):
+        with pytest.raises(InputError, match=message) as refused:
+            read(tmp_path / "bad.yaml")
+        assert "\n" not in str(refused.value)
 
 
 def test_a_pool_is_not_a_selection(tmp_path):
