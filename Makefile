@@ -55,15 +55,15 @@ browser:
 		echo "posegen: no headless Chromium and no root apt-get: the browser tests will be skipped"; \
 	fi
 
-# The suite on TEST_WORKERS processes (pytest-xdist; 2 cores here): each process builds the shared
-# fixtures it needs once. TEST_WORKERS=0 runs it in this process alone.
+# The suite on TEST_WORKERS processes (pytest-xdist; 2 cores here; an idle process takes tests from a
+# busy one's queue): each builds the shared fixtures it needs once. TEST_WORKERS=0: one process.
 TEST_WORKERS ?= 2
 test: lint browser
-	$(PY) -m pytest -q -n $(TEST_WORKERS) -m 'not slow' tests
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist worksteal -m 'not slow' tests
 
 # The slow checks (a step of .ci/run): the kill matrix at every crash point, every shipped robot
-# end to end, the whole example pipeline, the pipeline's byte manifest, the session on a rehearsed robot, a simulated session
-# through rosbag2, kills of `session add`.
+# end to end, the whole example pipeline, the pipeline's byte manifest, the session tests on a
+# started or rehearsed session, a simulated session through rosbag2, kills of `session add`.
 slow: $(STAMP)
 	POSEGEN_KILL_MATRIX=full $(PY) -m pytest -q -m slow tests
 

@@ -342,7 +342,7 @@ def load_postures(path: str | Path) -> tuple[Pool, list[dict[str, Any]]]:
     """Read a pool or a selection that has postures: the postures, and their entries as plain data.
 
     Example:
-        >>> postures, entries = load_postures("plans/talos/pool.yaml")  # doctest: +SKIP
+        >>> postures, entries = load_postures("plans/pool.yaml")  # doctest: +SKIP
 
     Raises:
         InputError: The file is missing, malformed (a selection: as :func:`read_selection`

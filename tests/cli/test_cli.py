@@ -266,7 +266,7 @@ def test_unreachable_scheduler_fails_before_any_work(tmp_path, capsys, monkeypat
     assert not list(tmp_path.glob("*.npz"))
 
 
-def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
+def test_route_repairs_a_selection_from_its_pool(scene, selection_file, tmp_path, capsys):
     """A selected posture that cannot be reached is replaced by a pool posture, and the swap is reported."""
     import hashlib
 
@@ -279,7 +279,8 @@ def test_route_repairs_a_selection_from_its_pool(scene, tmp_path, capsys):
     other = "right" if postures[1]["chain"] == "left" else "left"
     k = scene.joint_index(f"arm_{other}_1_joint")
     postures[1]["joints"][k] = float(scene.upper[k])  # no valid state above this contact
-    data.update(format="posegen-selection", postures=postures, method="k", figures={})
+    figures = yaml.safe_load(selection_file.read_text())["figures"]  # a whole section (of another selection)
+    data.update(format="posegen-selection", postures=postures, method="k", figures=figures)
     data["provenance"] = {
         **data["provenance"],
         "pool": str(EXAMPLE_POOL),

@@ -119,8 +119,8 @@ POOL_DATA = small_pool_data()
 def selection_data() -> dict[str, Any]:
     data = copy.deepcopy(POOL_DATA)
     data["format"] = SELECTION_FORMAT
-    data["method"] = "k"
-    data["figures"] = {"selected": 3}
+    data["method"] = "session"  # the figures of the smallest kind a selection has, whole
+    data["figures"] = {"missing_postures": []}
     for rank, posture in enumerate(data["postures"], start=1):
         posture.update({"pool_id": posture["id"], "rank": rank, "weight": 0.1})
     return data
