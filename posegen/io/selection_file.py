@@ -260,9 +260,8 @@ def selection_from_dict(data: dict[str, Any], where: str = "selection") -> Selec
         raise InputError(f"{where}: not a posegen selection ({reason(exc)})") from exc
     postures = []
     for i, raw in enumerate(raw_postures):
-        postures.append(
-            _chosen(raw, posture_from_dict(raw, len(names), f"{where}: posture {i}"), f"{where}: posture {i}")
-        )
+        at = f"{where}: posture {i}"
+        postures.append(_chosen(raw, posture_from_dict(raw, len(names), at), at))
     return Selection(dict(data["provenance"]), method, names, figures, tuple(postures))
 
 
