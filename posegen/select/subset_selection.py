@@ -91,7 +91,8 @@ def _check_k(design: Design, k: int) -> None:
     minimum = design.fewest()
     if not minimum <= k <= design.size:
         raise InfeasibleError(
-            f"k = {k}: choose between {minimum} (the fewest postures with nb = {design.n_params} measured rows) "
+            f"k = {k}: choose between {minimum} (the fewest postures with nb = {design.n_params} measured rows; "
+            f"identifying all {design.n_params} base parameters may take more; IROC, k unset, finds how many) "
             f"and {design.size} (the pool)"
         )
 
