@@ -44,6 +44,7 @@ from posegen.robot import FloatArray, RobotFiles, read_srdf_states, yaw_rotation
 
 LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
 LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
+ROBOT_MAX_M = 5.0  # joints farther apart than this are no humanoid's (a URDF in millimetres, not metres)
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,6 +124,7 @@ def study_body(src: DraftSource) -> Body:
     """
     model, tree = src.model, Tree.of(src.model)
     state, q, checks = srdf_state(model, src.files)
+    check_size(model, q, src.label)
     bearing = orient(model, q, tree, src.label)
     q[:7] = pin.SE3ToXYZQUAT(bearing.root)
     if bearing.up != "+z":
@@ -325,6 +327,24 @@ def _arm_paths(joint: int, path: list[int], tree: Tree, total: float, out: list[
         out.append(path)
     for child in heavy:
         _arm_paths(child, path, tree, total, out)
+
+
+def check_size(model: pin.Model, q: FloatArray, label: str) -> None:
+    """The joints at ``q`` (nq,) lie within a humanoid's size: a URDF written in millimetres is named as such.
+
+    Raises:
+        ConfigError: Two joints farther apart, along an axis, than :data:`ROBOT_MAX_M`.
+
+    """
+    data = model.createData()
+    pin.forwardKinematics(model, data, q)
+    placed = np.array([data.oMi[j].translation for j in range(2, model.njoints)])  # (njoints - 2, 3) m, not the root
+    span = float(np.ptp(placed, axis=0).max()) if len(placed) else 0.0
+    if span > ROBOT_MAX_M:
+        raise ConfigError(
+            f"{label}: its joints lie {span:.0f} m apart, no humanoid's size: lengths in millimetres? A URDF's "
+            'lengths are metres: scale its origins, and give each <mesh> scale="0.001 0.001 0.001"'
+        )
 
 
 def locked_joints(model: pin.Model, q: FloatArray, kept: set[int]) -> dict[str, float]:

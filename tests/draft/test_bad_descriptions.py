@@ -155,3 +155,22 @@ def test_a_foot_mesh_in_millimetres_is_named(tmp_path, capfd):
     line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
     assert re.search(r"link '._foot': its foot geometry spans .* m, not a foot: meshes in millimetres\?", line), line
     assert not (tmp_path / "config.yaml").exists()
+
+
+def test_a_urdf_in_millimetres_throughout_is_named(tmp_path, capfd):
+    """Origins in mm too: the foot-mesh message's scale was half the fix; the robot's size is named first."""
+    import trimesh
+
+    path = humanoid_urdf(tmp_path)
+    for mesh in (tmp_path / "meshes").glob("*.stl"):
+        loaded = trimesh.load(mesh)
+        loaded.apply_scale(1000.0)
+        loaded.export(mesh)
+
+    def in_mm(match: re.Match[str]) -> str:
+        return f'{match.group(1)}="{" ".join(f"{1000.0 * float(v):g}" for v in match.group(2).split())}"'
+
+    path.write_text(re.sub(r'(xyz|length|radius|size)="([^"]*)"', in_mm, path.read_text()))
+    line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert re.search(r"joints lie \d+ m apart, no humanoid's size: lengths in millimetres\? .*scale its origins", line)
+    assert not (tmp_path / "config.yaml").exists()
