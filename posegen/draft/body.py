@@ -10,7 +10,8 @@
    the upper body, in neither the legs nor the arms: :func:`~posegen.draft.stance.waist_joints`);
 4. :func:`bend_reference`: without an SRDF state, a standing posture with the knees bent;
 5. :func:`find_arms`: the two longest chains of the upper body, up to where they branch
-   into light parts only (fingers: under 1 % of the robot's mass);
+   into light parts only (fingers: under 1 % of the robot's mass), less the joints at their
+   ends too narrow to plan (:func:`without_narrow_ends`);
 6. :func:`locked_joints` and :func:`clear_of_limits`: every joint off the legs and arms is
    locked where it is; the arms' joints are moved clear of their limits.
 
@@ -143,6 +144,9 @@ def study_body(src: DraftSource) -> Body:
         found += bent
         pin.framesForwardKinematics(model, data, q)
     arms = find_arms(model, data, tree, roots, bearing.left, src.label)
+    trimmed = [without_narrow_ends(model, arm, margin) for arm in arms]
+    arms = [arm for arm, _ in trimmed]
+    found += tuple(check for _, check in trimmed if check)
     waist = waist_joints(model, roots)
     kept = legs.joints | {j for arm in arms for j in arm} | set(waist)
     locked = locked_joints(model, q, kept)
@@ -313,6 +317,24 @@ def find_arms(
         names = ", ".join(f"'{model.names[b]}'" for b in upper) or "none"
         raise ConfigError(f"{label}: no two arms: the upper body (from joint {names}) has the chains ending at {found}")
     return sorted(paths[:2], key=lambda p: -float(data.oMi[p[-1]].translation @ left))
+
+
+def without_narrow_ends(model: pin.Model, arm: list[int], margin: float) -> tuple[list[int], str]:
+    """An arm without the joints at its end too narrow to keep ``margin`` from both limits (a gripper's finger).
+
+    Such a joint could not move in a plan; off the arm, it is locked and its link is part of the hand.
+    Returns the arm and a ``# CHECK:`` line ("" when none was dropped).
+    """
+    kept = list(arm)
+    while len(kept) > 3 and np.subtract(*limits(model, kept[-1])[::-1]) < 2.0 * margin:
+        kept.pop()
+    if len(kept) == len(arm):
+        return kept, ""
+    names = ", ".join(f"'{model.names[j]}'" for j in arm[len(kept) :])
+    return kept, (
+        f"{names} ended an arm with a range under twice margins.joint_limit_rad ({2.0 * margin:g}): locked, as a "
+        f"gripper's finger; the hand is the link of '{model.names[kept[-1]]}'"
+    )
 
 
 def _arm_paths(joint: int, path: list[int], tree: Tree, total: float, out: list[list[int]]) -> None:

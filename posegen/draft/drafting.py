@@ -8,8 +8,9 @@ names, and records every guess with how to check it (:attr:`Draft.checks`):
   bent is found when none gives one), in the steps of :mod:`posegen.draft.body`;
 * arms: the two longest chains of the upper body, up to where they branch into light
   parts only (fingers: under 1 % of the robot's mass), which are locked, like every joint
-  off the legs and arms (head, neck) (:mod:`posegen.draft.body`). A gripper joint
-  that ends a chain stays in it: lock it by hand;
+  off the legs and arms (head, neck) (:mod:`posegen.draft.body`). A joint that ends a
+  chain stays in it, but for one too narrow to keep the margin from both limits (a
+  gripper's slide finger), which is locked too;
 * contact: :func:`posegen.draft.geometry.hand_contact` (a flat face pointing down,
   else a point at the hand's tip);
 * collision geometry for the links that move without any (or whose collision shapes leave

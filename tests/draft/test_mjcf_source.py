@@ -52,6 +52,32 @@ def test_robot_init_writes_a_draft_and_its_urdf_and_the_draft_runs(tmp_path, cap
     assert _init(mjcf, output) == 0  # a re-run: the same URDF is there already, kept
 
 
+def test_a_slide_finger_ending_the_arm_is_locked_and_the_draft_loads(tmp_path, capsys):
+    """Was: the 2 cm finger stayed in the arm, the hand was the finger, and the draft did not load."""
+    mjcf = humanoid_mjcf(tmp_path / "model")
+    text = mjcf.read_text()
+    for side in ("l", "r"):
+        wrist = f'<joint name="{side}_wrist" axis="0 1 0" range="-1 1"/>'
+        finger = (
+            f'<body name="{side}_finger" pos="0 0 -0.1"><inertial pos="0 0 0" mass="0.005" diaginertia="1e-6 1e-6 '
+            f'1e-6"/><joint name="{side}_finger_slide" type="slide" axis="1 0 0" range="0 0.02"/>'
+            '<geom type="box" size="0.005 0.005 0.01"/></body>'
+        )
+        text = text.replace(wrist, wrist + finger)
+    mjcf.write_text(text)
+    output = tmp_path / "humanoid.yaml"
+    assert _init(mjcf, output) == 0
+    out = capsys.readouterr().out
+    assert "note: the draft loads as a scene" in out and "hands l_hand, r_hand" in out
+    draft = output.read_text()
+    assert "# CHECK: 'l_finger_slide' ended an arm with a range under twice margins.joint_limit_rad" in draft
+    config = load_config(output)
+    assert {"l_finger_slide", "r_finger_slide"} <= set(config.locked_joints)
+    scene = Scene(config)
+    free = {scene.joint_names[j] for j in range(len(scene.joint_names)) if not scene.locked[j]}
+    assert "l_wrist" in free and "l_finger_slide" not in free
+
+
 def test_a_urdf_in_the_way_is_never_overwritten(tmp_path, capsys):
     mjcf = humanoid_mjcf(tmp_path / "model")
     theirs = tmp_path / "humanoid.urdf"
