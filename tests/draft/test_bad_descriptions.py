@@ -8,6 +8,7 @@ overwrites what the draft reads: the URDF, the MJCF or a mesh.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
 
@@ -143,15 +144,21 @@ def test_an_mjcf_refused_at_init_names_the_mjcf(edit, message, tmp_path, capfd):
     assert not (tmp_path / "config.yaml").exists() and not (tmp_path / "config.urdf").exists()
 
 
-def test_a_foot_mesh_in_millimetres_is_named(tmp_path, capfd):
-    """Was: "stance.foot_x_m: expected values within 0.5 of 0", a key of a config the user never wrote."""
+def _humanoid_with_meshes_in_mm(folder: Path) -> Path:
+    """The synthetic humanoid's URDF, its STL meshes scaled to millimetres."""
     import trimesh
 
-    path = humanoid_urdf(tmp_path)
-    for mesh in (tmp_path / "meshes").glob("*.stl"):
+    path = humanoid_urdf(folder)
+    for mesh in (folder / "meshes").glob("*.stl"):
         loaded = trimesh.load(mesh)
         loaded.apply_scale(1000.0)
         loaded.export(mesh)
+    return path
+
+
+def test_a_foot_mesh_in_millimetres_is_named(tmp_path, capfd):
+    """Was: "stance.foot_x_m: expected values within 0.5 of 0", a key of a config the user never wrote."""
+    path = _humanoid_with_meshes_in_mm(tmp_path)
     line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
     assert re.search(r"link '._foot': its foot geometry spans .* m, not a foot: meshes in millimetres\?", line), line
     assert not (tmp_path / "config.yaml").exists()
@@ -159,13 +166,7 @@ def test_a_foot_mesh_in_millimetres_is_named(tmp_path, capfd):
 
 def test_a_urdf_in_millimetres_throughout_is_named(tmp_path, capfd):
     """Origins in mm too: the foot-mesh message's scale was half the fix; the robot's size is named first."""
-    import trimesh
-
-    path = humanoid_urdf(tmp_path)
-    for mesh in (tmp_path / "meshes").glob("*.stl"):
-        loaded = trimesh.load(mesh)
-        loaded.apply_scale(1000.0)
-        loaded.export(mesh)
+    path = _humanoid_with_meshes_in_mm(tmp_path)
 
     def in_mm(match: re.Match[str]) -> str:
         return f'{match.group(1)}="{" ".join(f"{1000.0 * float(v):g}" for v in match.group(2).split())}"'
