@@ -41,7 +41,7 @@ from posegen.draft.stance import (
     waist_joints,
 )
 from posegen.errors import ConfigError
-from posegen.robot import FloatArray, RobotFiles, read_srdf_states, yaw_rotation
+from posegen.robot import FloatArray, RobotFiles, leaves_no_room, read_srdf_states, yaw_rotation
 
 LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
 LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
@@ -326,7 +326,7 @@ def without_narrow_ends(model: pin.Model, arm: list[int], margin: float) -> tupl
     Returns the arm and a ``# CHECK:`` line ("" when none was dropped).
     """
     kept = list(arm)
-    while len(kept) > 3 and np.subtract(*limits(model, kept[-1])[::-1]) < 2.0 * margin:
+    while len(kept) > 3 and leaves_no_room(*limits(model, kept[-1]), margin):
         kept.pop()
     if len(kept) == len(arm):
         return kept, ""

@@ -58,6 +58,7 @@ from posegen.robot.config import (
     load_config,
     parse_config,
 )
+from posegen.robot.config_sections import leaves_no_room
 from posegen.robot.contact_kinds import (
     DEFAULT_KIND,
     FLUSH,
@@ -231,6 +232,7 @@ __all__ = [
     "kinematic_urdf",
     "least_size_map",
     "least_size_share",
+    "leaves_no_room",
     "left_out_m",
     "linear_torques",
     "link_masses",

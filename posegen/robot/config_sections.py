@@ -7,6 +7,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 
+import numpy as np
+import numpy.typing as npt
+
 from posegen.errors import ConfigError
 from posegen.robot.chain_config import ChainConfig
 from posegen.robot.config_reader import Reader
@@ -58,6 +61,19 @@ class MarginConfig:
     com_uncertainty_m: float = 0.0  # the true CoM may lie this far from the model's (x and y): torques hold either way
     joint_limit_rad_by_joint: dict[str, float] = field(default_factory=dict)  # joint -> a larger margin, rad
     table_clearance_m: float = 0.0  # in free motions every body stays this far above the table (0: collision_m)
+
+
+def leaves_no_room(lower: npt.ArrayLike, upper: npt.ArrayLike, margin: npt.ArrayLike) -> npt.NDArray[np.bool_]:
+    """Whether keeping ``margin`` (rad) from both limits leaves a joint no room: a range of at most twice it.
+
+    Element-wise over arrays of joints (the scene's margins) or for one joint (a draft's arm end).
+
+    Example:
+        >>> bool(leaves_no_room(0.0, 0.02, 0.01))
+        True
+
+    """
+    return np.asarray(np.subtract(upper, lower) <= 2.0 * np.asarray(margin))
 
 
 @dataclass(frozen=True)

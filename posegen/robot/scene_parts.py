@@ -27,6 +27,7 @@ from posegen.errors import ConfigError, unknown_name
 from posegen.io import native_output, read_text_file
 from posegen.robot.collision_geometry import check_link_names
 from posegen.robot.config import ChainConfig, Config, StanceConfig, TableConfig
+from posegen.robot.config_sections import leaves_no_room
 from posegen.robot.description import (
     RobotFiles,
     augmented_urdf,
@@ -236,7 +237,7 @@ def limit_margins(
 
     """
     margin = np.full(len(names), config.margins.joint_limit_rad)
-    narrow = upper - lower <= 2.0 * margin  # (nj,)
+    narrow = leaves_no_room(lower, upper, margin)  # (nj,)
     margin[narrow & locked] = 0.0
     narrow &= ~locked
     if narrow.any():
@@ -248,7 +249,7 @@ def limit_margins(
     field = "margins.joint_limit_rad_by_joint"
     for name, value in config.margins.joint_limit_rad_by_joint.items():
         i = _joint_index(names, name, field)
-        if 2.0 * value >= upper[i] - lower[i]:
+        if leaves_no_room(lower[i], upper[i], value):
             raise ConfigError(
                 f"{field}.{name}: {value} rad from both limits leaves no room in [{lower[i]:.3f}, {upper[i]:.3f}] rad"
             )

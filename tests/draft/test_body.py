@@ -230,3 +230,23 @@ def test_a_model_without_legs_is_not_stood_on_its_arms_below_its_waist(tmp_path)
     src = load_draft_source(str(humanoid_urdf(tmp_path, "z", legs=0)), None, ())
     with pytest.raises(ConfigError, match=r"no two legs: .*'waist'"):
         study_body(src)
+
+
+def test_an_arm_end_is_locked_exactly_when_the_scene_would_refuse_it_free():
+    """The draft's rule is the scene's (``leaves_no_room``): a range of exactly twice the margin is dropped too."""
+    from posegen.draft.body import without_narrow_ends
+    from posegen.robot import leaves_no_room
+
+    margin = 0.02
+    ranges = (1.0, 1.0, 1.0, 1.0, 0.0401, 0.04)  # the last: exactly twice the margin; the one before: just over
+    joints = "".join(
+        f'<link name="l{i + 1}"/><joint name="j{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
+        f'<axis xyz="0 1 0"/><limit lower="0" upper="{r}" effort="1" velocity="1"/></joint>'
+        for i, r in enumerate(ranges)
+    )
+    model = pin.buildModelFromXML(f'<robot name="r"><link name="l0"/>{joints}</robot>', pin.JointModelFreeFlyer())
+    arm = list(range(2, model.njoints))
+    kept, check = without_narrow_ends(model, arm, margin)
+    assert [str(model.names[j]) for j in kept] == ["j0", "j1", "j2", "j3", "j4"]
+    assert check.startswith("'j5' ended an arm") and "the hand is the link of 'j4'" in check
+    assert bool(leaves_no_room(0.0, ranges[-1], margin)) and not leaves_no_room(0.0, ranges[-2], margin)
