@@ -7,20 +7,15 @@ shows a stage's error with the flag in the parameter's place (:mod:`posegen.cli.
 
 from __future__ import annotations
 
-import math
 import os
-from typing import TypeGuard, TypeVar
+from typing import TypeVar
 
 from posegen.errors import ArgumentError
+from posegen.numeric import is_finite_number  # here for the readers that import it from here
 
 T = TypeVar("T")
 
 MAX_SEED = 2**31 - 1  # every generator posegen seeds (numpy, OMPL, python-tsp) takes this range
-
-
-def is_finite_number(value: object) -> TypeGuard[int | float]:
-    """Whether ``value`` is an int or float (not a bool) and finite."""
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _integer(value: object, name: str) -> int:

@@ -30,6 +30,7 @@ import numpy as np
 
 from posegen.errors import InputError, reason
 from posegen.io import dump_yaml, read_yaml, write_atomic
+from posegen.numeric import is_finite_number
 from posegen.robot import FloatArray, Scene, gravity_torques
 
 COMPLIANCE_FORMAT = "posegen-compliance"
@@ -257,7 +258,7 @@ def read_compliance(path: str | Path) -> Compliance:
         std = group.get("std_rad_per_knm", 0.0) if isinstance(group, dict) else None
         if not isinstance(joints, list) or not joints or not all(isinstance(j, str) for j in joints):
             raise InputError(f"{path}: groups.{name}.joints: expected a non-empty list of joint names")
-        if not _compliance(value) or not _finite(std) or std < 0:  # type: ignore[operator]
+        if not _compliance(value) or not is_finite_number(std) or std < 0:
             raise InputError(
                 f"{path}: groups.{name}: compliance_rad_per_nm must be a finite number from 0 to "
                 f"{MAX_COMPLIANCE_RAD_PER_NM:g} and std_rad_per_knm a finite one from 0 (got {value!r}, {std!r})"
@@ -266,13 +267,9 @@ def read_compliance(path: str | Path) -> Compliance:
     return Compliance(tuple(groups), tuple(soles))
 
 
-def _finite(value: object) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and bool(np.isfinite(value))
-
-
 def _compliance(value: object) -> bool:
     """Whether ``value`` is a compliance: a number from 0 (a negative one would push back) to the largest plausible."""
-    return _finite(value) and 0.0 <= float(value) <= MAX_COMPLIANCE_RAD_PER_NM  # type: ignore[arg-type]
+    return is_finite_number(value) and 0.0 <= float(value) <= MAX_COMPLIANCE_RAD_PER_NM
 
 
 def _checked(compliance: Compliance) -> Compliance:

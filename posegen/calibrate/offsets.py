@@ -30,6 +30,7 @@ import pinocchio as pin
 
 from posegen.errors import InputError
 from posegen.io import dump_yaml, read_yaml, write_atomic
+from posegen.numeric import is_finite_number
 from posegen.robot import FloatArray
 
 OFFSETS_FORMAT = "posegen-offsets"
@@ -244,7 +245,7 @@ def _check_offset(offset: JointOffset) -> None:
 def _offset_problem(angle: object, placement: object) -> str:
     """What is wrong with an offset's numbers ("" if nothing)."""
     values = list(placement) if isinstance(placement, (tuple, list)) else []
-    if len(values) != len(PLACEMENT_FIELDS) or not all(_finite(v) for v in [angle, *values]):
+    if len(values) != len(PLACEMENT_FIELDS) or not all(is_finite_number(v) for v in [angle, *values]):
         return f"angle_offset_rad and placement ({', '.join(PLACEMENT_FIELDS)}) must be finite numbers"
     lengths, angles = values[:3], [angle, *values[3:]]
     if max(abs(v) for v in lengths) > MAX_LENGTH_M or max(abs(v) for v in angles) > MAX_ANGLE_RAD:
@@ -312,7 +313,3 @@ def read_offsets(path: str | Path, joint_names: tuple[str, ...] | None = None) -
         if unknown:
             raise InputError(f"{path}: offsets of joints the URDF does not have: {', '.join(unknown)}")
     return out
-
-
-def _finite(value: object) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and bool(np.isfinite(value))

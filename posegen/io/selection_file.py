@@ -21,7 +21,6 @@ does (one reader: a file ``route`` takes is one ``posegen.load`` takes).
 from __future__ import annotations
 
 import enum
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Generic, TypeVar
@@ -37,6 +36,7 @@ from posegen.io.pool_file import (
     pool_from_dict,
     posture_from_dict,
 )
+from posegen.numeric import is_finite_number
 
 
 class SelectionMethod(str, enum.Enum):
@@ -277,7 +277,7 @@ def _chosen(raw: dict[str, Any], posture: Posture, where: str) -> ChosenPosture:
         if not isinstance(value, int) or isinstance(value, bool):
             raise InputError(f"{where}: '{name}' must be an integer, got {value!r}")
     weight = raw.get("weight")
-    if not isinstance(weight, (int, float)) or isinstance(weight, bool) or not math.isfinite(weight):
+    if not is_finite_number(weight):
         raise InputError(f"{where}: 'weight' must be a finite number, got {weight!r}")
     return ChosenPosture(raw["pool_id"], raw["rank"], float(weight), posture)
 
