@@ -11,7 +11,8 @@
 4. :func:`bend_reference`: without an SRDF state, a standing posture with the knees bent;
 5. :func:`find_arms`: the two longest chains of the upper body, up to where they branch
    into light parts only (fingers: under 1 % of the robot's mass), less the joints at their
-   ends too narrow to plan (:func:`without_narrow_ends`);
+   ends a plan cannot use (:mod:`posegen.draft.arm_ends`: too narrow, or a light part the
+   hand's tip does not follow);
 6. :func:`locked_joints` and :func:`clear_of_limits`: every joint off the legs and arms is
    locked where it is; the arms' joints are moved clear of their limits.
 
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from posegen.draft.arm_ends import without_idle_ends, without_narrow_ends
 from posegen.draft.geometry import Geometry, load_geometry
 from posegen.draft.heading import TURNED, Bearing, forward_of, knees_face_back
 from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limit, outside_limits
@@ -41,7 +43,7 @@ from posegen.draft.stance import (
     waist_joints,
 )
 from posegen.errors import ConfigError
-from posegen.robot import FloatArray, RobotFiles, leaves_no_room, read_srdf_states, yaw_rotation
+from posegen.robot import FloatArray, RobotFiles, read_srdf_states, yaw_rotation
 
 LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
 LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
@@ -144,9 +146,14 @@ def study_body(src: DraftSource) -> Body:
         found += bent
         pin.framesForwardKinematics(model, data, q)
     arms = find_arms(model, data, tree, roots, bearing.left, src.label)
-    trimmed = [without_narrow_ends(model, arm, margin) for arm in arms]
-    arms = [arm for arm, _ in trimmed]
-    found += tuple(check for _, check in trimmed if check)
+    light_kg = LIGHT_FRACTION * tree.mass(list(range(1, model.njoints)))
+    for drop in (
+        lambda arm: without_narrow_ends(model, arm, margin),
+        lambda arm: without_idle_ends(model, data, geometry, arm, tree.subtree, light_kg),
+    ):
+        trimmed = [drop(arm) for arm in arms]
+        arms = [arm for arm, _ in trimmed]
+        found += tuple(check for _, check in trimmed if check)
     waist = waist_joints(model, roots)
     kept = legs.joints | {j for arm in arms for j in arm} | set(waist)
     locked = locked_joints(model, q, kept)
@@ -232,8 +239,8 @@ def find_legs(model: pin.Model, data: pin.Data, tree: Tree, left: FloatArray, la
         ConfigError: Not exactly two such branches.
 
     """
-    floor = min(float(data.oMi[j].translation[2]) for j in range(1, model.njoints))
     lowest = {b: min(float(data.oMi[j].translation[2]) for j in tree.subtree(b)) for b in range(2, model.njoints)}
+    floor = min(lowest[b] for b in tree.children[1])  # the root's own placement left out (a base_footprint's is low)
     reaching = reaching_branches(tree.children, lowest, floor)
     legs = sorted(reaching, key=lambda b: -float(data.oMi[b].translation @ left))
     if len(legs) != 2:
@@ -289,7 +296,9 @@ def bend_reference(
             "margins.joint_limit_rad is 0; check the URDF's limits"
         )
         return q.copy(), {}, 0.0, tuple(checks)
-    joints = {str(model.names[j]): round(float(bent[model.joints[j].idx_q]), 4) for path in legs.paths for j in path}
+    joints = {
+        str(model.names[j]): round(float(bent[model.joints[j].idx_q]), 4) + 0.0 for path in legs.paths for j in path
+    }
     check = (
         "no SRDF posture: the reference (stance.reference_joints) bends the knees, soles flat, CoM over the "
         "feet; check it with `posegen view` on a pool"
@@ -317,24 +326,6 @@ def find_arms(
         names = ", ".join(f"'{model.names[b]}'" for b in upper) or "none"
         raise ConfigError(f"{label}: no two arms: the upper body (from joint {names}) has the chains ending at {found}")
     return sorted(paths[:2], key=lambda p: -float(data.oMi[p[-1]].translation @ left))
-
-
-def without_narrow_ends(model: pin.Model, arm: list[int], margin: float) -> tuple[list[int], str]:
-    """An arm without the joints at its end too narrow to keep ``margin`` from both limits (a gripper's finger).
-
-    Such a joint could not move in a plan; off the arm, it is locked and its link is part of the hand.
-    Returns the arm and a ``# CHECK:`` line ("" when none was dropped).
-    """
-    kept = list(arm)
-    while len(kept) > 3 and leaves_no_room(*limits(model, kept[-1]), margin):
-        kept.pop()
-    if len(kept) == len(arm):
-        return kept, ""
-    names = ", ".join(f"'{model.names[j]}'" for j in arm[len(kept) :])
-    return kept, (
-        f"{names} ended an arm with a range under twice margins.joint_limit_rad ({2.0 * margin:g}): locked, as a "
-        f"gripper's finger; the hand is the link of '{model.names[kept[-1]]}'"
-    )
 
 
 def _arm_paths(joint: int, path: list[int], tree: Tree, total: float, out: list[list[int]]) -> None:

@@ -232,21 +232,23 @@ def test_a_model_without_legs_is_not_stood_on_its_arms_below_its_waist(tmp_path)
         study_body(src)
 
 
-def test_an_arm_end_is_locked_exactly_when_the_scene_would_refuse_it_free():
-    """The draft's rule is the scene's (``leaves_no_room``): a range of exactly twice the margin is dropped too."""
-    from posegen.draft.body import without_narrow_ends
-    from posegen.robot import leaves_no_room
+@pytest.mark.parametrize("root", ["base_footprint", "world"])
+def test_a_root_link_at_the_floor_leaves_the_body_as_it_was(root, sources, tmp_path):
+    """A ``base_footprint`` (REP 120) or ``world`` root fixed 1.5 m below the pelvis: joint 1 lies below the feet.
 
-    margin = 0.02
-    ranges = (1.0, 1.0, 1.0, 1.0, 0.0401, 0.04)  # the last: exactly twice the margin; the one before: just over
-    joints = "".join(
-        f'<link name="l{i + 1}"/><joint name="j{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
-        f'<axis xyz="0 1 0"/><limit lower="0" upper="{r}" effort="1" velocity="1"/></joint>'
-        for i, r in enumerate(ranges)
+    The floor is that of the root's branches (the root's own placement left out), as :func:`orient` takes it.
+    """
+    urdf = humanoid_urdf(tmp_path, "z")
+    text = urdf.read_text()
+    root_xml = (
+        f'<link name="{root}"/><joint name="to_pelvis" type="fixed"><parent link="{root}"/>'
+        '<child link="pelvis"/><origin xyz="0 0 1.5"/></joint>'
     )
-    model = pin.buildModelFromXML(f'<robot name="r"><link name="l0"/>{joints}</robot>', pin.JointModelFreeFlyer())
-    arm = list(range(2, model.njoints))
-    kept, check = without_narrow_ends(model, arm, margin)
-    assert [str(model.names[j]) for j in kept] == ["j0", "j1", "j2", "j3", "j4"]
-    assert check.startswith("'j5' ended an arm") and "the hand is the link of 'j4'" in check
-    assert bool(leaves_no_room(0.0, ranges[-1], margin)) and not leaves_no_room(0.0, ranges[-2], margin)
+    urdf.write_text(text.replace('<robot name="synthetic">', f'<robot name="synthetic">{root_xml}'))
+    rooted, plain = study_body(load_draft_source(str(urdf), None, ())), study_body(sources["z"])
+    names = [[str(rooted.tree.model.names[j]) for j in path] for path in rooted.legs.paths]
+    assert names == [[str(plain.tree.model.names[j]) for j in path] for path in plain.legs.paths]
+    assert [s.frame for s in rooted.legs.soles] == [s.frame for s in plain.legs.soles]
+    assert [len(arm) for arm in rooted.arms] == [len(arm) for arm in plain.arms]
+    assert rooted.reference_joints == plain.reference_joints
+    assert any("pins 'pelvis' to 'world'" in c for c in rooted.checks) == (root == "world")
