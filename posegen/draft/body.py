@@ -2,7 +2,8 @@
 
 :func:`study_body` runs them in order:
 
-1. :func:`srdf_state`: the SRDF's first state, unless it breaks the URDF's limits;
+1. :func:`srdf_state`: the SRDF's first state, unless it breaks the URDF's limits (or, found
+   after step 3, its CoM is not inside the soles' polygon by the drafted margin);
 2. :func:`orient`: the up axis, forward and left (:mod:`posegen.draft.stance`);
 3. :func:`find_legs` then :func:`find_soles`: the two branches reaching the floor, their
    feet and soles; the legs branch from the root, else from a joint below it (a torso-rooted
@@ -30,8 +31,16 @@ import pinocchio as pin
 from posegen.draft.arm_ends import without_idle_ends, without_narrow_ends
 from posegen.draft.geometry import Geometry, load_geometry
 from posegen.draft.heading import TURNED, Bearing, forward_of, knees_face_back
-from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD, limits, near_limit, outside_limits
-from posegen.draft.soles import ANKLE_HEIGHT, Sole, find_sole, sole_pose
+from posegen.draft.limits import (
+    COM_MARGIN_M,
+    JOINT_LIMIT_MARGIN_RAD,
+    clear_of_limits,
+    locked_joints,
+    near_limit,
+    outside_limits,
+    with_joints,
+)
+from posegen.draft.soles import ANKLE_HEIGHT, Sole, com_margin, find_sole, sole_pose
 from posegen.draft.source import DraftSource
 from posegen.draft.stance import (
     bend_legs,
@@ -46,7 +55,6 @@ from posegen.errors import ConfigError
 from posegen.robot import FloatArray, RobotFiles, read_srdf_states, yaw_rotation
 
 LIGHT_FRACTION = 0.01  # a branch lighter than this share of the robot's mass is an end effector's part
-LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
 ROBOT_MAX_M = 5.0  # joints farther apart than this are no humanoid's (a URDF in millimetres, not metres)
 
 
@@ -118,15 +126,18 @@ class Body:
 WORLD_LINK = "world"  # the URDF convention for a fixed base (a joint from it pins the robot)
 
 
-def study_body(src: DraftSource) -> Body:
+def study_body(src: DraftSource, refused_state: str = "") -> Body:
     """Find the legs, soles, arms, reference posture and joints to lock of a humanoid.
+
+    An SRDF state whose CoM is not ``COM_MARGIN_M`` inside the soles' polygon is not used:
+    the body is studied again without it (``refused_state``: the CHECK line saying why).
 
     Raises:
         ConfigError: Not two legs reaching the floor, or not two arms.
 
     """
     model, tree = src.model, Tree.of(src.model)
-    state, q, checks = srdf_state(model, src.files)
+    state, q, checks = srdf_state(model, src.files, refused_state)
     check_size(model, q, src.label)
     bearing = orient(model, q, tree, src.label)
     q[:7] = pin.SE3ToXYZQUAT(bearing.root)
@@ -139,6 +150,12 @@ def study_body(src: DraftSource) -> Body:
         bearing, roots, checks = bearing.turned(), roots[::-1], (*checks, TURNED)
     geometry = load_geometry(model, src.text, src.files.package_dirs)
     legs, found = find_soles(model, data, geometry, tree, roots, bearing.heading)
+    if state and (margin := com_margin(model, q, legs.soles)) < COM_MARGIN_M:
+        return study_body(
+            src,
+            f"the SRDF's state '{state}' is not balanced (its CoM {1e3 * margin:.1f} mm inside the soles' polygon, "
+            f"margins.com_m {1e3 * COM_MARGIN_M:g} mm): the draft finds its own reference posture",
+        )
     reference_joints: dict[str, float] = {}
     margin = JOINT_LIMIT_MARGIN_RAD
     if not state:
@@ -191,11 +208,12 @@ def fixed_base(urdf_text: str) -> tuple[str, ...]:
     )
 
 
-def srdf_state(model: pin.Model, files: RobotFiles) -> tuple[str, FloatArray, tuple[str, ...]]:
+def srdf_state(model: pin.Model, files: RobotFiles, refused: str = "") -> tuple[str, FloatArray, tuple[str, ...]]:
     """The SRDF's first state ("" without one) and its configuration (nq,), else the neutral one.
 
-    A state outside the URDF's limits is not used (a CHECK line says so). The SRDF's states
-    are added to ``model.referenceConfigurations``.
+    A state outside the URDF's limits is not used (a CHECK line says so), nor one the
+    caller ``refused`` (that CHECK line, e.g. an unbalanced state). The SRDF's states are
+    added to ``model.referenceConfigurations``.
 
     Raises:
         ConfigError: The SRDF is unreadable or malformed.
@@ -205,6 +223,8 @@ def srdf_state(model: pin.Model, files: RobotFiles) -> tuple[str, FloatArray, tu
     if files.srdf is not None:
         read_srdf_states(model, files)  # a clear error for an unreadable or malformed SRDF
         states = {str(e.key()): np.array(e.data()) for e in model.referenceConfigurations}
+    if refused:
+        return "", pin.neutral(model), (refused,)
     state = next(iter(states), "")
     outside = outside_limits(model, states[state]) if state else []
     if outside:
@@ -358,32 +378,3 @@ def check_size(model: pin.Model, q: FloatArray, label: str) -> None:
             f"{label}: its joints lie {span:.0f} m apart, no humanoid's size: lengths in millimetres? A URDF's "
             'lengths are metres: scale its origins, and give each <mesh> scale="0.001 0.001 0.001"'
         )
-
-
-def locked_joints(model: pin.Model, q: FloatArray, kept: set[int]) -> dict[str, float]:
-    """Every 1-dof joint not kept, at its value in ``q`` (nq,) brought within its limits (rad)."""
-    return {
-        str(model.names[j]): float(np.clip(q[model.joints[j].idx_q], *limits(model, j)))
-        for j in range(2, model.njoints)
-        if model.joints[j].nq == 1 and j not in kept
-    }
-
-
-def clear_of_limits(model: pin.Model, q: FloatArray, joints: list[int]) -> dict[str, float]:
-    """The joints of ``joints`` that ``q`` (nq,) puts too near a limit, moved clear of it (rad)."""
-    out = {}
-    for j in joints:
-        low, high = limits(model, j)
-        value = float(q[model.joints[j].idx_q])
-        inside = float(np.clip(value, low + LIMIT_CLEARANCE_RAD, high - LIMIT_CLEARANCE_RAD))
-        if low + LIMIT_CLEARANCE_RAD <= high - LIMIT_CLEARANCE_RAD and inside != value:
-            out[str(model.names[j])] = inside
-    return out
-
-
-def with_joints(model: pin.Model, q: FloatArray, values: dict[str, float]) -> FloatArray:
-    """A copy of ``q`` (nq,) with these joints (1-dof, by name) set (rad)."""
-    out = np.array(q, dtype=float)
-    for name, value in values.items():
-        out[model.joints[model.getJointId(name)].idx_q] = value
-    return out

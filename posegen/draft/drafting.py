@@ -31,6 +31,7 @@ import pinocchio as pin
 
 from posegen.draft.body import Body, study_body
 from posegen.draft.covering import collision_additions
+from posegen.draft.force import held_force
 from posegen.draft.geometry import Geometry, HandContact, hand_contact, link_of_joint, vertices
 from posegen.draft.limits import (
     IMPLAUSIBLE_SPEED_RAD_S,
@@ -101,6 +102,7 @@ class Draft:
     reach_m: float
     survey: PairSurvey
     joint_limit_margin_rad: float = JOINT_LIMIT_MARGIN_RAD
+    contact_force_n: float | None = None  # route.contact_force_n to write (None: posegen's default)
     checks: tuple[str, ...] = field(default=())  # what was guessed, and how to check it
     notes: tuple[str, ...] = field(default=())
 
@@ -145,6 +147,8 @@ def draft_robot(
             f"{len(no_effort)} joints have no URDF effort limit ({', '.join(no_effort[:3])}"
             f"{', ...' if len(no_effort) > 3 else ''}): their holding torques are not checked (pool, route, check)",
         )
+    held = held_force(model, body.reference, [(c.joints, c.contact.frames, c.contact.flush) for c in chains])
+    found += held.checks
     table, reach = table_for(model, data, geometry, body, chains[0])
     found += (f"the table is a guess from the arm's reach ({reach:.2f} m): put it where yours is",)
     soles = body.legs.soles
@@ -176,6 +180,7 @@ def draft_robot(
         reach_m=reach,
         survey=_survey(model, src, added.shapes, body.reference, body.locked, samples, seed),
         joint_limit_margin_rad=body.joint_limit_margin_rad,
+        contact_force_n=held.force_n if held.lowered else None,
         checks=body.checks + checks + found,
     )
 

@@ -1,7 +1,11 @@
-"""Joint limits as ``posegen robot init`` reads them: implausible speeds, postures at or past a limit."""
+"""Joint limits as ``posegen robot init`` reads them: implausible speeds, postures at or past a limit.
+
+And the reference's joints moved clear of their limits, or locked within them.
+"""
 
 from __future__ import annotations
 
+import numpy as np
 import pinocchio as pin
 
 from posegen.robot import FloatArray
@@ -9,6 +13,8 @@ from posegen.robot import FloatArray
 IMPLAUSIBLE_SPEED_RAD_S = 50.0  # humanoid joints turn at up to ~40 rad/s (small wrist motors); above, a stand-in
 PLACEHOLDER_SPEED_RAD_S = 3.0  # a humanoid joint's usual speed limit (TALOS: 2.7-6.3 rad/s), where the URDF has none
 JOINT_LIMIT_MARGIN_RAD = 0.02  # the drafted margins.joint_limit_rad
+COM_MARGIN_M = 0.02  # the drafted margins.com_m
+LIMIT_CLEARANCE_RAD = 0.05  # the reference keeps free joints this far inside their limits
 
 
 def velocity_placeholders(model: pin.Model, kept: set[int]) -> tuple[dict[str, float], dict[str, float]]:
@@ -60,3 +66,32 @@ def outside_limits(model: pin.Model, q: FloatArray) -> list[str]:
         for j in range(2, model.njoints)
         if model.joints[j].nq == 1 and not limits(model, j)[0] <= q[model.joints[j].idx_q] <= limits(model, j)[1]
     ]
+
+
+def locked_joints(model: pin.Model, q: FloatArray, kept: set[int]) -> dict[str, float]:
+    """Every 1-dof joint not kept, at its value in ``q`` (nq,) brought within its limits (rad)."""
+    return {
+        str(model.names[j]): float(np.clip(q[model.joints[j].idx_q], *limits(model, j)))
+        for j in range(2, model.njoints)
+        if model.joints[j].nq == 1 and j not in kept
+    }
+
+
+def clear_of_limits(model: pin.Model, q: FloatArray, joints: list[int]) -> dict[str, float]:
+    """The joints of ``joints`` that ``q`` (nq,) puts too near a limit, moved clear of it (rad)."""
+    out = {}
+    for j in joints:
+        low, high = limits(model, j)
+        value = float(q[model.joints[j].idx_q])
+        inside = float(np.clip(value, low + LIMIT_CLEARANCE_RAD, high - LIMIT_CLEARANCE_RAD))
+        if low + LIMIT_CLEARANCE_RAD <= high - LIMIT_CLEARANCE_RAD and inside != value:
+            out[str(model.names[j])] = inside
+    return out
+
+
+def with_joints(model: pin.Model, q: FloatArray, values: dict[str, float]) -> FloatArray:
+    """A copy of ``q`` (nq,) with these joints (1-dof, by name) set (rad)."""
+    out = np.array(q, dtype=float)
+    for name, value in values.items():
+        out[model.joints[model.getJointId(name)].idx_q] = value
+    return out

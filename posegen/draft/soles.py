@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from posegen.draft.geometry import Geometry, link_of_joint, round3, vertices
 from posegen.errors import ConfigError
-from posegen.robot import Box, FloatArray, FrameConfig
+from posegen.robot import Box, FloatArray, FrameConfig, convex_hull_clockwise, polygon_margin
 
 SOLE_VERTEX_TOL_M = 0.005  # foot vertices this close to the lowest one make the footprint
 SOLE_VISUAL_GAP_M = 0.02  # a sole mesh whose lowest vertex is this close above the collision's counts in the footprint
@@ -134,3 +134,26 @@ def foot_box(model: pin.Model, data: pin.Data, sole: Sole) -> Box:
     size = (round(sole.x_m[1] - sole.x_m[0], 3), round(sole.y_m[1] - sole.y_m[0], 3), FOOT_BOX_M)
     rpy = round3(np.rad2deg(pin.rpy.matrixToRpy(local.rotation)))
     return Box(sole.foot_link, round3(local.act(centre)), size, rpy)
+
+
+def com_margin(model: pin.Model, q: FloatArray, soles: list[Sole]) -> float:
+    """How far (m) the CoM at ``q`` (nq,) lies inside the soles' support polygon (negative: outside).
+
+    The polygon spans the footprints' corners at their poses in ``q``, as the scene's
+    (:func:`posegen.robot.stand`) does with the soles flattened on the floor.
+
+    Example:
+        >>> com_margin(model, q, legs.soles)  # a balanced stance: a few centimetres
+        0.041
+
+    """
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    corners = [
+        sole_pose(model, data, sole).act(np.array([x, y, 0.0]))[:2]
+        for sole in soles
+        for x in sole.x_m
+        for y in sole.y_m
+    ]
+    com = pin.centerOfMass(model, data, q)  # (3,) m, world
+    return polygon_margin(convex_hull_clockwise(np.array(corners)), com[:2])

@@ -10,6 +10,7 @@ from typing import Any
 import yaml
 
 from posegen.draft.drafting import Draft, draft_robot
+from posegen.draft.limits import COM_MARGIN_M
 from posegen.draft.mjcf_source import converted_urdf, mjcf_files, mjcf_source, urdf_beside
 from posegen.draft.source import source_files
 from posegen.errors import ConfigError, InfeasibleError
@@ -99,11 +100,22 @@ def render_draft(draft: Draft, seed: int, command: str = "") -> str:
         f"  spots_y_m: {_flow(list(draft.spots_y_m))}",
         f"  approach_standoff_m: {half_standoff}",
         "",
-        f"margins: {{com_m: 0.02, collision_m: 0.005, joint_limit_rad: {draft.joint_limit_margin_rad}}}",
+        f"margins: {{com_m: {COM_MARGIN_M}, collision_m: 0.005, joint_limit_rad: {draft.joint_limit_margin_rad}}}",
         f"sampling: {{soft_iterations: 50, hard_iterations: 15, spot_tolerance_m: {half_standoff}, chunk_size: 32}}",
         "",
     ]
-    return "\n".join(lines)
+    return "\n".join(lines + _press_text(draft))
+
+
+def _press_text(draft: Draft) -> list[str]:
+    """A lighter press than posegen's default, found at half that force by ``measure`` (none: the default)."""
+    if draft.contact_force_n is None:
+        return []
+    return [
+        f"route: {{contact_force_n: {draft.contact_force_n:g}}}   # CHECK: what the wrists hold",
+        f"recording: {{force_threshold_n: {draft.contact_force_n / 2:g}}}   # half the contact force",
+        "",
+    ]
 
 
 def _shapes_text(draft: Draft) -> list[str]:

@@ -8,22 +8,24 @@ import pinocchio as pin
 import pytest
 
 from posegen.draft.body import (
-    LIMIT_CLEARANCE_RAD,
     Tree,
     bend_reference,
-    clear_of_limits,
     find_arms,
     find_legs,
     find_soles,
     fixed_base,
-    locked_joints,
     orient,
     srdf_state,
     study_body,
-    with_joints,
 )
 from posegen.draft.geometry import load_geometry
-from posegen.draft.limits import JOINT_LIMIT_MARGIN_RAD
+from posegen.draft.limits import (
+    JOINT_LIMIT_MARGIN_RAD,
+    LIMIT_CLEARANCE_RAD,
+    clear_of_limits,
+    locked_joints,
+    with_joints,
+)
 from posegen.draft.soles import sole_pose
 from posegen.draft.source import load_draft_source
 from posegen.draft.stance import reaching_branches, upper_branches

@@ -32,6 +32,7 @@ def test_draft_finds_legs_arms_and_what_to_lock(talos_full_draft):
     assert [c.joints[-1] for c in draft.chains] == ["arm_left_7_joint", "arm_right_7_joint"]
     assert all(len(c.joints) == 7 for c in draft.chains)
     assert set(draft.locked) == set(shipped.locked_joints)  # fingers and head, nothing else
+    assert draft.contact_force_n is None  # its wrists hold posegen's 30 N press, as the shipped config's
     found = {frozenset((p.link_a, p.link_b)) for p in draft.survey.disabled}
     assert found == {frozenset((p.link_a, p.link_b)) for p in shipped.collision.disabled_pairs}
 
