@@ -2,7 +2,7 @@
 
 posegen plans every contact within ``margins.effort_ratio`` of the URDF's effort limits,
 the hand pressing ``route.contact_force_n`` (30 N unless the config says otherwise). A
-robot with small wrists (iCub's hold 0.45-0.65 N m) cannot press 30 N anywhere: its pool
+robot with small wrists (some hold 0.45-0.65 N m) cannot press 30 N anywhere: its pool
 would find no posture. The draft therefore estimates, for each arm joint, the lever of
 the table's reaction about its axis at random arm postures (the contact's normal fixed in
 the hand). When some joint cannot hold posegen's default press at its median lever, the
@@ -115,7 +115,8 @@ def _levers(
         n = data.oMf[parent].rotation @ normal  # (3,) world
         for k, j in enumerate(joints):
             axis, origin = data.oMi[j].rotation @ joint_axis(model.joints[j]), data.oMi[j].translation
-            if model.joints[j].shortname().startswith("JointModelP"):
+            kind = model.joints[j].shortname()
+            if kind.startswith("JointModelP") and not kind.startswith("JointModelPlanar"):
                 out[s, k] = abs(float(axis @ n))  # a slide: the force along its axis
             else:
                 out[s, k] = max(abs(float(axis @ np.cross(p - origin, n))) for p in points)
