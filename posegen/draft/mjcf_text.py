@@ -6,7 +6,8 @@ from an included ``materials.xml`` fails with ``unordered_map::at``, as in dm_co
 humanoid), and it reads the first ``<asset>`` section only. So the model is flattened
 first: each ``<include>`` is replaced by the children of the included file's
 ``<mujoco>`` (paths relative to the main file's folder, as MuJoCo reads them), the
-``<asset>`` sections are merged into one, and the compiler's ``meshdir``,
+``<frame>`` elements (which pinocchio skips, with every body in them) become bodies
+without joints, the ``<asset>`` sections are merged into one, and the compiler's ``meshdir``,
 ``texturedir`` and ``assetdir`` are made absolute, so that the flattened text can be
 read from any folder.
 """
@@ -56,9 +57,37 @@ def flattened_mjcf(path: Path) -> ET.Element:
     """
     root = parse_xml(path)
     _inline(root, path, 0)
+    _frames_as_bodies(root)
     _one_asset_section(root)
     _absolute_asset_dirs(root, path.parent)
     return root
+
+
+def _frames_as_bodies(root: ET.Element) -> None:
+    """Replace each ``<frame>`` by what pinocchio reads (its MJCF parser skips a frame and all it holds).
+
+    In a body, a frame becomes a body without joints (welded to its parent, placed by the
+    frame's pose, its ``childclass`` kept); in ``<worldbody>``, its elements move up in its
+    place (the root floats: the frame's pose would only place it), inheriting its
+    ``childclass`` as their own class when they have none.
+    """
+    for world in root.findall("worldbody"):
+        while (frame := world.find("frame")) is not None:
+            at = list(world).index(frame)
+            world.remove(frame)
+            for k, child in enumerate(list(frame)):
+                kind = "childclass" if child.tag in ("body", "frame") else "class"
+                if frame.get("childclass") is not None and child.get(kind) is None:
+                    child.set(kind, frame.get("childclass", ""))
+                world.insert(at + k, child)
+    taken = {b.get("name") for b in root.iter("body")}
+    for k, frame in enumerate(root.iter("frame")):
+        frame.tag = "body"
+        name = frame.get("name") or f"frame_{k}"
+        while name in taken:
+            name += "_frame"
+        frame.set("name", name)
+        taken.add(name)
 
 
 def _one_asset_section(root: ET.Element) -> None:

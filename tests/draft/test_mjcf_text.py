@@ -69,3 +69,59 @@ def test_bad_includes_are_one_line(include, message, tmp_path):
     with pytest.raises(ConfigError, match=message) as error:
         flattened_mjcf(path)
     assert len(str(error.value).splitlines()) == 1
+
+
+def _with_frames(folder: Path) -> Path:
+    """The fixture with MuJoCo ``<frame>`` elements: one in ``<worldbody>`` around the robot (with a
+    ``childclass``), a turned one in the torso holding the head, and one nested in the head holding the camera."""
+    path = humanoid_mjcf(folder)
+    text = path.read_text()
+    text = text.replace('<compiler angle="radian"/>', '<compiler angle="radian"/><default><default class="soft">'
+                        '<geom friction="0.5"/></default></default>')  # fmt: skip
+    text = text.replace(
+        '<body name="pelvis"', '<frame pos="0.2 0.1 0" euler="0 0 0.4" childclass="soft"><body name="pelvis"'
+    )
+    text = text.replace("  </worldbody>", "  </frame></worldbody>")
+    head, arms = text.index('<body name="head"'), text.index('<body name="l_upper_arm"')
+    block = text[head:arms].rstrip()
+    framed = block.replace('<body name="camera"', '<frame pos="0.01 0 0" quat="0.9 0 0.436 0"><body name="camera"')
+    framed = framed[: framed.rindex("</body>")] + "</frame>" + framed[framed.rindex("</body>") :]
+    text = (
+        text[:head]
+        + f'<frame name="mount" pos="0 0 0.05" euler="0.2 0 0.3">{framed}</frame>'
+        + text[head + len(block) :]
+    )
+    text = text.replace('<body name="head" pos="0 0 0.45">', '<body name="head" pos="0 0 0.4">')
+    path.write_text(text)
+    return path
+
+
+def test_bodies_in_frames_are_where_mujoco_puts_them(tmp_path):
+    """pinocchio's MJCF parser skips a ``<frame>`` and every body in it: the head (4 kg) and its camera were lost."""
+    mujoco = pytest.importorskip("mujoco")
+    import numpy as np
+    import pinocchio as pin
+
+    path = _with_frames(tmp_path)
+    native = mujoco.MjModel.from_xml_path(str(path))
+    data = mujoco.MjData(native)
+    mujoco.mj_forward(native, data)
+    urdf = tmp_path / "robot.urdf"
+    urdf.write_text(convert_mjcf(path).text)
+    model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
+    root = mujoco.mj_name2id(native, mujoco.mjtObj.mjOBJ_BODY, "pelvis")
+    q = pin.neutral(model)
+    q[:3], q[3:7] = data.xpos[root], np.roll(data.xquat[root], -1)  # MuJoCo's (w, x, y, z) as (x, y, z, w)
+    placed = model.createData()
+    pin.framesForwardKinematics(model, placed, q)
+    names = [mujoco.mj_id2name(native, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(1, native.nbody)]
+    assert {"head", "camera"} <= set(names)
+    for b, name in enumerate(names, start=1):
+        frame = placed.oMf[model.getFrameId(name)]
+        assert model.existFrame(name), name
+        assert np.allclose(frame.translation, data.xpos[b], atol=1e-9), name
+        assert np.allclose(frame.rotation, data.xmat[b].reshape(3, 3), atol=1e-9), name
+    camera = mujoco.mj_name2id(native, mujoco.mjtObj.mjOBJ_BODY, "camera")  # no <inertial>: MuJoCo's mass from its box
+    expected = float(native.body_subtreemass[0] - native.body_mass[camera])  # the head's 4 kg among them
+    assert sum(i.mass for i in model.inertias) == pytest.approx(expected, rel=1e-12)
+    assert flattened_mjcf(path).find(".//frame") is None
