@@ -7,13 +7,15 @@ humanoid), and it reads the first ``<asset>`` section only. So the model is flat
 first: each ``<include>`` is replaced by the children of the included file's
 ``<mujoco>`` (paths relative to the main file's folder, as MuJoCo reads them), the
 ``<frame>`` elements (which pinocchio skips, with every body in them) become bodies
-without joints, the ``<asset>`` sections are merged into one, and the compiler's ``meshdir``,
+without joints, each ``axisangle``'s axis is made of unit length (MuJoCo normalizes it,
+pinocchio does not), the ``<asset>`` sections are merged into one, and the compiler's ``meshdir``,
 ``texturedir`` and ``assetdir`` are made absolute, so that the flattened text can be
 read from any folder.
 """
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -58,6 +60,7 @@ def flattened_mjcf(path: Path) -> ET.Element:
     root = parse_xml(path)
     _inline(root, path, 0)
     _frames_as_bodies(root)
+    _unit_rotation_axes(root)
     _one_asset_section(root)
     _absolute_asset_dirs(root, path.parent)
     return root
@@ -88,6 +91,19 @@ def _frames_as_bodies(root: ET.Element) -> None:
             name += "_frame"
         frame.set("name", name)
         taken.add(name)
+
+
+def _unit_rotation_axes(root: ET.Element) -> None:
+    """Normalize each ``axisangle``'s axis, as MuJoCo does (pinocchio takes it as written: a wrong turn)."""
+    for element in root.iter():
+        values = element.get("axisangle", "").split()
+        try:
+            x, y, z, angle = (float(v) for v in values)
+        except ValueError:
+            continue  # absent, or not four numbers: MuJoCo's own message (the conversion reads it as written)
+        norm = math.sqrt(x * x + y * y + z * z)
+        if norm > 0.0 and math.isfinite(norm):
+            element.set("axisangle", f"{x / norm!r} {y / norm!r} {z / norm!r} {angle!r}")
 
 
 def _one_asset_section(root: ET.Element) -> None:

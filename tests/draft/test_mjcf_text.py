@@ -96,17 +96,19 @@ def _with_frames(folder: Path) -> Path:
     return path
 
 
-def test_bodies_in_frames_are_where_mujoco_puts_them(tmp_path):
-    """pinocchio's MJCF parser skips a ``<frame>`` and every body in it: the head (4 kg) and its camera were lost."""
+def _placed_as_mujoco(path: Path, folder: Path) -> tuple[list[str], object, object]:
+    """The bodies MuJoCo names in ``path``, and MuJoCo's and the converted URDF's models (its root placed as MuJoCo's).
+
+    Asserts that every body is where MuJoCo puts it at ``qpos0`` (1e-9 m, 1e-9 in rotation).
+    """
     mujoco = pytest.importorskip("mujoco")
     import numpy as np
     import pinocchio as pin
 
-    path = _with_frames(tmp_path)
     native = mujoco.MjModel.from_xml_path(str(path))
     data = mujoco.MjData(native)
     mujoco.mj_forward(native, data)
-    urdf = tmp_path / "robot.urdf"
+    urdf = folder / "robot.urdf"
     urdf.write_text(convert_mjcf(path).text)
     model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
     root = mujoco.mj_name2id(native, mujoco.mjtObj.mjOBJ_BODY, "pelvis")
@@ -115,13 +117,35 @@ def test_bodies_in_frames_are_where_mujoco_puts_them(tmp_path):
     placed = model.createData()
     pin.framesForwardKinematics(model, placed, q)
     names = [mujoco.mj_id2name(native, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(1, native.nbody)]
-    assert {"head", "camera"} <= set(names)
     for b, name in enumerate(names, start=1):
-        frame = placed.oMf[model.getFrameId(name)]
         assert model.existFrame(name), name
+        frame = placed.oMf[model.getFrameId(name)]
         assert np.allclose(frame.translation, data.xpos[b], atol=1e-9), name
         assert np.allclose(frame.rotation, data.xmat[b].reshape(3, 3), atol=1e-9), name
-    camera = mujoco.mj_name2id(native, mujoco.mjtObj.mjOBJ_BODY, "camera")  # no <inertial>: MuJoCo's mass from its box
+    return names, native, model
+
+
+def test_bodies_in_frames_are_where_mujoco_puts_them(tmp_path):
+    """pinocchio's MJCF parser skips a ``<frame>`` and every body in it: the head (4 kg) and its camera were lost."""
+    path = _with_frames(tmp_path)
+    names, native, model = _placed_as_mujoco(path, tmp_path)
+    assert {"head", "camera"} <= set(names)
+    camera = names.index("camera") + 1  # no <inertial>: MuJoCo's mass from its box
     expected = float(native.body_subtreemass[0] - native.body_mass[camera])  # the head's 4 kg among them
     assert sum(i.mass for i in model.inertias) == pytest.approx(expected, rel=1e-12)
     assert flattened_mjcf(path).find(".//frame") is None
+
+
+def test_a_turn_about_an_axis_of_any_length_is_mujocos(tmp_path):
+    """MuJoCo normalizes an ``axisangle``'s axis; pinocchio took "1 1 0 0.3" as it was (0.11 off at the forearm)."""
+    path = humanoid_mjcf(tmp_path)
+    text = path.read_text().replace(
+        '<body name="r_forearm" pos="0 0 -0.25">', '<body name="r_forearm" pos="0 0 -0.25" axisangle="1 1 0 0.3">'
+    )
+    path.write_text(
+        text.replace(
+            '<body name="l_hand" pos="0 0 -0.25">', '<body name="l_hand" pos="0 0 -0.25" axisangle="0 0 -3 0.5">'
+        )
+    )
+    names, _, _ = _placed_as_mujoco(path, tmp_path)
+    assert {"r_forearm", "r_hand", "l_hand"} <= set(names)
