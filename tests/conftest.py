@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from hypothesis import HealthCheck, settings
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
@@ -23,6 +24,23 @@ from posegen.pool import generate_pool
 from posegen.robot import Config, Scene, load_config
 from posegen.route import Planner, Unplanned, plan_stop, route_postures_file
 from posegen.select import select_pool_file
+
+# Hypothesis: derandomized, so that CI and a laptop see the same cases. Loaded here, before any
+# test module (a module of another folder may import a fuzz module, whose @settings then take
+# the profile loaded at that time). ``HYPOTHESIS_PROFILE=explore`` draws new cases each run, ten
+# times as many (for a search, not for CI); ``fuzz`` (``make fuzz``) is the long run of the fuzz
+# suites (``test_fuzz.py``, ``test_fuzz_surfaces.py``, ``test_readers.py``; ``tests/session/test_journal.py``'s kills).
+settings.register_profile(
+    "posegen",
+    max_examples=40,
+    deadline=None,
+    derandomize=True,
+    database=None,  # no .hypothesis folder in the checkout
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+settings.register_profile("explore", parent=settings.get_profile("posegen"), max_examples=400, derandomize=False)
+settings.register_profile("fuzz", parent=settings.get_profile("posegen"), max_examples=800, derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "posegen"))
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "configs" / "talos_table.yaml"
