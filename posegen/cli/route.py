@@ -69,8 +69,9 @@ def run(args: argparse.Namespace) -> int:
     )
     for s in route.substitutions:
         print(
-            f"  posture {s.lost} replaced by pool posture {s.substitute} (log det gain {s.gain:.2f}; "
-            f"O1 {s.o1_before:.2f} -> {s.o1_after:.2f}, rank {s.rank_before} -> {s.rank_after}): {s.reason}"
+            f"  posture {s.lost} replaced by pool posture {s.substitute} (log det gain {s.gain:.2f}; the selection's "
+            f"O1 {s.o1_before:.2f}, rank {s.rank_before} -> the postures routed so far with it: O1 {s.o1_after:.2f}, "
+            f"rank {s.rank_after}): {s.reason}"
         )
     for index, reason in route.skipped:
         print(f"  skipped posture {index}: {reason} ({routed.repair})")
