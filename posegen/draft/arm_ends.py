@@ -17,12 +17,11 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from posegen.draft.geometry import Geometry, carried, link_of_joint
+from posegen.draft.geometry import Geometry, carried, forearm, link_of_joint
 from posegen.draft.limits import limits
 from posegen.robot import leaves_no_room
 
 MIN_ARM_JOINTS = 3  # an arm keeps at least this many joints
-APART_M = 0.01  # the elbow is the first joint before the wrist at least this far from it
 BEYOND_M = 0.001  # the wrist's geometry reaches beyond the end's by more than this
 
 
@@ -100,15 +99,11 @@ def _idle(
     carried_by_end = set(subtree(end))
     if sum(model.inertias[j].mass for j in carried_by_end) >= light_kg:
         return False
-    at = data.oMi[end].translation
-    elbow = next(
-        (data.oMi[j].translation for j in reversed(arm[:-1]) if np.linalg.norm(data.oMi[j].translation - at) > APART_M),
-        at,
-    )
-    length = float(np.linalg.norm(at - elbow))
+    reach = forearm(data, arm)  # (3,) m, world
+    length = float(np.linalg.norm(reach))
     if length == 0.0:
         return False
-    along = (at - elbow) / length  # (3,) world, the forearm's direction
+    along = reach / length  # (3,) world, the forearm's direction
     world = pin.SE3.Identity()
     end_points = carried(model, data, geometry, carried_by_end, world)  # (k, 3) m, world
     wrist_points = carried(model, data, geometry, {wrist}, world)  # (k', 3) m, world

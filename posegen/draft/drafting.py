@@ -32,7 +32,7 @@ import pinocchio as pin
 from posegen.draft.body import Body, study_body
 from posegen.draft.covering import collision_additions
 from posegen.draft.force import held_force
-from posegen.draft.geometry import Geometry, HandContact, hand_contact, link_of_joint, vertices
+from posegen.draft.geometry import Geometry, HandContact, forearm, hand_contact, link_of_joint, vertices
 from posegen.draft.limits import (
     IMPLAUSIBLE_SPEED_RAD_S,
     JOINT_LIMIT_MARGIN_RAD,
@@ -214,10 +214,8 @@ def find_hands(model: pin.Model, data: pin.Data, geometry: Geometry, body: Body)
     checks = []
     for name, sole, path in zip(("left", "right"), body.legs.soles, body.arms, strict=True):
         hand = link_of_joint(model, path[-1])
-        wrist = data.oMi[path[-1]].translation
-        elbow = next((data.oMi[j].translation for j in reversed(path) if _apart(data.oMi[j].translation, wrist)), wrist)
         fingers = set(body.tree.subtree(path[-1])) - {path[-1]}
-        contact = hand_contact(model, data, geometry, name, hand, wrist - elbow, fingers)
+        contact = hand_contact(model, data, geometry, name, hand, forearm(data, path), fingers)
         joints = tuple(str(model.names[j]) for j in path if j not in shared)
         gripper = FrameConfig(f"{name}_gripper", hand, (0.0, 0.0, 0.0))
         chains.append(Chain(name, sole.frame, hand, gripper, joints, contact))
@@ -233,10 +231,6 @@ def table_for(model: pin.Model, data: pin.Data, geometry: Geometry, body: Body, 
     points = vertices(model, data, geometry.collision, set(range(1, model.njoints)), body.bearing.heading)  # (k, 3)
     points[:, 2] -= floor_z
     return place_table(body.bearing.heading, shoulder, reach, floor_z, points), reach
-
-
-def _apart(a: FloatArray, b: FloatArray) -> bool:
-    return bool(np.linalg.norm(a - b) > 0.01)
 
 
 def _survey(

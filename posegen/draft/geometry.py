@@ -22,6 +22,7 @@ FLAT_TOL_M = 0.002  # vertices this close to a face's plane lie on it
 FLAT_FILL = 0.5  # a face is flat when its touching vertices span this share of its box face in both directions
 HAND_GUESS = 0.35  # without geometry, the tip is this share of the forearm beyond the wrist
 TIP_RADIUS_M = 0.01  # guessed rounding of a point contact's tip
+APART_M = 0.01  # the elbow is the last joint before the wrist at least this far from it
 
 
 @dataclass(frozen=True)
@@ -101,6 +102,25 @@ def _points(shape: object) -> FloatArray:
     half_length = float(getattr(shape, "halfLength", 0.0))
     ends = [np.array([0.0, 0.0, -half_length]), np.array([0.0, 0.0, half_length])]
     return np.array([end + radius * d for end in ends for d in np.vstack([np.eye(3), -np.eye(3)])])
+
+
+def forearm(data: pin.Data, arm: list[int]) -> FloatArray:
+    """(3,) m, world: from the elbow to the arm's last joint (the wrist), at the posture of ``data``.
+
+    The elbow is the last joint before the wrist at least ``APART_M`` from it; the vector is
+    zero when there is none.
+
+    Example:
+        >>> forearm(data, body.arms[0])  # a hanging arm: down
+        array([ 0.  ,  0.  , -0.25])
+
+    """
+    wrist = data.oMi[arm[-1]].translation
+    elbow = next(
+        (data.oMi[j].translation for j in reversed(arm) if np.linalg.norm(data.oMi[j].translation - wrist) > APART_M),
+        wrist,
+    )
+    return np.array(wrist - elbow, dtype=float)
 
 
 def link_of_joint(model: pin.Model, joint: int) -> str:
