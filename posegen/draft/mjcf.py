@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from posegen.draft.mjcf_joints import body_joint_names, joint_refs
 from posegen.draft.mjcf_text import flattened_mjcf
 from posegen.draft.urdf_check import number, numbers
 from posegen.errors import ConfigError
@@ -96,7 +97,7 @@ def convert_mjcf(path: str | Path) -> MjcfUrdf:
     _check_numbers(root, path)
     model, collision, visual = _load(root, path)
     _check_tree(model, path)
-    writer = _UrdfWriter(model, _body_joint_names(root), path)
+    writer = _UrdfWriter(model, body_joint_names(root), joint_refs(root, path), path)
     text = writer.write(collision, visual)
     dropped = tuple(writer.dropped) + _sections_dropped(root)
     return MjcfUrdf(path, hashlib.sha256(path.read_bytes()).hexdigest(), text, dropped)
@@ -184,17 +185,6 @@ def _check_tree(model: pin.Model, path: Path) -> None:
             raise ConfigError(f"{path}: joint '{model.names[j]}' starts a second body tree; posegen reads one robot")
 
 
-def _body_joint_names(root: ET.Element) -> dict[str, list[str]]:
-    """The names of each named body's ``<joint>`` elements, in order (unnamed: ``<body>_joint<k>``)."""
-    names: dict[str, list[str]] = {}
-    for body in root.iter("body"):
-        name = body.get("name")
-        if name is not None:
-            joints = body.findall("joint")
-            names[name] = [j.get("name") or f"{name}_joint{k}" for k, j in enumerate(joints)]
-    return names
-
-
 def _sections_dropped(root: ET.Element) -> tuple[str, ...]:
     """The MJCF parts a URDF has no place for, counted: ``"12 actuator"``."""
     counts: Counter[str] = Counter()
@@ -223,6 +213,13 @@ def _origin(placement: pin.SE3) -> str:
     return f'<origin xyz="{_vec(placement.translation)}" rpy="{_vec(rpy)}"/>'
 
 
+def _motion(axis: np.ndarray, value: float, prismatic: bool) -> pin.SE3:
+    """A joint's motion by ``value`` (m along a slide's unit ``axis``, rad about a hinge's)."""
+    if prismatic:
+        return pin.SE3(np.eye(3), value * axis)
+    return pin.SE3(pin.AngleAxis(value, axis).matrix(), np.zeros(3))
+
+
 def _is_identity(placement: pin.SE3) -> bool:
     return bool(np.allclose(placement.homogeneous, np.eye(4), atol=_IDENTITY_TOL, rtol=0.0))
 
@@ -230,9 +227,12 @@ def _is_identity(placement: pin.SE3) -> bool:
 class _UrdfWriter:
     """The URDF elements of a pinocchio model read from an MJCF, in the model's joint order."""
 
-    def __init__(self, model: pin.Model, joint_names: dict[str, list[str]], path: Path) -> None:
+    def __init__(
+        self, model: pin.Model, joint_names: dict[str, list[str]], refs: dict[str, list[float]], path: Path
+    ) -> None:
         self.model = model
         self.joint_names = joint_names
+        self.refs = refs  # body -> its joints' ref (rad, m): pinocchio's zero, MuJoCo's ref
         self.path = path
         self.links: dict[str, list[str]] = {}  # link -> its inner elements (inertial, visuals, collisions)
         self.joints: list[str] = []
@@ -291,21 +291,31 @@ class _UrdfWriter:
         joint = self.model.joints[j]
         parent = self.link_of[self.model.parents[j]]
         placement = self.model.jointPlacements[j]
+        refs = self.refs.get(body, [])
         if joint.shortname() != "JointModelComposite":
-            self._hinge(str(self.model.names[j]), joint, parent, link, placement, joint.idx_q)
+            ref = refs[0] if len(refs) == 1 else 0.0
+            self._hinge(str(self.model.names[j]), joint, parent, link, placement, joint.idx_q, ref)
             return
         composite = joint.extract()
         names = self.joint_names.get(body, [])
         if len(names) != len(composite.joints):
             names = [f"{body}_joint{k}" for k in range(len(composite.joints))]
+        if len(refs) != len(composite.joints):
+            refs = [0.0] * len(composite.joints)
         idx_q = joint.idx_q
         for k, (sub, inner) in enumerate(zip(composite.joints, composite.jointPlacements, strict=True)):
             child = link if k == len(composite.joints) - 1 else self._link(f"{names[k]}_link")
-            self._hinge(names[k], sub, parent, child, placement * inner, idx_q)
+            self._hinge(names[k], sub, parent, child, placement * inner, idx_q, refs[k])
             parent, placement, idx_q = child, pin.SE3.Identity(), idx_q + sub.nq
 
-    def _hinge(self, name: str, joint: pin.JointModel, parent: str, child: str, at: pin.SE3, idx_q: int) -> None:
-        """A one-dof URDF joint (revolute, continuous or prismatic) with pinocchio's axis and limits."""
+    def _hinge(
+        self, name: str, joint: pin.JointModel, parent: str, child: str, at: pin.SE3, idx_q: int, ref: float
+    ) -> None:
+        """A one-dof URDF joint (revolute, continuous or prismatic) with pinocchio's axis and limits.
+
+        Its origin is turned back by ``ref`` (rad or m): pinocchio's zero is the pose as
+        written, MuJoCo's (the limits' and the encoders') is ``ref`` from it.
+        """
         kind = joint.shortname().removeprefix("JointModel")
         if kind in ("RevoluteUnaligned", "PrismaticUnaligned"):
             axis = tuple(float(v) for v in joint.extract().axis)
@@ -315,6 +325,8 @@ class _UrdfWriter:
             raise ConfigError(f"{self.path}: joint '{name}' is a {kind} joint; posegen converts hinges and slides")
         low, high = float(self.model.lowerPositionLimit[idx_q]), float(self.model.upperPositionLimit[idx_q])
         prismatic = kind.startswith("P")
+        if ref:
+            at = at * _motion(np.array(axis), -ref, prismatic)
         urdf_kind = "prismatic" if prismatic else "revolute" if np.isfinite([low, high]).all() else "continuous"
         idx_v = idx_q - self.model.joints[1].nq + self.model.joints[1].nv  # one-dof joints after the free root
         speed, effort = (float(self.model.velocityLimit[idx_v]), float(self.model.effortLimit[idx_v]))
