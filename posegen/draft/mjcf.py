@@ -25,6 +25,7 @@ infinity).
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import tempfile
 import xml.etree.ElementTree as ET
@@ -35,15 +36,16 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from posegen.draft.mjcf_joints import body_joint_names, joint_refs
+from posegen.draft.mjcf_checks import check_elements, check_numbers
+from posegen.draft.mjcf_joints import MjcfJoint, body_joints
 from posegen.draft.mjcf_text import flattened_mjcf
-from posegen.draft.urdf_check import number, numbers
 from posegen.errors import ConfigError
 from posegen.io import native_output
 
 MJCF_ROOT = "mujoco"
 _IDENTITY_TOL = 1e-12
 _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+_NOTHING_WRITTEN = MjcfJoint("", 0.0, None)  # a joint whose MJCF element is not told apart: pinocchio's reading
 _NOT_CARRIED = ("actuator", "tendon", "equality", "sensor", "contact", "keyframe")  # top-level sections
 
 
@@ -93,11 +95,11 @@ def convert_mjcf(path: str | Path) -> MjcfUrdf:
     """
     path = Path(path).resolve()
     root = flattened_mjcf(path)
-    _check_elements(root, path)
-    _check_numbers(root, path)
+    check_elements(root, path)
+    check_numbers(root, path)
     model, collision, visual = _load(root, path)
     _check_tree(model, path)
-    writer = _UrdfWriter(model, body_joint_names(root), joint_refs(root, path), path)
+    writer = _UrdfWriter(model, body_joints(root, path), path)
     text = writer.write(collision, visual)
     dropped = tuple(writer.dropped) + _sections_dropped(root)
     return MjcfUrdf(path, hashlib.sha256(path.read_bytes()).hexdigest(), text, dropped)
@@ -118,54 +120,6 @@ def _load(root: ET.Element, path: Path) -> tuple[pin.Model, pin.GeometryModel, p
             first = lines[0] if lines else type(exc).__name__
             raise ConfigError(f"{path}: pinocchio cannot load the MJCF: {first}") from exc
     return model, collision, visual
-
-
-_NUMBERS = (  # attributes that hold numbers, on any element of the model
-    "pos", "quat", "axisangle", "euler", "xyaxes", "zaxis", "axis", "fromto", "size", "mass", "diaginertia",
-    "fullinertia", "range", "ref", "scale", "density",
-)  # fmt: skip
-
-
-def _check_numbers(root: ET.Element, path: Path) -> None:
-    """Every number of the model finite, no mass negative (pinocchio reads both, and carries them into the URDF)."""
-    for element in root.iter():
-        if element.get("mass") is not None and number(element.get("mass")) < 0.0:
-            raise ConfigError(f'{path}: <{element.tag}> mass="{element.get("mass")}": a negative mass (kg)')
-        for key in _NUMBERS:
-            text = element.get(key)
-            if text is None:
-                continue
-            values = numbers(text)
-            if not values or not np.isfinite(values).all():
-                name = element.get("name") or element.get("mesh") or "(unnamed)"
-                raise ConfigError(f'{path}: <{element.tag} name="{name}"> {key}="{text}": expected finite numbers')
-
-
-def _check_elements(root: ET.Element, path: Path) -> None:
-    """Meshes that exist, one body in ``<worldbody>`` (pinocchio passes over the others without a word)."""
-    meshdir = Path(next(c.get("meshdir", "") for c in root.findall("compiler") if c.get("meshdir")))  # absolute
-    meshes = {}
-    inline = {m.get("name") for m in root.iter("mesh") if not m.get("file")}  # vertex="...": no file to convert
-    for mesh in root.iter("mesh"):
-        if mesh.get("file"):
-            meshes[mesh.get("name") or Path(mesh.get("file", "")).stem] = mesh.get("file", "")
-    for geom in root.iter("geom"):
-        name = geom.get("mesh")
-        if name is not None and name not in meshes and name in inline:
-            raise ConfigError(
-                f"{path}: mesh '{name}' is given inline (vertex=...), not as a file: posegen converts mesh files; "
-                "save it as an STL or OBJ file and name it with file=..."
-            )
-        if name is not None and name not in meshes:
-            raise ConfigError(f"{path}: geom '{geom.get('name', '(unnamed)')}' names the mesh '{name}', not in <asset>")
-        if name is not None and not (meshdir / meshes[name]).is_file():
-            raise ConfigError(f"{path}: mesh '{name}' file '{meshes[name]}' not found in {meshdir}")
-    bodies = [body for world in root.findall("worldbody") for body in world.findall("body")]
-    if not bodies:
-        raise ConfigError(f"{path}: no body in <worldbody>")
-    if len(bodies) > 1:
-        second = bodies[1].get("name", "(unnamed)")
-        raise ConfigError(f"{path}: a second body '{second}' in <worldbody>; posegen reads one robot: remove it")
 
 
 def _check_tree(model: pin.Model, path: Path) -> None:
@@ -227,12 +181,9 @@ def _is_identity(placement: pin.SE3) -> bool:
 class _UrdfWriter:
     """The URDF elements of a pinocchio model read from an MJCF, in the model's joint order."""
 
-    def __init__(
-        self, model: pin.Model, joint_names: dict[str, list[str]], refs: dict[str, list[float]], path: Path
-    ) -> None:
+    def __init__(self, model: pin.Model, joints: dict[str, list[MjcfJoint]], path: Path) -> None:
         self.model = model
-        self.joint_names = joint_names
-        self.refs = refs  # body -> its joints' ref (rad, m): pinocchio's zero, MuJoCo's ref
+        self.mjcf_joints = joints  # body -> its <joint> elements, read as MuJoCo does
         self.path = path
         self.links: dict[str, list[str]] = {}  # link -> its inner elements (inertial, visuals, collisions)
         self.joints: list[str] = []
@@ -291,31 +242,35 @@ class _UrdfWriter:
         joint = self.model.joints[j]
         parent = self.link_of[self.model.parents[j]]
         placement = self.model.jointPlacements[j]
-        refs = self.refs.get(body, [])
+        written = self.mjcf_joints.get(body, [])
         if joint.shortname() != "JointModelComposite":
-            ref = refs[0] if len(refs) == 1 else 0.0
-            self._hinge(str(self.model.names[j]), joint, parent, link, placement, joint.idx_q, ref)
+            own = written[0] if len(written) == 1 else _NOTHING_WRITTEN
+            self._hinge(dataclasses.replace(own, name=str(self.model.names[j])), joint, parent, link, placement)
             return
         composite = joint.extract()
-        names = self.joint_names.get(body, [])
-        if len(names) != len(composite.joints):
-            names = [f"{body}_joint{k}" for k in range(len(composite.joints))]
-        if len(refs) != len(composite.joints):
-            refs = [0.0] * len(composite.joints)
+        if len(written) != len(composite.joints):
+            written = [
+                dataclasses.replace(_NOTHING_WRITTEN, name=f"{body}_joint{k}") for k in range(len(composite.joints))
+            ]
         idx_q = joint.idx_q
         for k, (sub, inner) in enumerate(zip(composite.joints, composite.jointPlacements, strict=True)):
-            child = link if k == len(composite.joints) - 1 else self._link(f"{names[k]}_link")
-            self._hinge(names[k], sub, parent, child, placement * inner, idx_q, refs[k])
+            child = link if k == len(composite.joints) - 1 else self._link(f"{written[k].name}_link")
+            self._hinge(written[k], sub, parent, child, placement * inner, idx_q)
             parent, placement, idx_q = child, pin.SE3.Identity(), idx_q + sub.nq
 
     def _hinge(
-        self, name: str, joint: pin.JointModel, parent: str, child: str, at: pin.SE3, idx_q: int, ref: float
+        self, written: MjcfJoint, joint: pin.JointModel, parent: str, child: str, at: pin.SE3, idx_q: int | None = None
     ) -> None:
         """A one-dof URDF joint (revolute, continuous or prismatic) with pinocchio's axis and limits.
 
-        Its origin is turned back by ``ref`` (rad or m): pinocchio's zero is the pose as
-        written, MuJoCo's (the limits' and the encoders') is ``ref`` from it.
+        ``written`` is the MJCF joint (its name, ``ref``, a slide's range); ``idx_q`` its
+        configuration index (default: ``joint``'s). The origin is turned back by ``ref``
+        (rad or m): pinocchio's zero is the pose as written, MuJoCo's (the limits' and the
+        encoders') is ``ref`` from it. A slide's limits are its range as written (pinocchio
+        reads them as degrees under ``angle="degree"``).
         """
+        name = written.name
+        idx_q = joint.idx_q if idx_q is None else idx_q
         kind = joint.shortname().removeprefix("JointModel")
         if kind in ("RevoluteUnaligned", "PrismaticUnaligned"):
             axis = tuple(float(v) for v in joint.extract().axis)
@@ -325,8 +280,10 @@ class _UrdfWriter:
             raise ConfigError(f"{self.path}: joint '{name}' is a {kind} joint; posegen converts hinges and slides")
         low, high = float(self.model.lowerPositionLimit[idx_q]), float(self.model.upperPositionLimit[idx_q])
         prismatic = kind.startswith("P")
-        if ref:
-            at = at * _motion(np.array(axis), -ref, prismatic)
+        if prismatic and written.slide_range_m is not None:
+            low, high = written.slide_range_m
+        if written.ref:
+            at = at * _motion(np.array(axis), -written.ref, prismatic)
         urdf_kind = "prismatic" if prismatic else "revolute" if np.isfinite([low, high]).all() else "continuous"
         idx_v = idx_q - self.model.joints[1].nq + self.model.joints[1].nv  # one-dof joints after the free root
         speed, effort = (float(self.model.velocityLimit[idx_v]), float(self.model.effortLimit[idx_v]))

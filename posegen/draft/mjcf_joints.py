@@ -1,112 +1,68 @@
-"""An MJCF's joints as each body holds them: their names, and their ``ref`` as MuJoCo resolves it.
+"""An MJCF's joints as MuJoCo reads them: names, ``ref`` and a slide's range, for the URDF's joints.
 
-A joint's ``ref`` is its angle (or a slide's position) in the pose the model is written
-in. pinocchio's MJCF parser puts a joint's zero there, while MuJoCo's zero (the angle a
-robot's encoders report, and the one its ``range`` is given in) is ``ref`` away from it:
-the converted URDF turns each joint's origin back by its ``ref`` (:func:`joint_refs`).
+* ``ref``, a joint's value in the pose the model is written in: pinocchio puts the joint's
+  zero there, MuJoCo ``ref`` away from it (its zero is the one the ``range`` and a robot's
+  encoders use), so the converted URDF turns the joint's origin back by it (a hinge's
+  ``ref`` is in degrees unless the ``<compiler>`` says ``angle="radian"``);
+* a slide's ``range``, which pinocchio reads as an angle (degrees turned into radians).
 
-An attribute a joint does not give comes from its class's defaults: its ``class``, else
-the ``childclass`` of the nearest body around it (its own included), else ``main``; a
-class's defaults are its ``<joint>`` attributes over those of the classes it is nested in.
-A hinge's ``ref`` is in degrees unless the ``<compiler>`` says ``angle="radian"``.
+Each is read through the joint's class (:mod:`posegen.draft.mjcf_classes`).
 """
 
 from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 from pathlib import Path
 
+from posegen.draft.mjcf_classes import resolved
 from posegen.errors import ConfigError
 
-MAIN_CLASS = "main"
+
+@dataclass(frozen=True)
+class MjcfJoint:
+    """One ``<joint>`` of a body, read with its class's defaults under its own attributes."""
+
+    name: str  # its name, or ``<body>_joint<k>``
+    ref: float  # rad for a hinge, m for a slide: its value in the pose as written (pinocchio's zero)
+    slide_range_m: tuple[float, float] | None  # a slide's range as written; None: a hinge, or no range
 
 
-def body_joint_names(root: ET.Element) -> dict[str, list[str]]:
-    """The names of each named body's ``<joint>`` elements, in order (unnamed: ``<body>_joint<k>``).
-
-    Example:
-        >>> body_joint_names(ET.fromstring('<mujoco><worldbody><body name="arm"><joint/></body></worldbody></mujoco>'))
-        {'arm': ['arm_joint0']}
-
-    """
-    names: dict[str, list[str]] = {}
-    for body in root.iter("body"):
-        name = body.get("name")
-        if name is not None:
-            joints = body.findall("joint")
-            names[name] = [j.get("name") or f"{name}_joint{k}" for k, j in enumerate(joints)]
-    return names
-
-
-def joint_defaults(root: ET.Element) -> dict[str, dict[str, str]]:
-    """Each default class's ``<joint>`` attributes, those of the classes it is nested in included.
-
-    Example:
-        >>> leg = '<default class="leg"><joint axis="0 1 0"/></default>'
-        >>> joint_defaults(ET.fromstring(f'<mujoco><default><joint ref="1"/>{leg}</default></mujoco>'))["leg"]
-        {'ref': '1', 'axis': '0 1 0'}
-
-    """
-    classes: dict[str, dict[str, str]] = {}
-
-    def visit(element: ET.Element, inherited: dict[str, str]) -> None:
-        own = dict(inherited)
-        for joint in element.findall("joint"):
-            own.update(joint.attrib)
-        classes[element.get("class", MAIN_CLASS)] = own
-        for child in element.findall("default"):
-            visit(child, own)
-
-    for top in root.findall("default"):
-        visit(top, {})
-    return classes
-
-
-def joint_refs(root: ET.Element, path: Path) -> dict[str, list[float]]:
-    """Each named body's joints' ``ref``, in order: rad for a hinge, m for a slide.
+def body_joints(root: ET.Element, path: Path) -> dict[str, list[MjcfJoint]]:
+    """Each named body's joints, in order (a ``ref`` in degrees read as rad).
 
     Args:
         root: The flattened MJCF (includes inlined, frames made bodies).
         path: The MJCF file, named in errors.
 
     Raises:
-        ConfigError: A joint with a nonzero ``ref`` is in a body without a name (its
-            converted joint could not be told apart), or names a class no default defines.
+        ConfigError: A joint names a class no default defines, or a joint with a nonzero
+            ``ref`` is in a body without a name (its converted joint could not be told apart).
 
     Example:
         >>> text = '<mujoco><worldbody><body name="b"><joint ref="90"/></body></worldbody></mujoco>'
-        >>> joint_refs(ET.fromstring(text), Path("robot.xml"))  # degrees by default
-        {'b': [1.5707963267948966]}
+        >>> body_joints(ET.fromstring(text), Path("robot.xml"))["b"][0].ref  # degrees by default
+        1.5707963267948966
 
     """
-    classes = joint_defaults(root)
     degrees = _angle_unit(root) != "radian"
-    refs: dict[str, list[float]] = {}
-
-    def visit(body: ET.Element, childclass: str) -> None:
-        childclass = body.get("childclass", childclass)
-        values = []
-        for joint in body.findall("joint"):
-            kind = joint.get("class", childclass)
-            if kind not in classes and kind != MAIN_CLASS:
-                raise ConfigError(f"{path}: joint class '{kind}' has no <default class=\"{kind}\">")
-            attributes = {**classes.get(kind, {}), **joint.attrib}
-            ref = float(attributes.get("ref", "0"))
-            hinge = attributes.get("type", "hinge") == "hinge"
-            values.append(math.radians(ref) if hinge and degrees else ref)
+    joints: dict[str, list[MjcfJoint]] = {}
+    for body, joint, attributes in resolved(root, path, "joint"):
         name = body.get("name")
-        if name is not None:
-            refs[name] = values
-        elif any(values):
-            raise ConfigError(f"{path}: a body with a joint whose ref is not 0 has no name; name it")
-        for child in body.findall("body"):
-            visit(child, childclass)
-
-    for world in root.findall("worldbody"):
-        for body in world.findall("body"):
-            visit(body, MAIN_CLASS)
-    return refs
+        slide = attributes.get("type", "hinge") == "slide"
+        ref = float(attributes.get("ref", "0"))
+        if not slide and degrees:
+            ref = math.radians(ref)
+        if name is None:
+            if ref:
+                raise ConfigError(f"{path}: a body with a joint whose ref is not 0 has no name; name it")
+            continue
+        own = joints.setdefault(name, [])
+        values = attributes.get("range", "").split()
+        span = (float(values[0]), float(values[1])) if slide and len(values) == 2 else None
+        own.append(MjcfJoint(joint.get("name") or f"{name}_joint{len(own)}", ref, span))
+    return joints
 
 
 def _angle_unit(root: ET.Element) -> str:

@@ -1,16 +1,19 @@
-"""The MJCF text pinocchio is given: includes inlined, assets in one section, asset folders absolute.
+"""The MJCF text pinocchio is given: includes inlined, assets in one section, folders absolute.
 
-pinocchio 3.8 builds a model's kinematics through ``<include>`` elements, but its
-geometry reader does not see the assets an included file defines (a ``material="self"``
-from an included ``materials.xml`` fails with ``unordered_map::at``, as in dm_control's
-humanoid), and it reads the first ``<asset>`` section only. So the model is flattened
-first: each ``<include>`` is replaced by the children of the included file's
-``<mujoco>`` (paths relative to the main file's folder, as MuJoCo reads them), the
-``<frame>`` elements (which pinocchio skips, with every body in them) become bodies
-without joints, each ``axisangle``'s axis is made of unit length (MuJoCo normalizes it,
-pinocchio does not), the ``<asset>`` sections are merged into one, and the compiler's ``meshdir``,
-``texturedir`` and ``assetdir`` are made absolute, so that the flattened text can be
-read from any folder.
+pinocchio 3.8 builds a model's kinematics through ``<include>`` elements, but its geometry
+reader does not see the assets an included file defines (a ``material="self"`` from an
+included ``materials.xml`` fails with ``unordered_map::at``, as in dm_control's humanoid),
+and it reads the first ``<asset>`` section only. So the model is flattened first: each
+``<include>`` is replaced by the children of the included file's ``<mujoco>`` (paths
+relative to the main file's folder, as MuJoCo reads them), the ``<frame>`` elements (which
+pinocchio skips, with every body in them) become bodies without joints, each joint's and
+geom's attributes from its class are written on it (pinocchio skips a class's ``pos`` and
+lays a body's ``childclass`` over an element's ``class``), each ``axisangle``'s axis is made of
+unit length (MuJoCo normalizes it, pinocchio does not), each ``euler`` becomes the ``quat``
+MuJoCo makes of it (pinocchio turns an upper-case ``eulerseq``, about the fixed axes, as a
+lower-case one), the ``<asset>`` sections are merged into one, and the compiler's
+``meshdir``, ``texturedir`` and ``assetdir`` are made absolute, so that the flattened text
+can be read from any folder.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from posegen.draft.mjcf_classes import write_resolved
 from posegen.errors import ConfigError
 
 MAX_INCLUDE_DEPTH = 16  # deeper is a cycle
@@ -60,7 +64,9 @@ def flattened_mjcf(path: Path) -> ET.Element:
     root = parse_xml(path)
     _inline(root, path, 0)
     _frames_as_bodies(root)
+    write_resolved(root, path)
     _unit_rotation_axes(root)
+    _euler_as_quaternion(root)
     _one_asset_section(root)
     _absolute_asset_dirs(root, path.parent)
     return root
@@ -104,6 +110,44 @@ def _unit_rotation_axes(root: ET.Element) -> None:
         norm = math.sqrt(x * x + y * y + z * z)
         if norm > 0.0 and math.isfinite(norm):
             element.set("axisangle", f"{x / norm!r} {y / norm!r} {z / norm!r} {angle!r}")
+
+
+def _euler_as_quaternion(root: ET.Element) -> None:
+    """Write each ``euler`` as the ``quat`` MuJoCo makes of it (pinocchio turns an upper-case ``eulerseq`` wrongly).
+
+    MuJoCo turns about each axis of the compiler's ``eulerseq`` in turn (default ``xyz``):
+    about the moving frame's axis for a lower-case letter, about the fixed frame's for an
+    upper-case one; the angles are in the compiler's unit (default degrees).
+    """
+    sequence, unit = "xyz", "degree"
+    for compiler in root.findall("compiler"):
+        sequence, unit = compiler.get("eulerseq", sequence), compiler.get("angle", unit)
+    scale = 1.0 if unit == "radian" else math.pi / 180.0
+    for element in root.iter():
+        values = element.get("euler", "").split()
+        try:
+            angles = [float(v) * scale for v in values]
+        except ValueError:
+            continue  # not numbers: MuJoCo's own message (the conversion reads it as written)
+        if len(angles) != 3 or len(sequence) != 3 or not set(sequence.lower()) <= set("xyz"):
+            continue
+        total = (1.0, 0.0, 0.0, 0.0)  # (w, x, y, z)
+        for letter, angle in zip(sequence, angles, strict=True):
+            turn = [math.cos(angle / 2.0), 0.0, 0.0, 0.0]
+            turn[1 + "xyz".index(letter.lower())] = math.sin(angle / 2.0)
+            total = _product(total, tuple(turn)) if letter.islower() else _product(tuple(turn), total)
+        del element.attrib["euler"]
+        element.set("quat", " ".join(repr(v) for v in total))
+
+
+def _product(a: tuple[float, ...], b: tuple[float, ...]) -> tuple[float, float, float, float]:
+    """The quaternion product ``a b``, (w, x, y, z)."""
+    return (
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    )
 
 
 def _one_asset_section(root: ET.Element) -> None:

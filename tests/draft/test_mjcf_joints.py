@@ -1,4 +1,4 @@
-"""An MJCF joint's ``ref`` through class defaults, and the converted URDF's zero at MuJoCo's (not pinocchio's)."""
+"""An MJCF joint's ``ref`` and a slide's range through class defaults; the converted URDF's zero at MuJoCo's."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 from posegen.draft.mjcf import convert_mjcf
-from posegen.draft.mjcf_joints import joint_defaults, joint_refs
+from posegen.draft.mjcf_joints import body_joints
 from posegen.errors import ConfigError
 from tests.draft.humanoid_mjcf import humanoid_mjcf
 
@@ -28,11 +28,8 @@ def _parse(body: str, compiler: str = "") -> ET.Element:
     return ET.fromstring(f"<mujoco>{compiler}{DEFAULTS}<worldbody>{body}</worldbody></mujoco>")
 
 
-def test_a_class_default_is_inherited_through_nested_classes():
-    classes = joint_defaults(_parse(""))
-    assert classes["main"] == {"damping": "1"}
-    assert classes["limb"] == {"damping": "1", "ref": "0.2"}
-    assert classes["bent"] == {"damping": "1", "ref": "0.4", "armature": "0.1"}
+def _refs(root: ET.Element) -> dict[str, list[float]]:
+    return {body: [j.ref for j in joints] for body, joints in body_joints(root, Path("robot.xml")).items()}
 
 
 def test_a_ref_comes_from_the_joint_its_class_the_nearest_childclass_or_main():
@@ -42,11 +39,11 @@ def test_a_ref_comes_from_the_joint_its_class_the_nearest_childclass_or_main():
           <body name="hand" childclass="main"><joint name="main"/><joint type="slide" ref="0.05"/></body>
         </body>
       </body>"""
-    refs = joint_refs(_parse(body), Path("robot.xml"))  # degrees: MuJoCo's default unit
+    refs = _refs(_parse(body))  # degrees: MuJoCo's default unit
     assert refs["trunk"] == pytest.approx([math.radians(30), math.radians(0.4), math.radians(0.2)], abs=1e-15)
     assert refs["arm"] == pytest.approx([math.radians(0.2)], abs=1e-15)
     assert refs["hand"] == [0.0, 0.05]  # a slide's ref is a length, whatever the angle unit
-    radians = joint_refs(_parse(body, '<compiler angle="radian"/>'), Path("robot.xml"))
+    radians = _refs(_parse(body, '<compiler angle="radian"/>'))
     assert radians["trunk"] == [30.0, 0.4, 0.2]
 
 
@@ -59,8 +56,16 @@ def test_a_ref_comes_from_the_joint_its_class_the_nearest_childclass_or_main():
 )
 def test_a_ref_that_cannot_be_placed_is_one_line(body, message):
     with pytest.raises(ConfigError, match=message):
-        joint_refs(_parse(body), Path("robot.xml"))
-    assert joint_refs(_parse('<body><joint ref="0"/></body>'), Path("robot.xml")) == {}  # no ref: no name needed
+        body_joints(_parse(body), Path("robot.xml"))
+    assert body_joints(_parse('<body><joint ref="0"/></body>'), Path("robot.xml")) == {}  # no ref: no name needed
+
+
+def test_a_slides_range_is_a_length_whatever_the_angle_unit():
+    """pinocchio reads a slide's range as an angle: "-0.1 0.2" under degrees became -1.7 mm, 3.5 mm."""
+    body = '<body name="b"><joint type="slide" range="-0.1 0.2"/><joint range="-10 20"/><joint type="slide"/></body>'
+    joints = body_joints(_parse(body), Path("robot.xml"))["b"]
+    assert [j.slide_range_m for j in joints] == [(-0.1, 0.2), None, None]  # a hinge's range is pinocchio's to read
+    assert [j.name for j in joints] == ["b_joint0", "b_joint1", "b_joint2"]
 
 
 def _with_refs(folder: Path) -> Path:
