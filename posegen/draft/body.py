@@ -30,7 +30,7 @@ import pinocchio as pin
 
 from posegen.draft.arm_ends import without_idle_ends, without_narrow_ends
 from posegen.draft.geometry import Geometry, load_geometry
-from posegen.draft.heading import TURNED, Bearing, forward_of, knees_face_back
+from posegen.draft.heading import TURNED, Bearing, forward_of, knees_forward
 from posegen.draft.limits import (
     COM_MARGIN_M,
     JOINT_LIMIT_MARGIN_RAD,
@@ -39,6 +39,7 @@ from posegen.draft.limits import (
     near_limit,
     outside_limits,
     with_joints,
+    without_room,
 )
 from posegen.draft.soles import ANKLE_HEIGHT, Sole, com_margin, find_sole, sole_pose
 from posegen.draft.source import DraftSource
@@ -116,11 +117,12 @@ class Body:
     locked: dict[str, float]  # rad
     joint_limit_margin_rad: float
     checks: tuple[str, ...]
+    stuck: frozenset[int] = frozenset()  # joints of the legs, arms or waist locked for want of room between limits
 
     @property
     def kept(self) -> set[int]:
         """The joints of the legs, arms and waist (not locked)."""
-        return self.legs.joints | {j for arm in self.arms for j in arm} | set(self.waist)
+        return (self.legs.joints | {j for arm in self.arms for j in arm} | set(self.waist)) - self.stuck
 
 
 WORLD_LINK = "world"  # the URDF convention for a fixed base (a joint from it pins the robot)
@@ -146,8 +148,9 @@ def study_body(src: DraftSource, refused_state: str = "") -> Body:
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
     roots = find_legs(model, data, tree, bearing.left, src.label)
-    if knees_face_back(model, data, tree.children, tree.subtree, roots, bearing.forward):
-        bearing, roots, checks = bearing.turned(), roots[::-1], (*checks, TURNED)
+    if (facing := knees_forward(model, data, tree.children, tree.subtree, roots, bearing)) is not bearing:
+        bearing, checks = facing, (*checks, TURNED.format(axis=facing.root_axis()))
+        roots = find_legs(model, data, tree, bearing.left, src.label)
     geometry = load_geometry(model, src.text, src.files.package_dirs)
     legs, found = find_soles(model, data, geometry, tree, roots, bearing.heading)
     if state and (margin := com_margin(model, q, legs.soles)) < COM_MARGIN_M:
@@ -172,14 +175,18 @@ def study_body(src: DraftSource, refused_state: str = "") -> Body:
         arms = [arm for arm, _ in trimmed]
         found += tuple(check for _, check in trimmed if check)
     waist = waist_joints(model, roots)
-    kept = legs.joints | {j for arm in arms for j in arm} | set(waist)
+    stuck, found_stuck = without_room(model, legs.joints | {j for arm in arms for j in arm} | set(waist), margin)
+    found += found_stuck
+    kept = (legs.joints | {j for arm in arms for j in arm} | set(waist)) - stuck
     locked = locked_joints(model, q, kept)
     q = with_joints(model, q, locked)
     cleared = clear_of_limits(model, q, sorted(kept - legs.joints))
     q = with_joints(model, q, cleared)
     reference_joints.update({name: round(value, 4) for name, value in cleared.items()})
     checks += found + fixed_base(src.text)
-    return Body(tree, state, bearing, legs, arms, waist, geometry, q, reference_joints, locked, margin, checks)
+    return Body(
+        tree, state, bearing, legs, arms, waist, geometry, q, reference_joints, locked, margin, checks, frozenset(stuck)
+    )
 
 
 def fixed_base(urdf_text: str) -> tuple[str, ...]:

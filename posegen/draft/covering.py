@@ -174,25 +174,30 @@ def left_out_geometry(model: pin.Model, geometry: Geometry) -> dict[str, str]:
 
 
 def skeleton(model: pin.Model, link: str) -> list[Capsule]:
-    """Capsules from a link's joint to each child joint (or through its CoM, for an end link).
+    """Capsules from a link's origin to each child joint (or through its CoM, for an end link).
 
-    None for a link of no extent (its children and CoM within MIN_SEGMENT_M of its joint:
+    The link's origin is its joint's, unless the link is fixed off its joint's body (a
+    pelvis under a root link at the floor: the joint 0.6-1 m below it).
+
+    None for a link of no extent (its children and CoM within MIN_SEGMENT_M of its origin:
     a link between coincident joints, which a sphere would only make collide with its
     neighbours).
     """
     frame = model.frames[model.getFrameId(link)]
     joint = frame.parentJoint
     to_link = frame.placement.inverse()  # joint frame -> link frame
-    ends = [model.jointPlacements[c].translation for c in range(2, model.njoints) if model.parents[c] == joint]
-    inertia = model.inertias[joint]
+    children = [c for c in range(2, model.njoints) if model.parents[c] == joint]
+    ends = [to_link.act(model.jointPlacements[c].translation) for c in children]  # (3,) each, link frame
     ends = [e for e in ends if np.linalg.norm(e) >= MIN_SEGMENT_M]
     at_joint = bool(ends)  # the capsules end at child joints (else one through the CoM)
-    if not ends and inertia.mass > 0 and np.linalg.norm(inertia.lever) >= MIN_SEGMENT_M:
-        ends = [2.0 * inertia.lever]
-    origin = to_link.translation
-    out = []
+    inertia = model.inertias[joint]
+    com = to_link.act(inertia.lever)
+    if not ends and inertia.mass > 0 and np.linalg.norm(com) >= MIN_SEGMENT_M:
+        ends = [2.0 * com]
+    origin = np.zeros(3)  # the link's own origin: its joint's when the link is the joint's own, else a link fixed
+    out = []  # off the joint's body (a pelvis under a `world` or `base_footprint` root: the joint at the floor)
     for end in ends:
-        tip = to_link.act(np.asarray(end))
+        tip = np.asarray(end)
         length = float(np.linalg.norm(tip - origin))
         radius = round(float(np.clip(0.2 * length, 0.02, 0.06)), 3)
         if at_joint and length - radius >= MIN_SEGMENT_M:  # its cap reaches the child joint, not past it

@@ -96,6 +96,7 @@ class Draft:
     left_out: dict[str, str]  # link -> how much of its visual geometry its collision shapes leave out (replaced)
     bare: tuple[str, ...]  # moving links left without collision geometry (a CHECK line; `posegen check` warns too)
     table_center_m: tuple[float, float, float]
+    table_yaw_deg: float  # the table's x axis along the robot's forward
     table_size_m: tuple[float, float, float]
     spots_x_m: tuple[float, ...]
     spots_y_m: tuple[float, ...]
@@ -177,6 +178,7 @@ def draft_robot(
         table_size_m=table[1],
         spots_x_m=table[2],
         spots_y_m=table[3],
+        table_yaw_deg=table[4],
         reach_m=reach,
         survey=_survey(model, src, added.shapes, body.reference, body.locked, samples, seed),
         joint_limit_margin_rad=body.joint_limit_margin_rad,

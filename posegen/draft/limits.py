@@ -68,6 +68,26 @@ def outside_limits(model: pin.Model, q: FloatArray) -> list[str]:
     ]
 
 
+def without_room(model: pin.Model, joints: set[int], margin_rad: float) -> tuple[set[int], tuple[str, ...]]:
+    """The 1-dof joints of ``joints`` whose limits leave no room inside ``margin_rad`` of each (lower = upper).
+
+    The plan keeps every free joint ``margins.joint_limit_rad`` inside its limits, so such a
+    joint is locked: returned with a ``# CHECK:`` line each.
+
+    Example:
+        >>> without_room(model, {model.getJointId("arm_left_3_joint")}, 0.02)[0]  # doctest: +SKIP
+        {4}
+
+    """
+    stuck = {j for j in joints if model.joints[j].nq == 1 and np.diff(limits(model, j))[0] <= 2 * margin_rad}
+    checks = tuple(
+        f"'{model.names[j]}' has no room between its limits [{limits(model, j)[0]:g}, {limits(model, j)[1]:g}] rad "
+        f"(margins.joint_limit_rad {margin_rad:g} inside each): locked; check its limits in the URDF"
+        for j in sorted(stuck)
+    )
+    return stuck, checks
+
+
 def locked_joints(model: pin.Model, q: FloatArray, kept: set[int]) -> dict[str, float]:
     """Every 1-dof joint not kept, at its value in ``q`` (nq,) brought within its limits (rad)."""
     return {

@@ -1,7 +1,8 @@
 """A foot's sole as ``posegen robot init`` finds it: its frame and its footprint.
 
-* the sole frame: a link of the foot (fixed to it) with z up at the lowest point under the
-  ankle when there is one (TALOS's ``*_sole_link``), else a frame declared there;
+* the sole frame: a link of the foot (fixed to it) with z up and x forward at the lowest
+  point under the ankle when there is one (TALOS's ``*_sole_link``), else a frame declared
+  there;
 * the footprint (``stance.foot_x_m``, ``foot_y_m``): the lowest vertices of the foot's
   geometry, collision, else visual, and the visual sole's too when it reaches the floor
   beside the collision shapes (a sole mesh wider than the two rods under it:
@@ -24,11 +25,13 @@ from posegen.robot import Box, FloatArray, FrameConfig, convex_hull_clockwise, p
 SOLE_VERTEX_TOL_M = 0.005  # foot vertices this close to the lowest one make the footprint
 SOLE_VISUAL_GAP_M = 0.02  # a sole mesh whose lowest vertex is this close above the collision's counts in the footprint
 SOLE_FRAME_TOL_M = 0.005  # an existing link this close to the sole point is the sole frame
+SOLE_AXIS_COS = 0.999  # ... when its z axis is up and its x axis forward (the footprint is read along its axes)
 FOOT_LENGTH = 0.28  # a foot without geometry: this share of the leg's length
 FOOT_WIDTH = 0.12
 ANKLE_HEIGHT = 0.12  # a foot without geometry: its sole this share of the leg's length below the ankle
 FOOT_BOX_M = 0.02  # thickness of the box given to a foot without geometry
 FOOT_MAX_M = 1.0  # a footprint longer or wider than this is no humanoid's (a mesh in mm, not m)
+FOOT_MIN_M = 0.01  # ... nor one shorter or narrower than this (a mesh in metres scaled by 0.001)
 
 
 @dataclass(frozen=True)
@@ -69,13 +72,20 @@ def find_sole(
                 f"link '{link}': its foot geometry spans {x[1] - x[0]:g} x {y[1] - y[0]:g} m, not a foot: meshes in "
                 'millimetres? give each <mesh> scale="0.001 0.001 0.001"'
             )
+        if min(x[1] - x[0], y[1] - y[0]) < FOOT_MIN_M:
+            raise ConfigError(
+                f"link '{link}': its foot geometry spans {x[1] - x[0]:g} x {y[1] - y[0]:g} m, not a foot: meshes "
+                'scaled down twice (a <mesh scale="0.001 0.001 0.001"> on a mesh in metres)? check the scales'
+            )
     for f, frame in enumerate(model.frames):
         if frame.parentJoint != foot or frame.type != pin.FrameType.BODY:
             continue
         if model.frames[frame.parentFrame].type != pin.FrameType.FIXED_JOINT:
             continue  # a joint's own link: calibration moves its joint, not a sole placement
         pose = data.oMf[f]
-        if np.linalg.norm(pose.translation - sole_world.translation) < SOLE_FRAME_TOL_M and pose.rotation[2, 2] > 0.999:
+        forward = float(pose.rotation[:, 0] @ heading.rotation[:, 0])
+        level = pose.rotation[2, 2] > SOLE_AXIS_COS and forward > SOLE_AXIS_COS
+        if level and np.linalg.norm(pose.translation - sole_world.translation) < SOLE_FRAME_TOL_M:
             shift = pose.actInv(sole_world)  # the footprint, read in the robot's own sole frame
             x = (round(x[0] + float(shift.translation[0]), 3), round(x[1] + float(shift.translation[0]), 3))
             y = (round(y[0] + float(shift.translation[1]), 3), round(y[1] + float(shift.translation[1]), 3))

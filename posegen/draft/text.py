@@ -68,7 +68,7 @@ def render_draft(draft: Draft, seed: int, command: str = "") -> str:
         lines.append(f"    package_dirs: {_flow(list(source.package_dirs))}")
     if draft.locked:
         lines.append("  locked_joints:                     # held fixed (rad): off the legs and arms (head, fingers)")
-        lines += [f"    {_flow(name)}: {value:.4g}" for name, value in draft.locked.items()]
+        lines += [f"    {_flow(name)}: {_exact(value)}" for name, value in draft.locked.items()]
     lines.append("  frames:                            # declared here, added to the description at load")
     for frame in draft.frames:
         entry = f"{{parent: {_flow(frame.parent)}, xyz_m: {_flow(list(frame.xyz_m))}"
@@ -94,7 +94,7 @@ def render_draft(draft: Draft, seed: int, command: str = "") -> str:
         "",
         f"table:                               # CHECK: from the arm's reach ({draft.reach_m:.2f} m, shoulder to hand)",
         f"  top_center_m: {_flow(list(draft.table_center_m))}",
-        "  yaw_deg: 0.0",
+        f"  yaw_deg: {draft.table_yaw_deg}",
         f"  size_m: {_flow(list(draft.table_size_m))}",
         f"  spots_x_m: {_flow(list(draft.spots_x_m))}",
         f"  spots_y_m: {_flow(list(draft.spots_y_m))}",
@@ -105,6 +105,12 @@ def render_draft(draft: Draft, seed: int, command: str = "") -> str:
         "",
     ]
     return "\n".join(lines + _press_text(draft))
+
+
+def _exact(value: float) -> str:
+    """A locked angle (rad) written short when 4 digits hold it, else in full (a zero-width range's own limit)."""
+    short = f"{value:.4g}"
+    return short if float(short) == value else repr(float(value))
 
 
 def _press_text(draft: Draft) -> list[str]:

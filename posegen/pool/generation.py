@@ -81,7 +81,8 @@ def _sample_until(
             )
         if len(outcomes) >= max_samples:
             raise InfeasibleError(
-                f"only {accepted} feasible postures in {len(outcomes)} samples; loosen the margins or move the table"
+                f"only {accepted} feasible postures in {len(outcomes)} samples (rejections: "
+                f"{rejection_counts(outcomes)}); loosen the margins or move the table"
             )
         chunk = next(chunks)
         if checkpoint:

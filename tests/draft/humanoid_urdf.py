@@ -29,10 +29,12 @@ ROD_RADIUS_M = 0.01  # the rod variant's two rods, 2 cm thick, 4 cm across toget
 
 
 def _axes(up: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Forward, left, up in the model's frame."""
+    """Forward, left, up in the model's frame ("z": z up; "zy": z up, y forward; "y": y up)."""
     forward = np.array([1.0, 0.0, 0.0])
     if up == "z":
         return forward, np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    if up == "zy":
+        return np.array([0.0, 1.0, 0.0]), np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
     return forward, np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0])
 
 

@@ -164,6 +164,15 @@ def test_a_foot_mesh_in_millimetres_is_named(tmp_path, capfd):
     assert not (tmp_path / "config.yaml").exists()
 
 
+def test_a_foot_mesh_scaled_down_twice_is_named(tmp_path, capfd):
+    """Was: "stance.foot_x_m: expected [low, high] with low < high" (a helper's scale="0.001" on meshes in metres)."""
+    path = humanoid_urdf(tmp_path)
+    path.write_text(path.read_text().replace('.stl"/>', '.stl" scale="0.001 0.001 0.001"/>'))
+    line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert re.search(r"link '._foot': its foot geometry spans .* m, not a foot: meshes scaled down twice", line), line
+    assert not (tmp_path / "config.yaml").exists()
+
+
 def test_a_urdf_in_millimetres_throughout_is_named(tmp_path, capfd):
     """Origins in mm too: the foot-mesh message's scale was half the fix; the robot's size is named first."""
     path = _humanoid_with_meshes_in_mm(tmp_path)

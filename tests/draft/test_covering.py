@@ -100,3 +100,22 @@ def test_a_disc_under_a_tall_torso_mesh_gives_way_to_a_hull_containing_the_mesh(
     assert left_out_m(scene.model, urdf_only, visual, "torso") > 0.15  # the disc alone
     assert left_out_m(scene.model, urdf_only, visual, "l_hand") <= COVER_TOL_M  # a link whose shapes hold it: kept
     assert "l_hand" not in draft.left_out
+
+
+def test_a_pelvis_under_a_root_link_at_the_floor_gets_the_capsules_it_gets_as_the_root(tmp_path):
+    """The capsules along the joints started at the root joint: under a ``base_footprint`` 0.63 m below
+    (iCub's case), the pelvis's reached the floor and the zero posture collided with it."""
+    from posegen.draft.covering import skeleton
+
+    urdf = humanoid_urdf(tmp_path, "z")
+    plain = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
+    root = (
+        '<link name="base_footprint"/><joint name="to_pelvis" type="fixed"><parent link="base_footprint"/>'
+        '<child link="pelvis"/><origin xyz="0 0 0.63"/></joint>'
+    )
+    text = urdf.read_text().replace('<robot name="synthetic">', f'<robot name="synthetic">{root}')
+    rooted = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    assert rooted.frames[rooted.getFrameId("pelvis")].placement.translation[2] == pytest.approx(0.63)  # off joint 1
+    for link in ("pelvis", "torso", "l_thigh"):
+        assert skeleton(rooted, link) == skeleton(plain, link), link
+    assert skeleton(plain, "pelvis")  # the pelvis has capsules to check: to its hips and waist

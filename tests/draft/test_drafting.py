@@ -11,7 +11,7 @@ from posegen.draft.drafting import draft_robot, find_hands, table_for
 from posegen.draft.geometry import Geometry, vertices
 from posegen.draft.soles import floor_height
 from posegen.draft.source import load_draft_source
-from posegen.robot import Scene, load_config
+from posegen.robot import Scene, load_config, yaw_rotation
 from posegen.robot.additions import Box, Capsule, CollisionConfig
 from posegen.robot.collision_geometry import robot_geometry
 from tests.conftest import CONFIG, ROOT
@@ -102,9 +102,10 @@ def test_table_for_puts_the_table_within_reach_and_clear_of_the_body(synthetic):
     shapes = CollisionConfig(shapes=added.shapes)
     geometry = Geometry(robot_geometry(src.model, src.text, (), shapes, convex=False), body.geometry.visual)
     chains, _ = find_hands(src.model, data, geometry, body)
-    (top, size, spots_x, spots_y), reach = table_for(src.model, data, geometry, body, chains[0])
+    (top, size, spots_x, spots_y, yaw), reach = table_for(src.model, data, geometry, body, chains[0])
     assert 0.5 < reach < 0.6  # shoulder to wrist 0.5 m, then to the palm's face
     heading = body.bearing.heading
+    assert np.allclose(heading.rotation, yaw_rotation(np.deg2rad(yaw)), atol=1e-6)  # the table's frame is the robot's
     shoulder = heading.actInv(data.oMi[src.model.getJointId("l_shoulder_pitch")].translation)
     centre = heading.actInv(np.array(top))  # its height is from the floor
     floor = floor_height(src.model, data, body.legs.soles)

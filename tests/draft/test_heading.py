@@ -1,4 +1,4 @@
-"""Which way a drafted robot faces: its root's x axis, unless both knees bend the other way (iCub's root)."""
+"""Which way a drafted robot faces: its root's x axis, unless both knees say another (iCub's root: -x)."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ def icub(tmp_path_factory):
 
 def test_a_robot_whose_knees_bend_against_its_root_x_axis_is_turned_around(icub):
     draft, scene = icub
-    assert TURNED in draft.checks
+    assert TURNED.format(axis="-x") in draft.checks
     assert [s.declared.parent for s in draft.soles] == ["l_ankle_2", "r_ankle_2"]  # left is left
     q = scene.configuration(scene.reference)
     data = scene.model.createData()
@@ -32,6 +32,7 @@ def test_a_robot_whose_knees_bend_against_its_root_x_axis_is_turned_around(icub)
     table = scene.table_pose[:3, 3]
     forward = np.cross(left - right, [0.0, 0.0, 1.0])  # left = up x forward, so forward = left x up
     assert (table - (left + right) / 2) @ forward > 0  # the table stands in front of it
+    assert scene.table_pose[:3, 1] @ (left - right) > 0  # the table's +y side, the left hand's spots, on its left
     knee = scene.model.getJointId("l_knee")
     assert scene.model.lowerPositionLimit[scene.model.joints[knee].idx_q] < -1.5  # it flexes negative: backwards
 
@@ -44,7 +45,21 @@ def test_the_turned_draft_loads_and_stands_its_feet_on_the_floor(icub):
 
 def test_a_robot_facing_its_root_x_axis_is_not_turned(tmp_path):
     draft = write_draft(str(humanoid_urdf(tmp_path / "description", "z")), str(tmp_path / "c.yaml"), samples=5)
-    assert TURNED not in draft.checks
+    assert not [c for c in draft.checks if c.startswith("the robot faces")]
+    assert draft.table_yaw_deg == 0.0
+
+
+def test_a_robot_facing_its_root_y_axis_is_drafted_as_the_same_robot_turned(tmp_path):
+    """Before, the heading took the root's x axis (the robot's right): the table at its side, left and right swapped."""
+    straight = write_draft(str(humanoid_urdf(tmp_path / "x", "z")), str(tmp_path / "x.yaml"), samples=5, seed=3)
+    turned = write_draft(str(humanoid_urdf(tmp_path / "y", "zy")), str(tmp_path / "y.yaml"), samples=5, seed=3)
+    assert TURNED.format(axis="+y") in turned.checks
+    assert turned.table_yaw_deg == 90.0
+    assert [c.joints for c in turned.chains] == [c.joints for c in straight.chains]  # the left arm is the left chain
+    assert (turned.foot_x_m, turned.foot_y_m) == (straight.foot_x_m, straight.foot_y_m)
+    x, y, z = straight.table_center_m
+    assert turned.table_center_m == pytest.approx((-y, x, z), abs=1e-3)  # in front of it, a quarter turn round
+    assert turned.spots_y_m == straight.spots_y_m
 
 
 def test_a_capsule_along_the_joints_reaches_the_child_joint_not_past_it():

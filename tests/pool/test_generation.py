@@ -174,3 +174,17 @@ def test_example_pool_is_reproducible_and_valid(scene, config, example_pool):
     np.testing.assert_allclose(again.joints(), example_pool.joints()[:15], rtol=0, atol=1e-6)
     assert example_pool.provenance["config"] == config.to_dict()
     assert verify_postures(scene, example_pool.postures).ok
+
+
+def test_too_low_an_acceptance_says_why_the_samples_were_rejected(example_pool):
+    """The probe's error named its rejections; the one at the acceptance floor did not (a helper's box-shaped robot)."""
+    from posegen.pool.generation import MAX_SAMPLES_PER_POSTURE, _sample_until
+    from posegen.pool.sampler import Rejection
+    from posegen.progress import ignore_progress
+
+    chunk = [example_pool.postures[0]] + [Rejection.COLLISION] * 180 + [Rejection.NOT_CONVERGED] * 119  # 1 in 300
+    outcomes: list = []
+    message = r"^only 2 feasible postures in 600 samples \(rejections: \{'not_converged': 238, 'collision': 360\}\); "
+    with pytest.raises(InfeasibleError, match=message + "loosen the margins or move the table$"):
+        _sample_until(3, outcomes, iter([chunk] * 10), None, ignore_progress)
+    assert len(outcomes) == MAX_SAMPLES_PER_POSTURE * 3  # the floor: one posture in MAX_SAMPLES_PER_POSTURE samples
