@@ -149,8 +149,17 @@ def _sections_dropped(root: ET.Element) -> tuple[str, ...]:
     counts["body with mesh geoms and no <inertial> (pinocchio's default inertia: check its mass)"] = sum(
         body.find("inertial") is None and any(g.get("mesh") for g in body.findall("geom")) for body in root.iter("body")
     )
+    counts["body with visual-only geoms and no <inertial> (MuJoCo counts their mass, pinocchio does not)"] = sum(
+        body.find("inertial") is None and any(map(_weighs_unseen, body.findall("geom"))) for body in root.iter("body")
+    )
     counts["worldbody geom (floor, scenery)"] = sum(len(w.findall("geom")) for w in root.findall("worldbody"))
     return tuple(f"{n} {kind}" for kind, n in counts.items() if n)
+
+
+def _weighs_unseen(geom: ET.Element) -> bool:
+    """A geom without collisions (``contype`` and ``conaffinity`` 0, written by the flattening) that has mass."""
+    visual = geom.get("contype") == "0" and geom.get("conaffinity") == "0"
+    return visual and geom.get("mass") not in ("0", "0.0") and geom.get("density") not in ("0", "0.0")
 
 
 def _f(value: float) -> str:

@@ -171,14 +171,18 @@ def test_capsules_boxes_and_spheres_cover_the_same_space(models):
 
 def test_what_is_not_carried_is_listed(models, tmp_path):
     *_, converted = models
-    assert converted.dropped == ("1 actuator", "1 site", "1 worldbody geom (floor, scenery)")
+    unseen = "1 body with visual-only geoms and no <inertial> (MuJoCo counts their mass, pinocchio does not)"
+    assert converted.dropped == ("1 actuator", "1 site", unseen, "1 worldbody geom (floor, scenery)")  # the camera
     path = humanoid_mjcf(tmp_path)
     path.write_text(
         path.read_text().replace(
             'type="sphere" pos="0 0 0.1" size="0.08"', 'type="ellipsoid" pos="0 0 0.1" size="0.08 0.07 0.09"'
         )
     )
+    text = path.read_text().replace('contype="0" conaffinity="0" group="1"', 'contype="0" conaffinity="0" density="0"')
+    path.write_text(text)  # the camera weighs nothing: nothing for pinocchio to leave out
     dropped = convert_mjcf(path).dropped
+    assert not [d for d in dropped if "visual-only" in d]
     assert "1 visual ellipsoid geoms (head)" in dropped and "1 collision ellipsoid geoms (head)" in dropped
     assert is_mjcf(path) and not is_mjcf(tmp_path / "none.xml")
 

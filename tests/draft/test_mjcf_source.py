@@ -39,7 +39,7 @@ def test_robot_init_writes_a_draft_and_its_urdf_and_the_draft_runs(tmp_path, cap
     sha = hashlib.sha256(mjcf.read_bytes()).hexdigest()
     (check,) = [line for line in text.splitlines() if "converted by posegen from the MJCF" in line]
     assert check.startswith("# CHECK: robot.source.urdf") and f"{mjcf.resolve()} (sha256 {sha})" in check
-    assert "Not carried: 1 actuator; 1 site; 1 worldbody geom" in check
+    assert "Not carried: 1 actuator; 1 site; 1 body with visual-only geoms" in check
     scene = Scene(load_config(output))
     assert {"l_hip_yaw", "l_hip_roll", "l_hip_pitch", "l_ankle_pitch", "l_ankle_roll"} <= set(scene.model.names)
     pool = tmp_path / "pool.yaml"
