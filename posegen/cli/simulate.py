@@ -94,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
             f"({recorded.samples} joint states) -> {recorded.bag}/ (true parameters: {recorded.truth})"
         )
         return 0
-    simulated = simulate_postures_file(args.postures, args.output or MEASUREMENTS_FILE, **robot)
+    output = MEASUREMENTS_FILE if args.output is None else args.output
+    simulated = simulate_postures_file(args.postures, output, **robot)
     print(
         f"simulate: {simulated.contacts} contacts of a perturbed robot -> {simulated.measurements} "
         f"(true parameters: {simulated.truth})"

@@ -30,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     """Write the page, or serve the live viewer until Ctrl-C (which ends it normally)."""
     from posegen.view import DEFAULT_HOST, DEFAULT_PORT, open_artefact, serve, write_html_file
 
-    if args.html:
+    if args.html is not None:  # "" names no file: refused, not served
         page = write_html_file(args.artefact, args.html, args.config)
         print(
             f"view: {page.steps} steps, {page.duration_s:.1f} s of playback -> {args.html} "

@@ -51,6 +51,8 @@ def find_up(
             floor (one leg, no legs), or an axis along which four or more do (a quadruped).
 
     """
+    if not children.get(1):
+        raise ConfigError(f"{label}: no joint below its root link: posegen needs a humanoid with two legs and two arms")
     data = model.createData()
     best: tuple[float, pin.SE3, str] | None = None
     for axis in range(3):

@@ -14,7 +14,7 @@ from posegen.draft.limits import COM_MARGIN_M
 from posegen.draft.mjcf_source import converted_urdf, mjcf_files, mjcf_source, urdf_beside
 from posegen.draft.source import source_files
 from posegen.errors import ConfigError, InfeasibleError
-from posegen.io import check_apart, claim_output, write_atomic
+from posegen.io import check_apart, check_named, claim_output, write_atomic
 from posegen.model import pool_size
 from posegen.robot import (
     Box,
@@ -237,6 +237,7 @@ def write_draft(
 
     """
     mjcf = mjcf_source(robot)
+    check_named(output)
     urdf = urdf_beside(output) if mjcf else None
     read = mjcf_files(mjcf) if mjcf else source_files(robot, srdf, package_dirs)
     check_apart([output, urdf], [srdf, *read])  # never over the description, its SRDF or a mesh it reads

@@ -22,6 +22,8 @@ from posegen.errors import ConfigError
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 MOVING = ("revolute", "continuous", "prismatic", "planar")
+INERTIA_NOISE = 1e-9  # kg m^2: a CAD export's -5e-20 (iCub's r_hip_2) is a zero, not a negative moment
+MIN_AXIS_LENGTH = 1e-6  # a shorter axis is no direction (its square underflows, or a unit vector of noise)
 UNBOUNDED = ("continuous", "planar", "floating")  # joints of no range, or of more than one value
 _VECTORS = (  # (element path under a link or joint, attribute, how many numbers, what they are)
     ("origin", "xyz", 3),
@@ -140,13 +142,29 @@ def _check_numbers(element: ET.Element, where: str | Path) -> None:
                     raise ConfigError(
                         f'{where}: {_label(element)}: <{path} {key}="{found.get(key)}">: expected a finite number'
                     )
+    for kind in ("visual", "collision"):
+        for mesh in element.findall(f"{kind}/geometry/mesh"):
+            if 0.0 in numbers(mesh.get("scale", "1 1 1")):
+                scale = mesh.get("scale")
+                raise ConfigError(f'{where}: {_label(element)}: <mesh scale="{scale}">: a mesh scaled to nothing')
     for mass in element.findall("inertial/mass"):
         if _number(mass, "value") < 0.0:
             raise ConfigError(f"{where}: {_label(element)}: a negative mass ({mass.get('value')} kg)")
+    for inertia in element.findall("inertial/inertia"):
+        for key in ("ixx", "iyy", "izz"):
+            if inertia.get(key) is not None and _number(inertia, key) < -INERTIA_NOISE:
+                raise ConfigError(
+                    f'{where}: {_label(element)}: <inertia {key}="{inertia.get(key)}">: a moment of inertia '
+                    "cannot be negative (kg m^2)"
+                )
     axis = element.find("axis")
     moving = element.tag == "joint" and element.get("type") in MOVING
-    if moving and axis is not None and not any(float(v) != 0.0 for v in axis.get("xyz", "1 0 0").split()):
-        raise ConfigError(f"{where}: {_label(element)}: its axis is 0 0 0 (a joint moves along a direction)")
+    direction = [float(v) for v in axis.get("xyz", "1 0 0").split()] if axis is not None else [1.0]
+    if moving and math.sqrt(sum(v * v for v in direction)) < MIN_AXIS_LENGTH:
+        raise ConfigError(
+            f"{where}: {_label(element)}: its axis is {axis.get('xyz') if axis is not None else ''}, of no length "
+            "(a joint moves along a direction)"
+        )
 
 
 def _tree(joints: list[ET.Element], links: list[str], where: str | Path) -> dict[str, str]:

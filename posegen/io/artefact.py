@@ -15,10 +15,29 @@ from posegen.io.atomic import write_atomic
 
 try:
     _Dumper: Any = yaml.CSafeDumper
-    _Loader: Any = yaml.CSafeLoader
+    _Parser: Any = yaml.CSafeLoader
 except AttributeError:  # PyYAML built without libyaml
     _Dumper = yaml.SafeDumper
-    _Loader = yaml.SafeLoader
+    _Parser = yaml.SafeLoader
+MERGE_TAG = "tag:yaml.org,2002:merge"  # ``<<: *anchor``: its keys may be given again (they override)
+
+
+class _Loader(_Parser):
+    """The safe loader, refusing a key given twice in one mapping (YAML keeps the last one without a word)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen: set[tuple[str, str]] = set()
+        for key_node, _ in node.value:
+            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == MERGE_TAG:
+                continue
+            key = (key_node.tag, key_node.value)
+            if key in seen:
+                mark = key_node.start_mark
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"the key '{key_node.value}' is given twice (line {mark.line + 1})", None
+                )
+            seen.add(key)
+        return dict(super().construct_mapping(node, deep))
 
 
 def provenance(config: dict[str, Any], model_sha256: str, seed: int | None) -> dict[str, Any]:

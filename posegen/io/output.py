@@ -66,6 +66,23 @@ def _existing_ancestor(path: Path) -> Path:
     return ancestor
 
 
+def check_named(path: str | Path) -> None:
+    """Check that an output path names a file or folder (not ``""``, ``.``, ``..`` or ``/``).
+
+    Raises:
+        OutputError: The path names nothing to write.
+
+    Example:
+        >>> check_named("plans/pool.yaml")
+        >>> check_named("")
+        Traceback (most recent call last):
+        posegen.errors.OutputError: '': names no file or folder to write; give a name
+
+    """
+    if not str(path).strip() or Path(path).name in ("", ".", ".."):
+        raise OutputError(f"'{path}': names no file or folder to write; give a name")
+
+
 def check_writable(path: str | Path, kind: OutputKind = OutputKind.FILE) -> None:
     """Check, without changing anything, that ``path`` can be written as an output of ``kind``.
 
@@ -75,6 +92,7 @@ def check_writable(path: str | Path, kind: OutputKind = OutputKind.FILE) -> None
             place where no file can be created.
 
     """
+    check_named(path)
     path = Path(path)
     if kind is OutputKind.FILE and path.suffix.lower() == SIDECAR_SUFFIX:
         kept = "not overwriting it" if path.exists() else "not writing it"
@@ -144,9 +162,13 @@ def check_apart(outputs: Sequence[str | Path | None], inputs: Sequence[str | Pat
     skipped (an option not given).
 
     Raises:
-        OutputError: An output would overwrite, replace or be written into an input.
+        OutputError: An output names nothing (``""``, ``.``) or would overwrite, replace or be
+            written into an input.
 
     """
+    for named in outputs:
+        if named is not None:
+            check_named(named)
     read = [f for i in inputs if i is not None for f in input_files(i)]
     for output in (Path(o) for o in outputs if o is not None):
         for source in read:

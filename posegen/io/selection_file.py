@@ -13,9 +13,8 @@ selection, whose fields depend on its method::
     figures: {...}              # DesignFigures (iroc, k), FollowUpFigures, SessionFigures
     postures: [{pool_id, rank, weight, id, sample, chain, spot, joints, ...}, ...]
 
-:func:`read_selection` reads the whole file; the stages read a pool's or a selection's
-postures with :func:`load_postures`, which checks a selection whole as :func:`read_selection`
-does (one reader: a file ``route`` takes is one ``posegen.load`` takes).
+:func:`read_selection` reads the whole file; the stages read a pool's or a selection's postures
+with :func:`load_postures`, which checks a selection whole (a file ``route`` takes is one ``posegen.load`` takes).
 """
 
 from __future__ import annotations
@@ -262,7 +261,25 @@ def selection_from_dict(data: dict[str, Any], where: str = "selection") -> Selec
     for i, raw in enumerate(raw_postures):
         at = f"{where}: posture {i}"
         postures.append(_chosen(raw, posture_from_dict(raw, len(names), at), at))
+    if isinstance(figures, DesignFigures | FollowUpFigures):
+        _check_design(figures, postures, where)
     return Selection(dict(data["provenance"]), method, names, figures, tuple(postures))
+
+
+def _check_design(figures: DesignFigures | FollowUpFigures, postures: list[ChosenPosture], where: str) -> None:
+    """Each posture a row of the design's pool, weighed zero or more (InputError naming it).
+
+    A selection trimmed by hand (fewer postures than ``figures.selected``) or holding a
+    posture twice (``route`` routes it once, and says so) is read as it is.
+    """
+    for i, chosen in enumerate(postures):
+        if not 0 <= chosen.pool_id < figures.pool_postures:
+            raise InputError(
+                f"{where}: posture {i}: pool_id {chosen.pool_id} is not a row of its pool "
+                f"(figures.pool_postures {figures.pool_postures})"
+            )
+        if chosen.weight < 0.0:
+            raise InputError(f"{where}: posture {i}: 'weight' {chosen.weight:g} is negative")
 
 
 def _chosen(raw: dict[str, Any], posture: Posture, where: str) -> ChosenPosture:

@@ -38,6 +38,7 @@ import numpy as np
 from posegen.errors import InputError, reason, unknown_name
 from posegen.io import read_text_file, read_yaml, write_yaml
 from posegen.model.contact_model import Contacts, planned_kinds
+from posegen.numeric import is_finite_number
 from posegen.robot import Scene, kind_named, registered_kinds
 
 LOG = logging.getLogger(__name__)
@@ -45,6 +46,7 @@ LOG = logging.getLogger(__name__)
 MEASUREMENT_FORMAT = "posegen-measurements"
 MEASUREMENT_VERSION = 1
 LIMIT_TOLERANCE_RAD = 0.25  # real robots park joints a little past URDF limits (TALOS: arm_*_1 by 0.2 rad)
+WINDOW_FIELDS = frozenset({"start_s", "end_s", "samples", "joint_std_rad", "force_n"})  # a contact `measure` found
 
 
 def _check_angles(scene: Scene, names: Sequence[str], values: np.ndarray, where: str, tolerance: float) -> None:
@@ -260,6 +262,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
     chains_known = {c.name for c in scene.chains}
     kinds_known = ", ".join(k.value for k in registered_kinds())
     joints, chains, sessions, labels, kinds = [], [], [], [], []
+    windowed = any(isinstance(item, dict) and not WINDOW_FIELDS.isdisjoint(item) for item in raw)
     for i, item in enumerate(raw):
         where = f"{path}: contact {i}"
         try:
@@ -267,6 +270,7 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
             chain = str(item["chain"])
         except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise InputError(f"{where}: malformed ({reason(exc)})") from exc
+        _check_contact(item, where, windowed)
         if chain not in chains_known:
             raise InputError(f"{where}: unknown chain '{chain}'; valid chains: {', '.join(sorted(chains_known))}")
         name = str(item.get("kind", scene.chain(chain).contact_kind.value))
@@ -287,6 +291,32 @@ def read_measurements(path: str | Path, scene: Scene, session: str | None = None
         kinds.append(kind)
     contacts = Contacts(np.array(joints), tuple(chains), tuple(sessions), tuple(labels), tuple(kinds))
     return Measurements(contacts, (), provenance)
+
+
+def _check_contact(item: dict[str, Any], where: str, windowed: bool) -> None:
+    """A contact's names (session, label), and the window ``measure`` wrote when the file has windows.
+
+    Raises:
+        InputError: A name that is not one, or a window field missing or out of its range
+            (a truncated or edited file), named.
+
+    """
+    for key in ("session", "label"):
+        value = item.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, str | int)):
+            raise InputError(f"{where}: '{key}' must be a name, got {value!r}")
+    if not windowed:
+        return
+    missing = [key for key in sorted(WINDOW_FIELDS) if key not in item]
+    if missing:
+        raise InputError(f"{where}: no {', '.join(missing)}, which the other contacts have: a truncated or edited file")
+    start, end, samples, spread, force = (item[k] for k in ("start_s", "end_s", "samples", "joint_std_rad", "force_n"))
+    if not (is_finite_number(start) and is_finite_number(end) and start <= end):
+        raise InputError(f"{where}: start_s {start!r}, end_s {end!r}: expected finite times (s), the start first")
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        raise InputError(f"{where}: samples {samples!r}: expected a count of 1 or more")
+    if not is_finite_number(spread) or spread < 0.0 or not (force is None or is_finite_number(force)):
+        raise InputError(f"{where}: joint_std_rad {spread!r}, force_n {force!r}: expected finite numbers")
 
 
 def _provenance(data: dict[str, Any], path: Path) -> dict[str, Any]:

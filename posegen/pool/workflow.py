@@ -12,6 +12,7 @@ from posegen.io import (
     SELECTION_FORMAT,
     Pool,
     check_apart,
+    check_named,
     claim_output,
     postures_of,
     read_yaml,
@@ -58,6 +59,7 @@ def generate_pool_file(
     check_seed(seed, "seed")
     if not isinstance(workers, Backend):
         check_count(workers, "workers")
+    check_named(output)
     path = Path(output)
     checkpoint = path.with_name(path.name + ".partial.jsonl")
     check_apart([path, checkpoint], [config_path])

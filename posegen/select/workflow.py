@@ -18,6 +18,7 @@ from posegen.io import (
     Selection,
     SelectionMethod,
     check_apart,
+    check_named,
     check_writable,
     chosen_from_pool,
     claim_output,
@@ -87,6 +88,7 @@ def select_pool_file(
         check_count(k, "k")
     check_count(runs, "runs", minimum=0, maximum=MAX_RUNS)
     check_seed(seed, "seed")
+    check_named(output)
     path = Path(output)
     plots = [path.with_name(path.stem + "_o1.png"), path.with_name(path.stem + "_detmax.png")]
     check_writable(path)

@@ -37,6 +37,15 @@ def _first(pattern: str, replacement: str, text: str) -> str:
 URDF_CASES = [
     (lambda t: re.sub(r'<mass value="[^"]*"', '<mass value="0"', t), r"every link has zero mass"),
     (lambda t: _first(r'<axis xyz="[^"]*"', '<axis xyz="0 0 0"', t), r"joint 'l_hip_yaw': its axis is 0 0 0"),
+    (  # scipy's least squares failed on the stance's reach ("residuals are not finite": a traceback)
+        lambda t: _first(r'<axis xyz="[^"]*"', '<axis xyz="1e-300 0 0"', t),
+        r"joint 'l_hip_yaw': its axis is 1e-300 0 0, of no length",
+    ),
+    (lambda t: _first(r'\.stl"/>', '.stl" scale="1 0 1"/>', t), r'<mesh scale="1 0 1">: a mesh scaled to nothing'),
+    (
+        lambda t: _first(r'ixx="[^"]*"', 'ixx="-1"', t),
+        r'<inertia ixx="-1">: a moment of inertia cannot be negative',
+    ),
     (lambda t: _first(r'<origin xyz="[^"]*"', '<origin xyz="0 nan 0"', t), r"xyz=\"0 nan 0\">: expected 3 finite"),
     (lambda t: t.replace('<parent link="pelvis"/>', '<parent link="nothing"/>', 1), r"parent link 'nothing' is not"),
     (lambda t: t.replace('<child link="l_thigh"/>', '<child link="pelvis"/>', 1), r"loop through link"),
@@ -61,6 +70,16 @@ def test_a_malformed_urdf_is_one_line_naming_the_real_cause(edit, message, tmp_p
     path.write_text(edit(path.read_text()))
     line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
     assert str(path.name) in line and re.search(message, line), line
+    assert not (tmp_path / "config.yaml").exists()
+
+
+def test_a_urdf_of_one_link_is_one_line(tmp_path, capfd):
+    """Was a traceback: ``min() arg is an empty sequence`` looking for the up axis among no branches."""
+    path = tmp_path / "one.urdf"
+    inertial = '<inertial><mass value="5"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>'
+    path.write_text(f'<robot name="one"><link name="pelvis">{inertial}</link></robot>')
+    line = _init([str(path), "-o", str(tmp_path / "config.yaml")], capfd)
+    assert "no joint below its root link: posegen needs a humanoid" in line, line
     assert not (tmp_path / "config.yaml").exists()
 
 
@@ -123,7 +142,7 @@ def test_an_mjcf_with_numbers_no_body_has_is_refused(edit, message, tmp_path):
     [
         (lambda t: _first(r'pos="[^"]*"', 'pos="0 nan 0.1"', t), r"pos=\"0 nan 0\.1\": expected finite numbers"),
         (lambda t: re.sub(r'mass="[^"]*"', 'mass="0"', t), r"every link has zero mass"),
-        (lambda t: _first(r'axis="[^"]*"', 'axis="0 0 0"', t), r"its axis is 0 0 0"),
+        (lambda t: _first(r'axis="[^"]*"', 'axis="0 0 0"', t), r"its axis is 0\.0 0\.0 0\.0, of no length"),
         (  # was: "names the mesh 'cube', not in <asset>" (it is there)
             lambda t: _first(
                 r'<geom type="sphere" pos="0 0 0.1" size="0.08"/>',

@@ -66,3 +66,24 @@ def test_read_compliance_of_none_is_an_input_error():
 
     with pytest.raises(InputError, match="expected a file's path"):
         read_compliance(None)  # type: ignore[arg-type]
+
+
+def test_a_key_given_twice_is_refused_naming_it_and_its_line(tmp_path):
+    """YAML keeps the last of two keys without a word: a second ``table:`` block read as "table.size_m: missing"."""
+    from posegen.errors import ConfigError
+    from posegen.io import load_yaml_file
+    from posegen.robot import load_config
+    from tests.conftest import CONFIG
+
+    path = tmp_path / "twice.yaml"
+    path.write_text("a: 1\nb: {c: 2, c: 3}\n")
+    with pytest.raises(InputError, match=r"twice\.yaml: not valid YAML \(the key 'c' is given twice \(line 2\)\)$"):
+        load_yaml_file(path, InputError)
+    path.write_text("x: &x {a: 1}\ny:\n  <<: *x\n  a: 2\nz: [1, 1]\n")  # a merged key given again overrides it
+    assert load_yaml_file(path, InputError) == {"x": {"a": 1}, "y": {"a": 2}, "z": [1, 1]}
+    text = Path(CONFIG).read_text()
+    config = tmp_path / "config.yaml"
+    config.write_text(text.replace("\ntable:\n", "\ntable:\n  yaw_deg: 45.0\n", 1))
+    assert "yaw_deg" in text.split("\ntable:\n", 1)[1].split("\n\n", 1)[0]  # the config gives it already
+    with pytest.raises(ConfigError, match=r"the key 'yaw_deg' is given twice \(line \d+\)"):
+        load_config(config)

@@ -80,6 +80,10 @@ def test_follow_up_and_session_selections_round_trip(tmp_path, example_pool):
         (lambda d: d["postures"][2].update(pool_id=True), "posture 2: 'pool_id' must be an integer, got True"),
         (lambda d: d["postures"][0].update(weight=float("inf")), "posture 0: 'weight' must be a finite number"),
         (lambda d: d["postures"][1].pop("joints"), "posture 1: malformed"),
+        # a helper's faults that route, simulate and check took
+        (lambda d: d["postures"][0].update(pool_id=99999), r"posture 0: pool_id 99999 is not a row of its pool"),
+        (lambda d: d["postures"][0].update(pool_id=-1), r"posture 0: pool_id -1 is not a row of its pool"),
+        (lambda d: d["postures"][0].update(weight=-0.5), "posture 0: 'weight' -0.5 is negative"),
     ],
 )
 def test_a_malformed_selection_is_refused_in_one_line(tmp_path, selection_file, edit, message):

@@ -118,6 +118,34 @@ def test_a_measurement_file_is_read_with_its_provenance(scene, tmp_path):
             reader()
 
 
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [  # a helper's edits that calibrate and select --given took
+        (lambda c: c[1].pop("end_s"), r"contact 1: no end_s, which the other contacts have: a truncated or edited"),
+        (lambda c: c[0].update(start_s="yesterday"), r"contact 0: start_s 'yesterday', end_s 2\.5: expected finite"),
+        (lambda c: c[1].update(start_s=9.0), r"contact 1: start_s 9\.0, end_s 4\.5: expected finite times"),
+        (lambda c: c[0].update(samples=-5), r"contact 0: samples -5: expected a count of 1 or more"),
+        (lambda c: c[1].update(force_n=float("nan")), r"contact 1: joint_std_rad 0\.001, force_n nan: expected"),
+        (lambda c: c[0].update(session=["a"]), r"contact 0: 'session' must be a name, got \['a'\]"),
+    ],
+)
+def test_a_contact_measure_found_is_checked_whole(scene, tmp_path, edit, message):
+    from posegen.io import write_yaml
+    from posegen.model import Contacts, measurements_to_dict
+
+    chain = scene.chains[0].name
+    contacts = Contacts(np.repeat(scene.reference[None, :], 2, axis=0), (chain,) * 2, ("day",) * 2, ("c0", "c1"))
+    data = measurements_to_dict(scene, contacts, scene.provenance(5))
+    for k, contact in enumerate(data["contacts"]):  # the window fields `measure` writes
+        contact.update(start_s=2.0 * k + 0.5, end_s=2.0 * k + 2.5, samples=400, joint_std_rad=0.001, force_n=31.0)
+    write_yaml(tmp_path / "good.yaml", data)
+    assert len(read_measurements(tmp_path / "good.yaml", scene).contacts.chains) == 2
+    edit(data["contacts"])
+    write_yaml(tmp_path / "bad.yaml", data)
+    with pytest.raises(InputError, match=message):
+        read_measurements(tmp_path / "bad.yaml", scene)
+
+
 def test_missing_file(scene, tmp_path):
     with pytest.raises(InputError, match="not found"):
         read_measurements(tmp_path / "nothing.csv", scene)

@@ -126,6 +126,8 @@ def bad_outputs(command: str, *before: str, flag: str = "-o") -> list[Fault]:
         F(command, "output inside a file", *before, flag, "{existing}/out.yaml"),
         F(command, "unwritable output", *before, flag, f"{UNWRITABLE}/out.yaml"),
         F(command, "output being written", *before, flag, "{existing}", locked="{existing}"),
+        F(command, "output named empty", *before, flag, ""),  # a pool crashed on its checkpoint's name
+        F(command, "output named /", *before, flag, "/"),
     ]
 
 
