@@ -22,7 +22,7 @@ from posegen.errors import ConfigError
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 MOVING = ("revolute", "continuous", "prismatic", "planar")
-INERTIA_NOISE = 1e-9  # kg m^2: a CAD export's -5e-20 (iCub's r_hip_2) is a zero, not a negative moment
+INERTIA_NOISE = 1e-9  # kg m^2: a CAD export's -5e-20 (one of iCub's hips) is a zero, not a negative moment
 MIN_AXIS_LENGTH = 1e-6  # a shorter axis is no direction (its square underflows, or a unit vector of noise)
 UNBOUNDED = ("continuous", "planar", "floating")  # joints of no range, or of more than one value
 _VECTORS = (  # (element path under a link or joint, attribute, how many numbers, what they are)
